@@ -1,0 +1,26 @@
+//! # gearbif
+//!
+//! Exact simulation, periodic orbits, bifurcations and identification of periodically driven
+//! oscillators with dry friction. The flagship system is the dipole magnetic gear of
+//! Hartung & Rehberg (2020), [`model::Gear`].
+//!
+//! Data flows one way: parameters → system ([`model`]) → integrator ([`integrator`]) →
+//! Poincaré maps ([`maps`]) → orbits, continuation, analysis, identification → outputs.
+//!
+//! ```
+//! use gearbif::model::GearParams;
+//! let gear = GearParams::paper();               // the paper's gear, Θ = Φ = 0
+//! let fc = gear.lock_loss_frequency().unwrap(); // f_c = (g − η)/(2πζ)
+//! assert!((fc - 39.84).abs() < 0.01);
+//! ```
+#![warn(missing_docs)]
+
+#[cfg(feature = "cli")]
+pub mod cli;
+pub mod error;
+pub mod integrator;
+pub mod io;
+pub mod maps;
+pub mod model;
+
+pub use error::{Error, Result};

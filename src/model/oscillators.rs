@@ -1,0 +1,180 @@
+//! Other periodically driven oscillators with dry friction, with known answers; they run through the
+//! same integrator, maps and orbit solvers as the gear and serve as test problems.
+
+use super::{DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry};
+use crate::error::{finite, non_negative, positive, Result};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::TAU;
+
+/// A Coulomb-damped, harmonically forced linear oscillator (Den Hartog's problem):
+///
+/// ```text
+///   ẍ + 2ξω₀ ẋ + ω₀² x + μ sgn(ẋ) = F cos(2π f t).
+/// ```
+///
+/// Parameter columns: (f, ω₀, ξ, μ, F). Half-period symmetry x → −x.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CoulombOscillator {
+    /// Natural angular frequency ω₀, rad/s.
+    pub omega0: f64,
+    /// Viscous damping ratio ξ.
+    pub xi: f64,
+    /// Coulomb friction μ (acceleration units).
+    pub mu: f64,
+    /// Forcing amplitude F (acceleration units).
+    pub force: f64,
+    /// Forcing frequency f, Hz.
+    pub f: f64,
+}
+
+impl CoulombOscillator {
+    /// Validated constructor: ω₀ > 0, ξ ≥ 0, μ ≥ 0, F finite, f > 0.
+    pub fn new(omega0: f64, xi: f64, mu: f64, force: f64, f: f64) -> Result<Self> {
+        Ok(Self {
+            omega0: positive("omega0", omega0)?,
+            xi: non_negative("xi", xi)?,
+            mu: non_negative("mu", mu)?,
+            force: finite("force", force)?,
+            f: positive("f", f)?,
+        })
+    }
+}
+
+impl DrivenOscillator for CoulombOscillator {
+    fn period(&self) -> f64 {
+        1.0 / self.f
+    }
+    fn n_params(&self) -> usize {
+        5
+    }
+    fn param_name(&self, k: usize) -> &'static str {
+        ["f", "omega0", "xi", "mu", "force"]
+            .get(k)
+            .copied()
+            .unwrap_or("?")
+    }
+    fn period_derivative(&self, k: usize) -> f64 {
+        if k == 0 {
+            -1.0 / (self.f * self.f)
+        } else {
+            0.0
+        }
+    }
+    fn forces(&self, t: f64, x: f64, v: f64) -> Forces {
+        let w0 = self.omega0;
+        Forces {
+            a: self.force * (TAU * self.f * t).cos() - 2.0 * self.xi * w0 * v - w0 * w0 * x,
+            r: self.mu,
+        }
+    }
+    fn forces_jet(&self, t: f64, x: f64, v: f64, params: bool) -> ForcesJet {
+        let w0 = self.omega0;
+        let (s, c) = (TAU * self.f * t).sin_cos();
+        let mut j = ForcesJet::new(
+            self.force * c - 2.0 * self.xi * w0 * v - w0 * w0 * x,
+            self.mu,
+        );
+        j.a_beta = -w0 * w0;
+        j.a_omega = -2.0 * self.xi * w0;
+        if params {
+            j.a_p[0] = -self.force * s * TAU * t;
+            j.a_p[1] = -2.0 * self.xi * v - 2.0 * w0 * x;
+            j.a_p[2] = -2.0 * w0 * v;
+            j.r_p[3] = 1.0;
+            j.a_p[4] = c;
+        }
+        j
+    }
+    fn half_period_symmetry(&self) -> Option<HalfPeriodSymmetry> {
+        Some(HalfPeriodSymmetry {
+            sign: -1.0,
+            shift: 0.0,
+        })
+    }
+}
+
+/// A forced pendulum with viscous and dry friction:
+///
+/// ```text
+///   θ̈ + γ θ̇ + μ sgn(θ̇) + ω₀² sin θ = A cos(2π f t).
+/// ```
+///
+/// Parameter columns: (f, ω₀, γ, μ, A). Half-period symmetry θ → −θ.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ForcedPendulum {
+    /// Small-amplitude angular frequency ω₀, rad/s.
+    pub omega0: f64,
+    /// Viscous damping γ, s⁻¹.
+    pub gamma: f64,
+    /// Dry friction μ, s⁻².
+    pub mu: f64,
+    /// Forcing amplitude A, s⁻².
+    pub amplitude: f64,
+    /// Forcing frequency f, Hz.
+    pub f: f64,
+}
+
+impl ForcedPendulum {
+    /// Validated constructor: ω₀ > 0, γ ≥ 0, μ ≥ 0, A finite, f > 0.
+    pub fn new(omega0: f64, gamma: f64, mu: f64, amplitude: f64, f: f64) -> Result<Self> {
+        Ok(Self {
+            omega0: positive("omega0", omega0)?,
+            gamma: non_negative("gamma", gamma)?,
+            mu: non_negative("mu", mu)?,
+            amplitude: finite("amplitude", amplitude)?,
+            f: positive("f", f)?,
+        })
+    }
+}
+
+impl DrivenOscillator for ForcedPendulum {
+    fn period(&self) -> f64 {
+        1.0 / self.f
+    }
+    fn n_params(&self) -> usize {
+        5
+    }
+    fn param_name(&self, k: usize) -> &'static str {
+        ["f", "omega0", "gamma", "mu", "amplitude"]
+            .get(k)
+            .copied()
+            .unwrap_or("?")
+    }
+    fn period_derivative(&self, k: usize) -> f64 {
+        if k == 0 {
+            -1.0 / (self.f * self.f)
+        } else {
+            0.0
+        }
+    }
+    fn forces(&self, t: f64, th: f64, v: f64) -> Forces {
+        Forces {
+            a: self.amplitude * (TAU * self.f * t).cos()
+                - self.gamma * v
+                - self.omega0 * self.omega0 * th.sin(),
+            r: self.mu,
+        }
+    }
+    fn forces_jet(&self, t: f64, th: f64, v: f64, params: bool) -> ForcesJet {
+        let (s, c) = (TAU * self.f * t).sin_cos();
+        let (st, ct) = th.sin_cos();
+        let w2 = self.omega0 * self.omega0;
+        let mut j = ForcesJet::new(self.amplitude * c - self.gamma * v - w2 * st, self.mu);
+        j.a_beta = -w2 * ct;
+        j.a_omega = -self.gamma;
+        if params {
+            j.a_p[0] = -self.amplitude * s * TAU * t;
+            j.a_p[1] = -2.0 * self.omega0 * st;
+            j.a_p[2] = -v;
+            j.r_p[3] = 1.0;
+            j.a_p[4] = c;
+        }
+        j
+    }
+    fn half_period_symmetry(&self) -> Option<HalfPeriodSymmetry> {
+        Some(HalfPeriodSymmetry {
+            sign: -1.0,
+            shift: 0.0,
+        })
+    }
+}
