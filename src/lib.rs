@@ -22,5 +22,7 @@ pub mod integrator;
 pub mod io;
 pub mod maps;
 pub mod model;
+#[cfg(feature = "plot")]
+pub mod plotting;
 
 pub use error::{Error, Result};

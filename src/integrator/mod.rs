@@ -166,7 +166,9 @@ impl FlowOptions {
         crate::error::positive("rtol", self.rtol)?;
         crate::error::non_negative("atol", self.atol)?;
         crate::error::positive("max_step_fraction", self.max_step_fraction)?;
-        if self.sample_times.windows(2).any(|w| !(w[0] <= w[1])) {
+        if self.sample_times.iter().any(|t| !t.is_finite())
+            || self.sample_times.windows(2).any(|w| w[0] > w[1])
+        {
             return Err(Error::InvalidInput(
                 "sample times must be finite and sorted ascending".into(),
             ));
