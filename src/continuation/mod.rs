@@ -831,10 +831,12 @@ pub fn switch_branch(
             let s = branch.spec.on_stroboscopic();
             OrbitSpec::stroboscopic(s.iterations, s.winding)
         }
-        k => return Err(Error::Unsupported(format!(
+        k => {
+            return Err(Error::Unsupported(format!(
             "branch switching is implemented at flips and symmetry-breaking points, not at a {}",
             k.label()
-        ))),
+        )))
+        }
     };
     let v = special.eigenvector.ok_or_else(|| {
         Error::Continuation("the special point carries no eigenvector to switch along".into())
