@@ -477,17 +477,14 @@ impl Continuation {
             let v_pred = v0 + self.ds * self.tangent;
             let u_pred = v_pred.component_div(&w);
             let t = self.tangent;
-            match self.correct(u_pred, t, v_pred, 0.0, 8) {
-                Ok(s) => {
-                    // refuse steps that turn the tangent around by more than ~60° (jumped branches)
-                    let tn = self.tangent_from(&s, &t);
-                    if let Ok(tn) = tn {
-                        if tn.dot(&t) > 0.5 || self.ds <= self.opts.ds_min * 2.0 {
-                            break (s, tn);
-                        }
+            // a failed corrector (or a parameter leaving its admissible range) halves the step
+            if let Ok(s) = self.correct(u_pred, t, v_pred, 0.0, 8) {
+                // refuse steps that turn the tangent around by more than ~60° (jumped branches)
+                if let Ok(tn) = self.tangent_from(&s, &t) {
+                    if tn.dot(&t) > 0.5 || self.ds <= self.opts.ds_min * 2.0 {
+                        break (s, tn);
                     }
                 }
-                Err(Error::InvalidParameter { .. }) | Err(_) => {}
             }
             self.ds *= 0.5;
             if self.ds < self.opts.ds_min {
