@@ -4,12 +4,11 @@
 use super::common::{GearArgs, Output};
 use super::continue_::{parse_range, parse_section, parse_state};
 use super::locate::parse_kind;
-use crate::continuation::two_param::{follow, Curve};
+use crate::continuation::two_param::{follow, grid};
 use crate::continuation::{Param, SpecialKind};
 use crate::error::{Error, Result};
 use crate::maps::Section;
 use crate::orbits::{OrbitSpec, ShootingOptions};
-use std::f64::consts::{FRAC_PI_2, TAU};
 
 /// Arguments of `gearbif boundary`.
 #[derive(Debug, clap::Args)]
@@ -61,50 +60,6 @@ pub struct Args {
     json: bool,
 }
 
-fn grid(lo: f64, hi: f64, step: f64, reverse: bool) -> Vec<f64> {
-    let n = ((hi - lo) / step).ceil().max(1.0) as usize;
-    let mut v: Vec<f64> = (0..=n).map(|i| (lo + i as f64 * step).min(hi)).collect();
-    v.dedup();
-    if reverse {
-        v.reverse();
-    }
-    v
-}
-
-/// The lock-loss boundary: fold curves of the forward lock (p = +1, from Θ = 0) and of the reversed
-/// lock (p = −1, from Θ = 54.74°), each started at the analytic f_c.
-pub fn lock_loss_boundary(
-    base: &crate::model::Gear,
-    step_deg: f64,
-    opts: &ShootingOptions,
-) -> Result<Vec<(String, Curve)>> {
-    if !(step_deg > 0.0 && step_deg.is_finite()) {
-        return Err(Error::InvalidInput("step must be > 0".into()));
-    }
-    let fc = base
-        .lock_loss_frequency()
-        .ok_or_else(|| Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into()))?;
-    let th_rev = (2.0f64 / 3.0).sqrt().asin().to_degrees();
-    let mut out = Vec::new();
-    for (p, from) in [(1, 0.0), (-1, th_rev)] {
-        let g = Param::ThetaDeg.set(base, from)?;
-        let vals = grid(0.0, th_rev, step_deg, p < 0);
-        let c = follow(
-            &g.with_f(fc)?,
-            &OrbitSpec::symmetric(p),
-            SpecialKind::Fold,
-            Param::F,
-            Param::ThetaDeg,
-            [FRAC_PI_2, p as f64 * TAU * fc],
-            fc,
-            &vals,
-            opts,
-        )?;
-        out.push((format!("fold of the lock, winding {p:+}"), c));
-    }
-    Ok(out)
-}
-
 /// Runs `gearbif boundary`.
 pub fn run(a: Args) -> Result<()> {
     let params = a.gear.params()?;
@@ -121,7 +76,7 @@ pub fn run(a: Args) -> Result<()> {
         && along == Param::ThetaDeg
         && free == Param::F
     {
-        lock_loss_boundary(&base, a.step, &opts)?
+        crate::continuation::two_param::lock_loss_boundary(&base, a.step, &opts)?
     } else {
         let (lo, hi) = parse_range(a.range.as_deref().unwrap_or("0:54.7356103"))?;
         let x = parse_state(a.start_state.as_deref().ok_or_else(|| {

@@ -19,6 +19,7 @@ use crate::model::Gear;
 use crate::orbits::{residual, EventCounts, Floquet, OrbitSpec, ShootingOptions};
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
+use std::f64::consts::{FRAC_PI_2, TAU};
 
 /// One solution of the augmented system.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -253,4 +254,50 @@ pub fn follow(
         points: pts,
         stopped,
     })
+}
+
+/// An inclusive grid from `lo` to `hi` with spacing `step` (the last step may be shorter), reversed if
+/// asked.
+pub fn grid(lo: f64, hi: f64, step: f64, reverse: bool) -> Vec<f64> {
+    let n = ((hi - lo) / step).ceil().max(1.0) as usize;
+    let mut v: Vec<f64> = (0..=n).map(|i| (lo + i as f64 * step).min(hi)).collect();
+    v.dedup();
+    if reverse {
+        v.reverse();
+    }
+    v
+}
+
+/// The lock-loss boundary f_c(Θ) for parallel shafts: fold curves of the forward lock (p = +1, from Θ = 0) and of the reversed
+/// lock (p = −1, from Θ = 54.74°), each started at the analytic f_c.
+pub fn lock_loss_boundary(
+    base: &Gear,
+    step_deg: f64,
+    opts: &ShootingOptions,
+) -> Result<Vec<(String, Curve)>> {
+    if !(step_deg > 0.0 && step_deg.is_finite()) {
+        return Err(Error::InvalidInput("step must be > 0".into()));
+    }
+    let fc = base
+        .lock_loss_frequency()
+        .ok_or_else(|| Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into()))?;
+    let th_rev = (2.0f64 / 3.0).sqrt().asin().to_degrees();
+    let mut out = Vec::new();
+    for (p, from) in [(1, 0.0), (-1, th_rev)] {
+        let g = Param::ThetaDeg.set(base, from)?;
+        let vals = grid(0.0, th_rev, step_deg, p < 0);
+        let c = follow(
+            &g.with_f(fc)?,
+            &OrbitSpec::symmetric(p),
+            SpecialKind::Fold,
+            Param::F,
+            Param::ThetaDeg,
+            [FRAC_PI_2, p as f64 * TAU * fc],
+            fc,
+            &vals,
+            opts,
+        )?;
+        out.push((format!("fold of the lock, winding {p:+}"), c));
+    }
+    Ok(out)
 }
