@@ -361,3 +361,49 @@ fn bad_options_are_errors_not_panics() {
         Err(Error::Unsupported(_))
     ));
 }
+
+#[cfg(feature = "cli")]
+#[test]
+fn cli_continue_writes_branch_json_and_plots() {
+    use clap::Parser;
+    let dir = std::env::temp_dir().join(format!("gearbif-cont-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("lock.json");
+    let svg = dir.join("lock.svg");
+    let cli = gearbif::cli::Cli::try_parse_from([
+        "gearbif",
+        "continue",
+        "--f",
+        "5",
+        "--lock",
+        "stable",
+        "--range",
+        "0.5:60",
+        "--ds",
+        "0.5",
+        "--ds-max",
+        "5",
+        "--max-multiplier",
+        "1e3",
+        "--out",
+        out.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
+    ])
+    .unwrap();
+    gearbif::cli::run(cli).unwrap();
+    let v: Vec<Branch> = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let fc = Gear::paper(0.0, 1.0)
+        .unwrap()
+        .lock_loss_frequency()
+        .unwrap();
+    let fold = v[0].specials_of(SpecialKind::Fold).next().unwrap();
+    assert!((fold.param - fc).abs() < 1e-6);
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+    // bad input is an error, not a panic
+    let bad =
+        gearbif::cli::Cli::try_parse_from(["gearbif", "continue", "--f", "5", "--range", "3:1"])
+            .unwrap();
+    assert!(gearbif::cli::run(bad).is_err());
+    std::fs::remove_dir_all(dir).ok();
+}
