@@ -479,9 +479,12 @@ impl Continuation {
             let t = self.tangent;
             // a failed corrector (or a parameter leaving its admissible range) halves the step
             if let Ok(s) = self.correct(u_pred, t, v_pred, 0.0, 8) {
-                // refuse steps that turn the tangent around by more than ~60° (jumped branches)
+                // refuse corrections longer than the step (the corrector jumped to another part of
+                // the branch, e.g. across a nonsmooth fold) and steps that turn the tangent by > 60°
+                let jump = (s.u.component_mul(&w) - v_pred).norm();
                 if let Ok(tn) = self.tangent_from(&s, &t) {
-                    if tn.dot(&t) > 0.5 || self.ds <= self.opts.ds_min * 2.0 {
+                    let small = self.ds <= self.opts.ds_min * 2.0;
+                    if (tn.dot(&t) > 0.5 && jump <= self.ds) || small {
                         break (s, tn);
                     }
                 }
