@@ -407,3 +407,61 @@ fn cli_continue_writes_branch_json_and_plots() {
     assert!(gearbif::cli::run(bad).is_err());
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn theta25_nonsmooth_fold_and_narrow_stable_window_confirmed_by_simulation() {
+    let b = sym_branch_theta25(1e-11);
+    let sb = b
+        .specials_of(SpecialKind::SymmetryBreaking)
+        .next()
+        .unwrap()
+        .clone();
+    let sw = switch_branch(&b, &sb, -1e-3, &ShootingOptions::default()).unwrap();
+    let opts = ContinuationOptions {
+        ds: -0.005,
+        ds_max: 0.02,
+        param_min: 1.9,
+        param_max: 3.0,
+        max_steps: 300,
+        ..Default::default()
+    };
+    let a = Continuation::from_orbit(sw.gear, Param::F, &sw.orbit, opts)
+        .unwrap()
+        .run(None)
+        .unwrap();
+    // stick onset where a multiplier jumps across +1 (2.31 → 0.51): a nonsmooth fold
+    let nf = a
+        .specials
+        .iter()
+        .find(|s| {
+            s.kind == SpecialKind::Nonsmooth
+                && s.jump.as_ref().unwrap().crosses.as_deref() == Some("fold")
+        })
+        .expect("nonsmooth fold");
+    assert!((nf.param - 1.9278115).abs() < 1e-5, "{}", nf.param);
+    assert!(nf.precision < 1e-7 && nf.stability_change);
+    let j = nf.jump.as_ref().unwrap();
+    assert_eq!(j.events_after.sticks, 1);
+    assert_eq!(j.floquet_after.multipliers[1], [0.0, 0.0]);
+    let fold = a
+        .specials_of(SpecialKind::Fold)
+        .next()
+        .expect("smooth fold");
+    assert!((fold.param - 1.9579023).abs() < 1e-5, "{}", fold.param);
+    // independent: the stable orbit between them is an attractor of the simulation, and a sweep
+    // loses it above the fold
+    let p = a
+        .points
+        .iter()
+        .find(|p| p.stable && p.param > 1.935 && p.param < 1.955)
+        .expect("stable point in the window");
+    let mk = |f| Gear::paper(25.0, f);
+    let x0 = [p.x[0] + 1e-3, p.x[1] + 1e-2];
+    let s = quasi_static_sweep(mk, &[p.param, 1.956, 1.962], x0, 300, 1e-9).unwrap();
+    let d0 = (s[0].x[0] - p.x[0].rem_euclid(TAU)).hypot(s[0].x[1] - p.x[1]);
+    assert!(d0 < 1e-5, "relaxed back onto the orbit: {d0}");
+    assert!(s[0].asymmetry > 1e-3 && s[1].asymmetry > 1e-3 && s[1].closing < 1e-5);
+    // above the fold the narrow T-state is gone: the sweep lands elsewhere
+    let d2 = (s[2].x[0] - s[1].x[0]).hypot(s[2].x[1] - s[1].x[1]);
+    assert!(d2 > 0.1 || s[2].closing > 1e-3, "{s:?}");
+}
