@@ -855,40 +855,58 @@ pub fn switch_branch(
         let Ok(old) = shoot(&gear, &old_spec, special.x, opts) else {
             continue;
         };
+        let found = |o: PeriodicOrbit| {
+            let sep = distinct(&o, &old);
+            (sep > 1e-4).then_some((o, sep))
+        };
+        let perturbed = |eps: f64, sgn: f64| {
+            [
+                special.x[0] + sgn * eps * v[0],
+                special.x[1] + sgn * eps * v[1],
+            ]
+        };
+        // Newton from x* ± εv
         for &eps in &[0.02, 0.05, 0.1, 0.2] {
             for sgn in [1.0, -1.0] {
-                let x0 = [
-                    special.x[0] + sgn * eps * v[0],
-                    special.x[1] + sgn * eps * v[1],
-                ];
-                let mut tries = vec![shoot(&gear, &spec, x0, opts)];
-                // a stable new branch (supercritical case): relax a simulation from the perturbed state
-                if let Ok(d) = crate::orbits::detect_period(
-                    &gear,
-                    x0,
-                    400,
-                    spec.iterations,
-                    1e-3,
-                    opts.tol.max(1e-10),
-                ) {
-                    tries.push(shoot(&gear, &spec, d.x, opts));
-                }
-                for t in tries {
-                    match t {
-                        Ok(o) => {
-                            let sep = distinct(&o, &old);
-                            if sep > 1e-4 {
-                                return Ok(SwitchStart {
-                                    gear,
-                                    spec,
-                                    orbit: o,
-                                    separation: sep,
-                                });
-                            }
+                match shoot(&gear, &spec, perturbed(eps, sgn), opts) {
+                    Ok(o) => {
+                        if let Some((orbit, separation)) = found(o) {
+                            return Ok(SwitchStart {
+                                gear,
+                                spec,
+                                orbit,
+                                separation,
+                            });
                         }
-                        Err(e) => last_err = Some(e),
+                    }
+                    Err(e) => last_err = Some(e),
+                }
+            }
+        }
+        // a stable new branch (supercritical case): relax a simulation from the perturbed state
+        for sgn in [1.0, -1.0] {
+            let Ok(d) = crate::orbits::detect_period(
+                &gear,
+                perturbed(0.05, sgn),
+                300,
+                spec.iterations,
+                1e-3,
+                opts.tol.max(1e-10),
+            ) else {
+                continue;
+            };
+            match shoot(&gear, &spec, d.x, opts) {
+                Ok(o) => {
+                    if let Some((orbit, separation)) = found(o) {
+                        return Ok(SwitchStart {
+                            gear,
+                            spec,
+                            orbit,
+                            separation,
+                        });
                     }
                 }
+                Err(e) => last_err = Some(e),
             }
         }
     }
