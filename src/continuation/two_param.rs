@@ -215,34 +215,50 @@ pub fn follow(
     }
     let mut pts: Vec<CurvePoint> = Vec::new();
     let mut stopped = None;
-    for (i, &v) in values.iter().enumerate() {
-        let g = along.set(gear, v)?;
-        let (xg, lg) = match pts.len() {
-            0 => (x0, free0),
-            1 => (pts[0].x, pts[0].free),
-            n => {
-                let (a, b) = (&pts[n - 2], &pts[n - 1]);
-                let c = (v - b.along) / (b.along - a.along);
-                (
-                    [
-                        b.x[0] + c * (b.x[0] - a.x[0]),
-                        b.x[1] + c * (b.x[1] - a.x[1]),
-                    ],
-                    b.free + c * (b.free - a.free),
-                )
-            }
-        };
-        match locate_augmented(&g, spec, kind, free, xg, lg, opts) {
-            Ok(mut p) => {
-                p.along = v;
-                pts.push(p);
-            }
-            Err(e) => {
-                if i == 0 {
-                    return Err(e);
+    // predictor from the last two points (secant), or the start
+    let predict = |pts: &[CurvePoint], v: f64| match pts.len() {
+        0 => (x0, free0),
+        1 => (pts[0].x, pts[0].free),
+        n => {
+            let (a, b) = (&pts[n - 2], &pts[n - 1]);
+            let c = (v - b.along) / (b.along - a.along);
+            (
+                [
+                    b.x[0] + c * (b.x[0] - a.x[0]),
+                    b.x[1] + c * (b.x[1] - a.x[1]),
+                ],
+                b.free + c * (b.free - a.free),
+            )
+        }
+    };
+    'values: for (i, &v) in values.iter().enumerate() {
+        // on failure, halve the step towards v (at most 5 times) before giving up
+        let mut target = v;
+        let mut halvings = 0;
+        loop {
+            let g = along.set(gear, target)?;
+            let (xg, lg) = predict(&pts, target);
+            match locate_augmented(&g, spec, kind, free, xg, lg, opts) {
+                Ok(mut p) => {
+                    p.along = target;
+                    pts.push(p);
+                    if target == v {
+                        break;
+                    }
+                    target = v;
+                    halvings = 0;
                 }
-                stopped = Some(format!("at {} = {v}: {e}", along.name()));
-                break;
+                Err(e) => {
+                    let Some(last) = pts.last().map(|p| p.along) else {
+                        return Err(e);
+                    };
+                    if i == 0 || halvings >= 5 {
+                        stopped = Some(format!("at {} = {target}: {e}", along.name()));
+                        break 'values;
+                    }
+                    target = 0.5 * (last + target);
+                    halvings += 1;
+                }
             }
         }
     }
