@@ -238,7 +238,21 @@ pub fn follow(
         loop {
             let g = along.set(gear, target)?;
             let (xg, lg) = predict(&pts, target);
-            match locate_augmented(&g, spec, kind, free, xg, lg, opts) {
+            // a solution far from the prediction has jumped to another curve: treat it as a failure
+            let res = locate_augmented(&g, spec, kind, free, xg, lg, opts).and_then(|p| {
+                let far_x = (p.x[0] - xg[0]).abs() > 0.5
+                    || (p.x[1] - xg[1]).abs() > 0.5 + 0.2 * xg[1].abs();
+                if pts.len() >= 2 && ((p.free - lg).abs() > 0.1 * lg.abs().max(1e-2) || far_x) {
+                    Err(Error::Continuation(format!(
+                        "solution {} = {} is far from the prediction {lg} (another curve?)",
+                        free.name(),
+                        p.free
+                    )))
+                } else {
+                    Ok(p)
+                }
+            });
+            match res {
                 Ok(mut p) => {
                     p.along = target;
                     pts.push(p);
