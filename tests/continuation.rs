@@ -465,3 +465,50 @@ fn theta25_nonsmooth_fold_and_narrow_stable_window_confirmed_by_simulation() {
     let d2 = (s[2].x[0] - s[1].x[0]).hypot(s[2].x[1] - s[1].x[1]);
     assert!(d2 > 0.1 || s[2].closing > 1e-3, "{s:?}");
 }
+
+#[test]
+fn continuation_in_theta_uses_the_chain_rule_and_meets_the_fc_curve() {
+    // ∂F/∂Θ from the Δ column times dΔ/dΘ against central differences
+    let sh = ShootingOptions::default();
+    let g = Gear::paper(20.0, 10.0).unwrap();
+    let spec = OrbitSpec::symmetric(1);
+    let x = [2.0, 60.0];
+    let (_, img) = gearbif::orbits::residual(&g, &spec, x, &sh, false).unwrap();
+    let d = Param::ThetaDeg.derivative(&img, 20.0).unwrap();
+    let h = 1e-5;
+    let r = |th: f64| {
+        let gg = Param::ThetaDeg.set(&g, th).unwrap();
+        gearbif::orbits::residual(&gg, &spec, x, &sh, false)
+            .unwrap()
+            .0
+    };
+    let (rp, rm) = (r(20.0 + h), r(20.0 - h));
+    for i in 0..2 {
+        assert_relative_eq!(d[i], (rp[i] - rm[i]) / (2.0 * h), max_relative = 1e-5);
+    }
+    assert_relative_eq!(Param::ThetaDeg.get(&g), 20.0, epsilon = 1e-10);
+    // at f = f_c(25°) from the boundary, the lock branch continued in Θ folds at Θ = 25°
+    let f25 = 28.2708171273;
+    let g10 = Gear::paper(10.0, f25).unwrap();
+    let o = gearbif::orbits::shoot(&g10, &spec, [2.4, TAU * f25], &sh).unwrap();
+    assert!(o.floquet.stable);
+    let b = Continuation::from_orbit(
+        g10,
+        Param::ThetaDeg,
+        &o,
+        ContinuationOptions {
+            ds: 1.0,
+            ds_max: 2.0,
+            param_min: 0.0,
+            param_max: 40.0,
+            max_steps: 60,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .run(None)
+    .unwrap();
+    let fold = b.specials_of(SpecialKind::Fold).next().unwrap();
+    assert!((fold.param - 25.0).abs() < 1e-5, "{}", fold.param);
+    let _ = PI;
+}
