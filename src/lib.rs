@@ -17,11 +17,13 @@
 
 #[cfg(feature = "cli")]
 pub mod cli;
+pub mod continuation;
 pub mod error;
 pub mod integrator;
 pub mod io;
 pub mod maps;
 pub mod model;
+pub mod orbits;
 #[cfg(feature = "plot")]
 pub mod plotting;
 

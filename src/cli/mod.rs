@@ -5,8 +5,11 @@
 //! units with angles in degrees; `--json` prints machine-readable output on stdout; errors go to
 //! stderr with exit code 2; output files are written atomically.
 
+mod boundary;
 mod common;
+mod continue_;
 mod info;
+mod locate;
 
 pub use common::{GearArgs, Output};
 
@@ -27,12 +30,21 @@ pub struct Cli {
 pub enum Command {
     /// Derived quantities of a gear: g, Δ, f_c, lock angles, cogging-free shaft angles.
     Info(info::Args),
+    /// Pseudo-arclength continuation of a periodic orbit in one parameter, with special points.
+    Continue(continue_::Args),
+    /// Refine one special point (fold, flip, symmetry-breaking, Neimark–Sacker) by Newton.
+    Locate(locate::Args),
+    /// A two-parameter curve of special points, by default the lock-loss boundary f_c(Θ).
+    Boundary(boundary::Args),
 }
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> crate::Result<()> {
     match cli.command {
         Command::Info(a) => info::run(a),
+        Command::Continue(a) => continue_::run(a),
+        Command::Locate(a) => locate::run(a),
+        Command::Boundary(a) => boundary::run(a),
     }
 }
 

@@ -1,0 +1,143 @@
+//! `gearbif boundary`: a two-parameter curve of special points, by default the lock-loss boundary
+//! f_c(Θ) of the locked orbit over Θ ∈ [0°, 54.74°] (both senses of rotation).
+
+use super::common::{GearArgs, Output};
+use super::continue_::{parse_range, parse_section, parse_state};
+use super::locate::parse_kind;
+use crate::continuation::two_param::{follow, grid};
+use crate::continuation::{Param, SpecialKind};
+use crate::error::{Error, Result};
+use crate::maps::Section;
+use crate::orbits::{OrbitSpec, ShootingOptions};
+
+/// Arguments of `gearbif boundary`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    gear: GearArgs,
+    /// Type of the special point followed: fold, flip, sb or ns.
+    #[arg(long, default_value = "fold")]
+    kind: String,
+    /// The parameter solved for.
+    #[arg(long, default_value = "f")]
+    free: String,
+    /// The parameter stepped (theta for parallel shafts).
+    #[arg(long, default_value = "theta")]
+    along: String,
+    /// Range `lo:hi` of the stepped parameter (default 0:54.7356 for theta).
+    #[arg(long, allow_hyphen_values = true)]
+    range: Option<String>,
+    /// Step of the stepped parameter.
+    #[arg(long, default_value_t = 1.0)]
+    step: f64,
+    /// Start: free-parameter value, state and winding at the first value of the range (default: the
+    /// analytic lock fold at Θ = 0 and at 54.74°, i.e. the lock-loss boundary).
+    #[arg(long)]
+    start_free: Option<f64>,
+    /// Start state `beta,omega`.
+    #[arg(long, allow_hyphen_values = true)]
+    start_state: Option<String>,
+    /// Step the range downwards (from hi to lo); the start is then at hi.
+    #[arg(long)]
+    reverse: bool,
+    /// Winding of the orbit.
+    #[arg(long, allow_hyphen_values = true, default_value_t = 1)]
+    winding: i32,
+    /// Orbit problem: sym or strob.
+    #[arg(long, default_value = "sym")]
+    section: String,
+    /// Integrator tolerance.
+    #[arg(long, default_value_t = 1e-11)]
+    tol: f64,
+    /// Write the curves (JSON).
+    #[arg(long)]
+    out: Option<std::path::PathBuf>,
+    /// Plot (.svg or .png).
+    #[arg(long)]
+    plot: Option<std::path::PathBuf>,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs `gearbif boundary`.
+pub fn run(a: Args) -> Result<()> {
+    let params = a.gear.params()?;
+    let base = params.driven(1.0)?;
+    let kind = parse_kind(&a.kind)?;
+    let free = Param::from_name(&a.free)?;
+    let along = Param::from_name(&a.along)?;
+    let opts = ShootingOptions {
+        tol: a.tol,
+        ..Default::default()
+    };
+    let curves = if a.start_state.is_none()
+        && kind == SpecialKind::Fold
+        && along == Param::ThetaDeg
+        && free == Param::F
+    {
+        crate::continuation::two_param::lock_loss_boundary(&base, a.step, &opts)?
+    } else {
+        let (lo, hi) = parse_range(a.range.as_deref().unwrap_or("0:54.7356103"))?;
+        let x = parse_state(a.start_state.as_deref().ok_or_else(|| {
+            Error::InvalidInput("--start-state is needed for this curve".into())
+        })?)?;
+        let f0 = a.start_free.ok_or_else(|| {
+            Error::InvalidInput("--start-free is needed with --start-state".into())
+        })?;
+        let spec = match parse_section(&a.section)? {
+            Section::HalfPeriod => OrbitSpec::symmetric(a.winding),
+            Section::Stroboscopic => OrbitSpec::stroboscopic(1, a.winding),
+        };
+        let vals = grid(lo, hi, a.step, a.reverse);
+        let g = along.set(&free.set(&base, f0)?, vals[0])?;
+        let c = follow(&g, &spec, kind, free, along, x, f0, &vals, &opts)?;
+        vec![(format!("{} curve", kind.label()), c)]
+    };
+    if let Some(p) = &a.out {
+        crate::io::write_json_atomic(p, &curves)?;
+    }
+    if let Some(p) = &a.plot {
+        let mut marks = Vec::new();
+        if let Some(fc) = base.lock_loss_frequency() {
+            marks.push(("analytic f_c".to_string(), 0.0, fc));
+            marks.push((
+                "analytic f_c".to_string(),
+                (2.0f64 / 3.0).sqrt().asin().to_degrees(),
+                fc,
+            ));
+        }
+        let fig = crate::plotting::branch::BoundaryPlot {
+            title: format!("{} boundary", kind.label()),
+            curves: curves.clone(),
+            marks,
+        };
+        crate::plotting::save(&fig, p)?;
+    }
+    Output { json: a.json }.emit(&curves, || {
+        let mut s = String::new();
+        for (label, c) in &curves {
+            s.push_str(&format!(
+                "{label}: {} points{}\n",
+                c.points.len(),
+                c.stopped
+                    .as_ref()
+                    .map(|r| format!(" (stopped {r})"))
+                    .unwrap_or_default()
+            ));
+            for p in &c.points {
+                s.push_str(&format!(
+                    "  {} = {:9.4}   {} = {:.9} ± {:.1e}   x = ({:.6}, {:.4})\n",
+                    c.along.name(),
+                    p.along,
+                    c.free.name(),
+                    p.free,
+                    p.precision,
+                    p.x[0],
+                    p.x[1]
+                ));
+            }
+        }
+        s
+    })
+}

@@ -1,0 +1,275 @@
+//! `gearbif continue`: pseudo-arclength continuation of a periodic orbit in one parameter.
+
+use super::common::{check_frequency, GearArgs, Output};
+use crate::continuation::{switch_branch, Branch, Continuation, ContinuationOptions, Param};
+use crate::error::{Error, Result};
+use crate::maps::Section;
+use crate::model::Gear;
+use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};
+
+/// Arguments of `gearbif continue`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    gear: GearArgs,
+    /// Drive frequency f [Hz] of the start orbit.
+    #[arg(long)]
+    f: f64,
+    /// Continuation parameter: f, theta (parallel shafts, deg), delta, zeta, eta or g.
+    #[arg(long, default_value = "f")]
+    param: String,
+    /// Parameter range `lo:hi`; the continuation stops on its bounds.
+    #[arg(long, allow_hyphen_values = true)]
+    range: String,
+    /// Initial direction: up or down in the parameter.
+    #[arg(long, default_value = "up")]
+    direction: String,
+    /// Start state `beta,omega` (rad, rad/s, physical convention); default: from a simulation
+    /// (relaxed, period and winding detected), or the analytic lock with --lock.
+    #[arg(long, allow_hyphen_values = true)]
+    state: Option<String>,
+    /// Start from the analytic lock branch (Δ = ±1 only): stable or unstable.
+    #[arg(long)]
+    lock: Option<String>,
+    /// Orbit problem: `sym` (half-period map G, symmetric orbits) or `strob` (P_T^k).
+    #[arg(long, default_value = "sym")]
+    section: String,
+    /// Winding p (per period for sym, over k periods for strob); default: detected or ±1.
+    #[arg(long, allow_hyphen_values = true)]
+    winding: Option<i32>,
+    /// Period k of the P_T^k problem.
+    #[arg(long, default_value_t = 1)]
+    period: usize,
+    /// Initial step (arclength).
+    #[arg(long, default_value_t = 0.02)]
+    ds: f64,
+    /// Largest step.
+    #[arg(long, default_value_t = 0.1)]
+    ds_max: f64,
+    /// Largest number of steps.
+    #[arg(long, default_value_t = 2000)]
+    max_steps: usize,
+    /// Integrator tolerance.
+    #[arg(long, default_value_t = 1e-11)]
+    tol: f64,
+    /// Stop when a multiplier modulus exceeds this.
+    #[arg(long, default_value_t = 1e4)]
+    max_multiplier: f64,
+    /// After the continuation, switch at special point number N (flip or symmetry-breaking) and
+    /// continue the new branch too.
+    #[arg(long)]
+    switch_at: Option<usize>,
+    /// Write the branch (JSON) to this file.
+    #[arg(long)]
+    out: Option<std::path::PathBuf>,
+    /// Branch diagram (.svg or .png).
+    #[arg(long)]
+    plot: Option<std::path::PathBuf>,
+    /// Multipliers in the complex plane (.svg or .png).
+    #[arg(long)]
+    plot_multipliers: Option<std::path::PathBuf>,
+    /// Print JSON (all branches) on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Parses `lo:hi`.
+pub(crate) fn parse_range(s: &str) -> Result<(f64, f64)> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| Error::InvalidInput(format!("range `{s}` must be lo:hi")))?;
+    let p = |x: &str| {
+        x.trim()
+            .parse::<f64>()
+            .map_err(|_| Error::InvalidInput(format!("range `{s}`: `{x}` is not a number")))
+    };
+    let (lo, hi) = (p(a)?, p(b)?);
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(Error::InvalidInput(format!(
+            "range `{s}` must have lo < hi"
+        )));
+    }
+    Ok((lo, hi))
+}
+
+/// Parses `beta,omega`.
+pub(crate) fn parse_state(s: &str) -> Result<[f64; 2]> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| Error::InvalidInput(format!("state `{s}` must be beta,omega")))?;
+    if v.len() != 2 || !v.iter().all(|x| x.is_finite()) {
+        return Err(Error::InvalidInput(format!(
+            "state `{s}` must be two finite numbers"
+        )));
+    }
+    Ok([v[0], v[1]])
+}
+
+pub(crate) fn parse_section(s: &str) -> Result<Section> {
+    match s {
+        "sym" | "half" | "G" => Ok(Section::HalfPeriod),
+        "strob" | "P" => Ok(Section::Stroboscopic),
+        _ => Err(Error::InvalidInput(format!(
+            "section `{s}`: expected sym or strob"
+        ))),
+    }
+}
+
+fn start_orbit(
+    a: &Args,
+    gear: &Gear,
+    shooting: &ShootingOptions,
+) -> Result<crate::orbits::PeriodicOrbit> {
+    let section = parse_section(&a.section)?;
+    let mk_spec = |p: i32| match section {
+        Section::HalfPeriod => OrbitSpec::symmetric(p),
+        Section::Stroboscopic => OrbitSpec::stroboscopic(a.period, p),
+    };
+    if let Some(which) = &a.lock {
+        let lb = gear.lock_branch()?;
+        let pt = match which.as_str() {
+            "stable" => lb.stable,
+            "unstable" => lb.unstable,
+            _ => {
+                return Err(Error::InvalidInput(
+                    "--lock expects stable or unstable".into(),
+                ))
+            }
+        };
+        let p = a.winding.unwrap_or(pt.winding * a.period as i32);
+        return shoot(gear, &mk_spec(p), pt.state, shooting);
+    }
+    if let Some(s) = &a.state {
+        let x = parse_state(s)?;
+        let p = a
+            .winding
+            .ok_or_else(|| Error::InvalidInput("--state needs --winding".into()))?;
+        return shoot(gear, &mk_spec(p), x, shooting);
+    }
+    let o = orbit_from_simulation(
+        gear,
+        [0.0, 0.0],
+        400,
+        8,
+        section == Section::HalfPeriod,
+        shooting,
+    )?;
+    Ok(o)
+}
+
+fn summary(b: &Branch) -> String {
+    let mut s = String::new();
+    let (lo, hi) = b.param_range().unwrap_or((f64::NAN, f64::NAN));
+    s.push_str(&format!(
+        "branch in {} ({:?}, k = {}, p = {}): {} points, {} ∈ [{lo:.6}, {hi:.6}], {} map evaluations, stop: {:?}\n",
+        b.param.name(),
+        b.spec.section,
+        b.spec.iterations,
+        b.spec.winding,
+        b.points.len(),
+        b.param.name(),
+        b.map_evaluations,
+        b.stop
+    ));
+    for (i, sp) in b.specials.iter().enumerate() {
+        let mu = sp.floquet.multipliers;
+        s.push_str(&format!(
+            "  [{i}] {:<18} {} = {:.9} ± {:.1e}   x = ({:.6}, {:.6})   μ = ({:.6}{:+.6}i, {:.6}{:+.6}i){}\n",
+            sp.kind.label(),
+            b.param.name(),
+            sp.param,
+            sp.precision,
+            sp.x[0],
+            sp.x[1],
+            mu[0][0],
+            mu[0][1],
+            mu[1][0],
+            mu[1][1],
+            sp.jump
+                .as_ref()
+                .map(|j| format!(
+                    "   events (crossings, sticks) {:?} → {:?}",
+                    j.events_before.signature(),
+                    j.events_after.signature()
+                ))
+                .unwrap_or_default()
+        ));
+    }
+    s
+}
+
+/// Runs `gearbif continue`.
+pub fn run(a: Args) -> Result<()> {
+    check_frequency(a.f)?;
+    let params = a.gear.params()?;
+    let gear = params.driven(a.f)?;
+    let param = Param::from_name(&a.param)?;
+    let (lo, hi) = parse_range(&a.range)?;
+    let sign = match a.direction.as_str() {
+        "up" => 1.0,
+        "down" => -1.0,
+        d => return Err(Error::InvalidInput(format!("direction `{d}`: up or down"))),
+    };
+    let shooting = ShootingOptions {
+        tol: a.tol,
+        ..Default::default()
+    };
+    let orbit = start_orbit(&a, &gear, &shooting)?;
+    let opts = ContinuationOptions {
+        ds: sign * a.ds.abs(),
+        ds_max: a.ds_max,
+        max_steps: a.max_steps,
+        param_min: lo,
+        param_max: hi,
+        max_multiplier: a.max_multiplier,
+        shooting,
+        ..Default::default()
+    };
+    let branch = Continuation::from_orbit(gear, param, &orbit, opts)?.run(None)?;
+    let mut branches = vec![branch];
+    if let Some(n) = a.switch_at {
+        let b0 = &branches[0];
+        let sp = b0.specials.get(n).ok_or_else(|| {
+            Error::InvalidInput(format!(
+                "--switch-at {n}: the branch has {} special points",
+                b0.specials.len()
+            ))
+        })?;
+        let sw = switch_branch(b0, sp, -sign * 1e-3 * sp.param.abs().max(1.0), &shooting)?;
+        let b1 = Continuation::from_orbit(
+            sw.gear,
+            param,
+            &sw.orbit,
+            ContinuationOptions {
+                ds: sign * 0.25 * a.ds.abs(),
+                ..opts
+            },
+        )?
+        .run(None)?;
+        branches.push(b1);
+    }
+    if let Some(p) = &a.out {
+        crate::io::write_json_atomic(p, &branches)?;
+    }
+    if let Some(p) = &a.plot {
+        let fig = crate::plotting::branch::BranchDiagram {
+            title: format!("continuation in {}", param.name()),
+            branches: branches.clone(),
+            paper_convention: a.gear.convention() == crate::model::Convention::Paper,
+            ..Default::default()
+        };
+        crate::plotting::save(&fig, p)?;
+    }
+    if let Some(p) = &a.plot_multipliers {
+        let fig = crate::plotting::branch::MultiplierPlot {
+            title: "Floquet multipliers".into(),
+            branch: Some(branches[0].clone()),
+        };
+        crate::plotting::save(&fig, p)?;
+    }
+    Output { json: a.json }.emit(&branches, || {
+        branches.iter().map(summary).collect::<Vec<_>>().join("")
+    })
+}
