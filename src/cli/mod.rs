@@ -7,6 +7,9 @@
 
 mod common;
 mod info;
+mod map;
+mod methods;
+mod simulate;
 
 pub use common::{GearArgs, Output};
 
@@ -27,12 +30,18 @@ pub struct Cli {
 pub enum Command {
     /// Derived quantities of a gear: g, Δ, f_c, lock angles, cogging-free shaft angles.
     Info(info::Args),
+    /// Integrate the driven gear: trajectory CSV (t, alpha, beta, omega, delta) and events on ω = 0.
+    Simulate(simulate::Args),
+    /// Poincaré map P_T (or half-period map G) of a state, its Jacobians and multipliers.
+    Map(map::Args),
 }
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> crate::Result<()> {
     match cli.command {
         Command::Info(a) => info::run(a),
+        Command::Simulate(a) => simulate::run(a),
+        Command::Map(a) => map::run(a),
     }
 }
 
