@@ -15,6 +15,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod bench;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod error;

@@ -268,3 +268,43 @@ fn toml_config_sets_parameters() {
     assert!((v["delta"].as_f64().unwrap() - delta).abs() < 1e-12);
     std::fs::remove_dir_all(d).ok();
 }
+
+#[test]
+fn bench_integrators_writes_csv_figure_and_json() {
+    let d = tmpdir("bench");
+    let (csv, svg) = (d.join("wp.csv"), d.join("wp.svg"));
+    let v = json(&gearbif(&[
+        "bench-integrators",
+        "--event-tols",
+        "1e-6,1e-9",
+        "--fixed-steps",
+        "50",
+        "--reg-tols",
+        "1e-6",
+        "--reg-eps",
+        "1e-3",
+        "--min-time",
+        "0",
+        "--csv",
+        csv.to_str().unwrap(),
+        "--figure",
+        svg.to_str().unwrap(),
+        "--json",
+    ]));
+    let pts = v["points"].as_array().unwrap();
+    let n_reg = usize::from(cfg!(feature = "diffsol-check"));
+    assert_eq!(pts.len(), 3 + n_reg);
+    let err = |i: usize| pts[i]["error"].as_f64().unwrap();
+    assert!(err(1) < err(0) && err(1) < 1e-7);
+    // the paper's 50 steps per period: error far above the event-driven one, Jacobian wrong
+    assert!(err(2) > 1e-3 && pts[2]["jac_error"].as_f64().unwrap() > 1e-2);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), pts.len() + 1);
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
+    fails_with(&["bench-integrators", "--event-tols", "0"], "tol");
+    fails_with(
+        &["bench-integrators", "--figure", "x.jpg", "--min-time", "0"],
+        "svg",
+    );
+    std::fs::remove_dir_all(d).ok();
+}

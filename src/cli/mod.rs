@@ -5,6 +5,7 @@
 //! units with angles in degrees; `--json` prints machine-readable output on stdout; errors go to
 //! stderr with exit code 2; output files are written atomically.
 
+mod bench;
 mod common;
 mod info;
 mod map;
@@ -34,6 +35,8 @@ pub enum Command {
     Simulate(simulate::Args),
     /// Poincaré map P_T (or half-period map G) of a state, its Jacobians and multipliers.
     Map(map::Args),
+    /// Work-precision diagram of the integrators (error, RHS evaluations, wall time) on one case.
+    BenchIntegrators(bench::Args),
 }
 
 /// Runs a parsed command line.
@@ -42,6 +45,7 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Info(a) => info::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Map(a) => map::run(a),
+        Command::BenchIntegrators(a) => bench::run(a),
     }
 }
 
