@@ -71,5 +71,10 @@ fn bench_methods(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bench_methods);
+// no plots: criterion's plotters backend needs a system font, which a fresh machine may lack
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = bench_methods
+}
 criterion_main!(benches);

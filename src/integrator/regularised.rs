@@ -256,7 +256,7 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for Regularised {
         let mut atol = vec![opts.atol.max(1e-300); n];
         // β lives on the lift: measure its error in radians, as the event-driven integrator does
         atol[0] = opts.atol + opts.rtol;
-        let problem = OdeBuilder::<NalgebraMat<f64>>::new()
+        let mut problem = OdeBuilder::<NalgebraMat<f64>>::new()
             .t0(t0)
             .h0(h0)
             .rtol(opts.rtol)
@@ -276,6 +276,15 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for Regularised {
             )
             .build()
             .map_err(|e| dsol_err(t0, e))?;
+        // tanh(ω/ε) saturates a few ε away from Σ: a Newton matrix a few steps old is then far
+        // from the true one and the stage solves fail in stick phases (creep). The system is tiny,
+        // so re-evaluate the Jacobian at every step.
+        problem.ode_options.update_jacobian_after_steps = 1;
+        problem.ode_options.update_rhs_jacobian_after_steps = 1;
+        // diffsol counts nonlinear-solver failures over the whole solve, not per step (0.18):
+        // a long run through many stick phases would hit the default of 50 although every
+        // failed step recovers by a smaller step; bound the work by `max_steps` instead
+        problem.ode_options.max_nonlinear_solver_failures = opts.max_steps;
         let mut stats = Stats::default();
         let mut y = vec![0.0; n];
         macro_rules! drive {
