@@ -237,7 +237,7 @@ pub fn to_csv(points: &[WorkPrecisionPoint]) -> String {
     s
 }
 
-/// The work-precision figure: error against wall time, log-log, one series per family.
+/// The work-precision figure: log₁₀ error against log₁₀ wall time, one series per family.
 #[cfg(feature = "plot")]
 pub fn figure(points: &[WorkPrecisionPoint], title: &str) -> crate::plotting::LinePlot {
     use crate::plotting::{LinePlot, Series};
@@ -254,7 +254,8 @@ pub fn figure(points: &[WorkPrecisionPoint], title: &str) -> crate::plotting::Li
             let mut pts: Vec<(f64, f64)> = points
                 .iter()
                 .filter(|p| p.family == *f)
-                .map(|p| (p.time_s, p.error.max(1e-17)))
+                .filter(|p| p.time_s > 0.0)
+                .map(|p| (p.time_s.log10(), p.error.max(1e-17).log10()))
                 .collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
             [
@@ -275,10 +276,10 @@ pub fn figure(points: &[WorkPrecisionPoint], title: &str) -> crate::plotting::Li
         .collect();
     LinePlot {
         title: title.to_string(),
-        x_label: "wall time per call [s]".into(),
-        y_label: "max error of (β, ω) vs reference".into(),
-        log_x: true,
-        log_y: true,
+        x_label: "log10 of wall time per call [s]".into(),
+        y_label: "log10 of max error of (β, ω) vs reference".into(),
+        log_x: false,
+        log_y: false,
         series,
     }
 }

@@ -58,7 +58,7 @@ pub struct Args {
     /// CSV file of the points (family, method, tol, error, jac_error, rhs_evals, steps, time_s, repeats).
     #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
-    /// Figure file (.svg or .png): error vs wall time, log-log.
+    /// Figure file (.svg or .png): log10 error vs log10 wall time.
     #[arg(long, value_name = "FILE")]
     figure: Option<PathBuf>,
     /// Print JSON.
@@ -126,12 +126,12 @@ pub fn run(a: Args) -> Result<()> {
     }
     #[cfg(feature = "diffsol-check")]
     let reg: Vec<(crate::integrator::Regularised, f64)> = a
-        .reg_tols
+        .reg_eps
         .iter()
-        .flat_map(|&t| {
-            a.reg_eps
+        .flat_map(|&e| {
+            a.reg_tols
                 .iter()
-                .map(move |&e| (crate::integrator::Regularised::new(e), t))
+                .map(move |&t| (crate::integrator::Regularised::new(e), t))
         })
         .collect();
     #[cfg(feature = "diffsol-check")]
@@ -139,7 +139,7 @@ pub fn run(a: Args) -> Result<()> {
         cands.push(Candidate::new(
             m as &dyn FlowMethod<Gear>,
             *t,
-            format!("regularised diffsol ESDIRK34, tol {t:e}"),
+            format!("regularised diffsol ESDIRK34, ε = {:e}", m.epsilon),
         ));
     }
     #[cfg(not(feature = "diffsol-check"))]
