@@ -27,3 +27,8 @@ pub mod model;
 pub mod plotting;
 
 pub use error::{Error, Result};
+
+/// The README's library example, compiled and run as a doc test.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -28,7 +28,8 @@ pub struct Args {
     /// angles in rad on the lift); stdout if absent (and not --json).
     #[arg(long, value_name = "FILE")]
     out: Option<PathBuf>,
-    /// CSV file listing the events on ω = 0 (t [s], beta [rad], kind, to).
+    /// CSV file listing the events on ω = 0 (t [s], beta [rad], kind, to); only the event-driven
+    /// method has events (the fixed-step and regularised methods list none).
     #[arg(long, value_name = "FILE")]
     events: Option<PathBuf>,
     /// Print a JSON summary on stdout (the CSV then goes only to --out).
