@@ -15,6 +15,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod bench;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod continuation;
@@ -28,3 +29,8 @@ pub mod orbits;
 pub mod plotting;
 
 pub use error::{Error, Result};
+
+/// The README's library example, compiled and run as a doc test.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

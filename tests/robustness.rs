@@ -43,7 +43,10 @@ fn random_gears_integrate_and_converge_in_tolerance() {
         assert!(a.x[0].is_finite() && a.x[1].is_finite());
         let d = (a.x[0] - b.x[0]).abs() + (a.x[1] - b.x[1]).abs() / (1.0 + b.x[1].abs());
         worst = worst.max(d);
-        assert!(d < 1e-4, "case {case}: tol 1e-9 vs 1e-12 differ by {d} ({gear:?}, x0 {x0:?})");
+        assert!(
+            d < 1e-4,
+            "case {case}: tol 1e-9 vs 1e-12 differ by {d} ({gear:?}, x0 {x0:?})"
+        );
     }
     eprintln!("worst tolerance discrepancy over 150 random cases: {worst:e}");
 }

@@ -5,11 +5,15 @@
 //! units with angles in degrees; `--json` prints machine-readable output on stdout; errors go to
 //! stderr with exit code 2; output files are written atomically.
 
+mod bench;
 mod boundary;
 mod common;
 mod continue_;
 mod info;
 mod locate;
+mod map;
+mod methods;
+mod simulate;
 
 pub use common::{GearArgs, Output};
 
@@ -36,6 +40,13 @@ pub enum Command {
     Locate(locate::Args),
     /// A two-parameter curve of special points, by default the lock-loss boundary f_c(Θ).
     Boundary(boundary::Args),
+    /// Integrate the driven gear: trajectory CSV (t, alpha, beta, omega, delta) and events on ω = 0.
+    Simulate(simulate::Args),
+    /// Poincaré map P_T (or half-period map G) of a state, its Jacobians and multipliers.
+    Map(map::Args),
+    /// Work-precision diagram of the integrators (error, RHS evaluations, wall time) on one case
+    /// (default Θ = 25°, f = 2.7 Hz, one P_T with its Jacobian).
+    BenchIntegrators(bench::Args),
 }
 
 /// Runs a parsed command line.
@@ -45,6 +56,9 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Continue(a) => continue_::run(a),
         Command::Locate(a) => locate::run(a),
         Command::Boundary(a) => boundary::run(a),
+        Command::Simulate(a) => simulate::run(a),
+        Command::Map(a) => map::run(a),
+        Command::BenchIntegrators(a) => bench::run(a),
     }
 }
 

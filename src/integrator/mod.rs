@@ -15,9 +15,13 @@
 
 mod dopri5;
 mod fixed_step;
+#[cfg(feature = "diffsol-check")]
+mod regularised;
 
 pub use dopri5::EventDriven;
 pub use fixed_step::FixedStep;
+#[cfg(feature = "diffsol-check")]
+pub use regularised::{ImplicitMethod, Regularised};
 
 use crate::error::{Error, Result};
 use crate::model::DrivenOscillator;

@@ -1,0 +1,232 @@
+//! `gearbif bench-integrators`: a work-precision diagram of every integrator on one case.
+
+use super::common::{GearArgs, Output};
+use super::methods::{parse_x0, DriveArgs};
+use crate::bench::{rhs_only_time, to_csv, work_precision, Candidate, WorkPrecisionSetup};
+use crate::error::{positive, Error, Result};
+use crate::integrator::{EventDriven, FixedStep, FlowMethod, Sensitivity};
+use crate::model::Gear;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Arguments of `gearbif bench-integrators`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    gear: GearArgs,
+    /// Drive (input) frequency f [Hz].
+    #[arg(long, default_value_t = 2.7, allow_hyphen_values = true)]
+    f: f64,
+    /// Initial state "BETA_DEG,OMEGA" [deg, rad/s] (default 28.6479,2 = (0.5 rad, 2 rad/s):
+    /// at Θ = 25°, f = 2.7 Hz its first period crosses ω = 0).
+    #[arg(long, value_name = "BETA_DEG,OMEGA", allow_hyphen_values = true)]
+    x0: Option<String>,
+    /// Duration in drive periods [1] (1 = one stroboscopic map P_T).
+    #[arg(long, default_value_t = 1.0)]
+    periods: f64,
+    /// Do not propagate the state Jacobian (default: P_T with its Jacobian).
+    #[arg(long)]
+    no_jacobian: bool,
+    /// Tolerances of the event-driven DP5 [dimensionless], comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1e-4,1e-6,1e-8,1e-10,1e-12"
+    )]
+    event_tols: Vec<f64>,
+    /// Steps per period of the fixed-step RK4 [1], comma-separated (the paper uses 50).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "25,50,100,200,400,800,1600,3200,12800"
+    )]
+    fixed_steps: Vec<usize>,
+    /// Tolerances of the regularised diffsol method [dimensionless], comma-separated (each is run
+    /// with every --reg-eps).
+    #[arg(long, value_delimiter = ',', default_value = "1e-6,1e-8,1e-10")]
+    reg_tols: Vec<f64>,
+    /// Regularisation velocities ε of the regularised method [rad/s], comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "1e-2,1e-3,1e-4,1e-5")]
+    reg_eps: Vec<f64>,
+    /// Tolerance of the event-driven reference [dimensionless].
+    #[arg(long, default_value_t = 1e-13)]
+    reference_tol: f64,
+    /// Minimum wall time spent timing each point [s].
+    #[arg(long, default_value_t = 0.05)]
+    min_time: f64,
+    /// CSV file of the points (family, method, tol, error, jac_error, rhs_evals, steps, time_s, repeats).
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Figure file (.svg or .png): log10 error vs log10 wall time.
+    #[arg(long, value_name = "FILE")]
+    figure: Option<PathBuf>,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct Report {
+    f_hz: f64,
+    theta_deg: f64,
+    delta: f64,
+    x0: [f64; 2],
+    periods: f64,
+    jacobian: bool,
+    reference_tol: f64,
+    points: Vec<crate::bench::WorkPrecisionPoint>,
+    /// Time of the reference's number of RHS evaluations alone (jets if with Jacobian), s.
+    rhs_only_time_s: f64,
+    rhs_only_evals: usize,
+}
+
+/// Runs `gearbif bench-integrators`.
+pub fn run(a: Args) -> Result<()> {
+    let mut g = a.gear.clone();
+    if g.theta_deg.is_none() && g.config.is_none() {
+        g.theta_deg = Some(25.0);
+    }
+    let p = g.params()?;
+    let drive = DriveArgs { f: a.f, x0: None };
+    let gear: Gear = drive.gear(&g)?;
+    let x0 = match &a.x0 {
+        Some(s) => parse_x0(s)?,
+        None => [0.5, 2.0],
+    };
+    positive("periods", a.periods)?;
+    for &e in &a.reg_eps {
+        positive("epsilon", e)?;
+    }
+    positive("reference-tol", a.reference_tol)?;
+    crate::error::non_negative("min-time", a.min_time)?;
+    for &t in a.event_tols.iter().chain(&a.reg_tols) {
+        positive("tol", t)?;
+    }
+    if a.fixed_steps.contains(&0) {
+        return Err(Error::InvalidInput("--fixed-steps must be >= 1".into()));
+    }
+    let fixed: Vec<FixedStep> = a
+        .fixed_steps
+        .iter()
+        .map(|&n| FixedStep {
+            steps_per_period: n,
+        })
+        .collect();
+    let mut cands: Vec<Candidate<'_, Gear>> = Vec::new();
+    for &t in &a.event_tols {
+        cands.push(Candidate::new(&EventDriven, t, "event-driven DP5"));
+    }
+    for m in &fixed {
+        cands.push(Candidate::new(
+            m as &dyn FlowMethod<Gear>,
+            0.0,
+            "fixed-step RK4",
+        ));
+    }
+    #[cfg(feature = "diffsol-check")]
+    let reg: Vec<(crate::integrator::Regularised, f64)> = a
+        .reg_eps
+        .iter()
+        .flat_map(|&e| {
+            a.reg_tols
+                .iter()
+                .map(move |&t| (crate::integrator::Regularised::new(e), t))
+        })
+        .collect();
+    #[cfg(feature = "diffsol-check")]
+    for (m, t) in &reg {
+        cands.push(Candidate::new(
+            m as &dyn FlowMethod<Gear>,
+            *t,
+            format!("regularised diffsol ESDIRK34, ε = {:e}", m.epsilon),
+        ));
+    }
+    #[cfg(not(feature = "diffsol-check"))]
+    if !a.reg_tols.is_empty() {
+        eprintln!("note: built without `diffsol-check`: the regularised method is skipped");
+    }
+    let setup = WorkPrecisionSetup {
+        x0,
+        periods: a.periods,
+        sensitivity: if a.no_jacobian {
+            Sensitivity::None
+        } else {
+            Sensitivity::State
+        },
+        reference_tol: a.reference_tol,
+        min_time_s: a.min_time,
+    };
+    let points = work_precision(&gear, &setup, &cands)?;
+    let refflow = crate::bench::reference(&gear, &setup)?;
+    let n_rhs = refflow.stats.rhs_evals;
+    let rhs_t = rhs_only_time(&gear, x0, n_rhs, !a.no_jacobian);
+    let report = Report {
+        f_hz: gear.f,
+        theta_deg: p.theta.to_degrees(),
+        delta: gear.delta,
+        x0,
+        periods: a.periods,
+        jacobian: !a.no_jacobian,
+        reference_tol: a.reference_tol,
+        points,
+        rhs_only_time_s: rhs_t,
+        rhs_only_evals: n_rhs,
+    };
+    if let Some(path) = &a.csv {
+        crate::io::write_atomic(path, to_csv(&report.points).as_bytes())?;
+    }
+    if let Some(path) = &a.figure {
+        let title = format!(
+            "work-precision: Θ = {:.1}°, f = {} Hz, {} period(s){}",
+            report.theta_deg,
+            report.f_hz,
+            report.periods,
+            if report.jacobian {
+                " with Jacobian"
+            } else {
+                ""
+            }
+        );
+        crate::plotting::save(&crate::bench::figure(&report.points, &title), path)?;
+    }
+    Output { json: a.json }.emit(&report, || {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "Θ = {:.2}°, f = {} Hz, x0 = ({}, {}), {} period(s), Jacobian: {}, reference tol {:e}",
+            report.theta_deg,
+            report.f_hz,
+            x0[0],
+            x0[1],
+            report.periods,
+            report.jacobian,
+            report.reference_tol
+        );
+        let _ = writeln!(
+            s,
+            "{:<44} {:>9} {:>10} {:>10} {:>9} {:>8} {:>12}",
+            "method", "tol", "error", "jac_err", "rhs", "steps", "time [µs]"
+        );
+        for p in &report.points {
+            let _ = writeln!(
+                s,
+                "{:<44} {:>9.0e} {:>10.2e} {:>10} {:>9} {:>8} {:>12.1}",
+                p.method.chars().take(44).collect::<String>(),
+                p.tol,
+                p.error,
+                p.jac_error.map(|e| format!("{e:.2e}")).unwrap_or_default(),
+                p.rhs_evals,
+                p.steps,
+                p.time_s * 1e6
+            );
+        }
+        let _ = writeln!(
+            s,
+            "RHS alone: {} evaluations in {:.1} µs",
+            report.rhs_only_evals,
+            report.rhs_only_time_s * 1e6
+        );
+        s
+    })
+}

@@ -1,0 +1,127 @@
+//! Arguments shared by the commands that integrate: the method and its settings, the drive
+//! frequency, the initial state.
+
+use super::common::{check_frequency, GearArgs};
+use crate::error::{finite, positive, Error, Result};
+use crate::integrator::{EventDriven, FixedStep, FlowMethod};
+use crate::model::Gear;
+use clap::Args;
+
+/// `--method` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Exact event-driven Filippov integration (adaptive Dormand–Prince 5(4), saltation matrices).
+    #[default]
+    Event,
+    /// The paper's fixed-step RK4 with a naive sgn(ω) (`--steps` per period).
+    Fixed,
+    /// Friction η tanh(ω/ε) as a stiff ODE solved by diffsol ESDIRK3(4) (feature `diffsol-check`).
+    Regularised,
+}
+
+/// Integration settings.
+#[derive(Debug, Clone, Args)]
+pub struct MethodArgs {
+    /// Integration method.
+    #[arg(long, value_enum, default_value_t = MethodArg::Event)]
+    pub method: MethodArg,
+    /// Tolerance [dimensionless]: rtol = tol, atol = 1e-3·tol (event and regularised methods).
+    #[arg(long, default_value_t = 1e-9, allow_hyphen_values = true)]
+    pub tol: f64,
+    /// Steps per drive period for `--method fixed` [1] (the paper uses 50).
+    #[arg(long, default_value_t = 50)]
+    pub steps: usize,
+    /// Regularisation velocity ε for `--method regularised` [rad/s].
+    #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
+    pub epsilon: f64,
+}
+
+impl MethodArgs {
+    /// Validates the settings and returns the chosen method.
+    pub fn method(&self) -> Result<Box<dyn FlowMethod<Gear>>> {
+        positive("tol", self.tol)?;
+        if self.tol >= 1.0 {
+            return Err(Error::InvalidParameter {
+                name: "tol",
+                value: self.tol,
+                reason: "must be < 1",
+            });
+        }
+        match self.method {
+            MethodArg::Event => Ok(Box::new(EventDriven)),
+            MethodArg::Fixed => {
+                if self.steps == 0 {
+                    return Err(Error::InvalidInput("--steps must be >= 1".into()));
+                }
+                Ok(Box::new(FixedStep {
+                    steps_per_period: self.steps,
+                }))
+            }
+            MethodArg::Regularised => {
+                positive("epsilon", self.epsilon)?;
+                #[cfg(feature = "diffsol-check")]
+                {
+                    Ok(Box::new(crate::integrator::Regularised::new(self.epsilon)))
+                }
+                #[cfg(not(feature = "diffsol-check"))]
+                {
+                    Err(Error::Unsupported(
+                        "--method regularised needs the `diffsol-check` feature".into(),
+                    ))
+                }
+            }
+        }
+    }
+}
+
+/// The drive frequency and the initial state.
+#[derive(Debug, Clone, Args)]
+pub struct DriveArgs {
+    /// Drive (input) frequency f [Hz].
+    #[arg(long, default_value_t = 2.7, allow_hyphen_values = true)]
+    pub f: f64,
+    /// Initial state "BETA_DEG,OMEGA": output angle β [deg] and velocity ω [rad/s] at t = 0, in the
+    /// chosen --convention (default: the locked-input equilibrium at α = 0, at rest).
+    #[arg(long, value_name = "BETA_DEG,OMEGA", allow_hyphen_values = true)]
+    pub x0: Option<String>,
+}
+
+impl DriveArgs {
+    /// The driven gear in the chosen convention.
+    pub fn gear(&self, g: &GearArgs) -> Result<Gear> {
+        let p = g.params()?;
+        check_frequency(self.f)?;
+        Ok(p.driven(self.f)?.with_convention(g.convention()))
+    }
+
+    /// The initial state (β [rad], ω [rad/s]) in the gear's convention.
+    pub fn x0(&self, gear: &Gear) -> Result<[f64; 2]> {
+        match &self.x0 {
+            None => Ok([
+                crate::model::gear::equilibrium_angle(gear.delta, gear.alpha0)
+                    + gear.convention.beta_offset(),
+                0.0,
+            ]),
+            Some(s) => parse_x0(s),
+        }
+    }
+}
+
+/// Parses "BETA_DEG,OMEGA" into (β [rad], ω [rad/s]).
+pub fn parse_x0(s: &str) -> Result<[f64; 2]> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 2 {
+        return Err(Error::InvalidInput(format!(
+            "--x0 expects BETA_DEG,OMEGA (two numbers), got `{s}`"
+        )));
+    }
+    let num = |name: &'static str, t: &str| -> Result<f64> {
+        let v: f64 = t
+            .parse()
+            .map_err(|_| Error::InvalidInput(format!("--x0: `{t}` is not a number")))?;
+        finite(name, v)
+    };
+    let beta = num("x0 beta_deg", parts[0])?;
+    let omega = num("x0 omega", parts[1])?;
+    Ok([beta.to_radians(), omega])
+}
