@@ -16,16 +16,16 @@ pub struct GearArgs {
     #[arg(long, value_name = "FILE")]
     pub config: Option<PathBuf>,
     /// Input dipole moment m1 [A m²] (paper: 3.51).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub m1: Option<f64>,
     /// Output dipole moment m2 [A m²] (paper: 3.51).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub m2: Option<f64>,
     /// Centre distance r [m] (paper: 0.040).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub r: Option<f64>,
     /// Output moment of inertia I [kg m²] (paper: 6.45e-5).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub inertia: Option<f64>,
     /// Input shaft angle Θ [deg] (paper figures: 0 to 54.74; default 0).
     #[arg(long, allow_hyphen_values = true)]
@@ -34,10 +34,10 @@ pub struct GearArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub phi_deg: Option<f64>,
     /// Viscous damping ζ [1/s] (paper: 1.1).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub zeta: Option<f64>,
     /// Dry friction η [1/s²] (paper: 23.1).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub eta: Option<f64>,
     /// Sign convention of outputs: physical (default) or paper (β shifted by 180°, model.md).
     #[arg(long, value_enum, default_value_t = ConventionArg::Physical)]
