@@ -18,6 +18,7 @@
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod error;
+pub mod identification;
 pub mod integrator;
 pub mod io;
 pub mod maps;
