@@ -6,7 +6,10 @@
 //! stderr with exit code 2; output files are written atomically.
 
 mod common;
+mod diagnose;
+mod fit;
 mod info;
+mod synth;
 
 pub use common::{GearArgs, Output};
 
@@ -27,12 +30,21 @@ pub struct Cli {
 pub enum Command {
     /// Derived quantities of a gear: g, Δ, f_c, lock angles, cogging-free shaft angles.
     Info(info::Args),
+    /// Fit a recording set: ring-downs (eq. `model`), κ(α0) → g, |Δ|, I, and the base model.
+    Fit(fit::Args),
+    /// Diagnose a recording set: locate the mismatch and name the missing physics (report.json).
+    Diagnose(diagnose::Args),
+    /// Make a synthetic recording set with a chosen effect at a chosen size.
+    Synth(synth::Args),
 }
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> crate::Result<()> {
     match cli.command {
         Command::Info(a) => info::run(a),
+        Command::Fit(a) => fit::run(a),
+        Command::Diagnose(a) => diagnose::run(a),
+        Command::Synth(a) => synth::run(a),
     }
 }
 

@@ -341,6 +341,15 @@ pub struct LinFit {
     pub chi2_dof: f64,
     /// rms of the residuals, rad/s².
     pub rms: f64,
+    /// Σ (r/σ)² (plain, without the Huber weights): the likelihood used by the BIC.
+    pub chi2: f64,
+}
+
+/// BIC difference of `new` against `old` (nested fits of the same rows), both with the effective
+/// sample size of `old`: n_eff ln(χ²_new/χ²_old) + Δk ln n_eff.
+pub fn delta_bic(new: &LinFit, old: &LinFit) -> f64 {
+    let ne = old.n_eff.max(2.0);
+    ne * (new.chi2 / old.chi2).ln() + (new.cols.len() as f64 - old.cols.len() as f64) * ne.ln()
 }
 
 impl LinFit {
@@ -506,6 +515,7 @@ pub fn fit(d: &Design, cols: &[usize]) -> Option<LinFit> {
         n_eff,
         chi2_dof: chi2 / (n - p) as f64,
         rms,
+        chi2,
     })
 }
 
