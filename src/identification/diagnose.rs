@@ -194,7 +194,19 @@ pub fn diagnose(
     };
     let hint = setup.beta_noise_deg.map(|d| d.to_radians());
     progress("cleaning runs (outlier rejection, noise, velocity)");
-    let runs: Vec<CleanRun> = set.runs.iter().map(|r| clean(r, hint)).collect();
+    let mut runs: Vec<CleanRun> = set.runs.iter().map(|r| clean(r, hint)).collect();
+    // one camera: its noise is a property of the set. Runs sampled too coarsely for a local cubic
+    // show a larger per-run scatter (signal the cubic cannot follow); that per-run level weights
+    // their rows, while the camera noise (median over runs) sets the outlier threshold of the
+    // predictions.
+    if hint.is_none() {
+        let mut s: Vec<f64> = runs.iter().map(|r| r.sigma_beta).collect();
+        s.sort_by(|a, b| a.total_cmp(b));
+        let pooled = s[s.len() / 2];
+        for r in &mut runs {
+            r.sigma_camera = pooled;
+        }
+    }
     let files: Vec<String> = set.runs.iter().map(|r| r.file.clone()).collect();
     let nr = runs.len();
 
@@ -260,6 +272,16 @@ pub fn diagnose(
         "inertia_err".to_string(),
         c / g * ((ge / g).powi(2) + setup.coupling_rel_tol().powi(2)).sqrt(),
     );
+
+    // ---- geometry refined from the fitted Δ (a common shift of both shaft angles), used by the
+    // force shape h(α, β) of load-dependent friction; the remaining freedom (how the shift is
+    // split between Θ and Φ, within the tolerance) becomes a systematic uncertainty below
+    let geo_nominal = geo;
+    let geo = refine_geometry(&geo_nominal, delta);
+    if geo != geo_nominal {
+        design = build(&runs, &geo, &terms, &opts.weak, 0.0);
+    }
+    let tol_split = setup.theta_tol_deg.unwrap_or(3.0).to_radians();
 
     // ---- mismatch
     progress("locating the mismatch (fingerprints, symmetry, consistency)");
@@ -374,17 +396,26 @@ pub fn diagnose(
             }
         }
     }
-    // symmetry test: all symmetry-breaking terms at once
+    // symmetry test: a flexible symmetric model (base, symmetric catalog and dictionary terms)
+    // against the same plus every symmetry-breaking term
     let sym_terms: Vec<Term> = design
         .terms
         .iter()
         .copied()
         .filter(|t| t.breaks_symmetry())
         .collect();
-    let mut sym_cols = base_cols.clone();
+    let symm_terms: Vec<Term> = design
+        .terms
+        .iter()
+        .copied()
+        .filter(|t| !t.breaks_symmetry())
+        .collect();
+    let symm_cols = cols_of(&design, &symm_terms);
+    let symm_fit = fit(&design, &symm_cols);
+    let mut sym_cols = symm_cols.clone();
     sym_cols.extend(cols_of(&design, &sym_terms));
-    if let Some(sf) = fit(&design, &sym_cols) {
-        let dbic = delta_bic(&sf, &base_fit);
+    if let (Some(sf), Some(s0)) = (fit(&design, &sym_cols), symm_fit.as_ref()) {
+        let dbic = delta_bic(&sf, s0);
         let broken = dbic < -opts.bic_threshold;
         mismatch.push(Mismatch {
             where_: if broken {
@@ -475,7 +506,7 @@ pub fn diagnose(
     let effects = catalog();
     let mut model_terms: Vec<Term> = BASE_TERMS.to_vec();
     let mut current = base_fit.clone();
-    let (_, mut current_cv) = loro(&design, &current, nr);
+    let (mut current_per, mut current_cv) = loro(&design, &current, nr);
     let mut latency = 0.0;
     let mut latency_err = f64::NAN;
     struct Accepted {
@@ -507,9 +538,10 @@ pub fn diagnose(
                 if let Some((tau, tau_err, dbic, d2, f2)) =
                     profile_latency(&runs, &geo, &model_terms, opts, &current)
                 {
-                    let (_, cv) = loro(&d2, &f2, nr);
+                    let (per, cv) = loro(&d2, &f2, nr);
                     if dbic < -opts.bic_threshold
                         && cv < current_cv
+                        && generalises(&per, &current_per)
                         && best.as_ref().map(|b| dbic < b.0).unwrap_or(true)
                     {
                         best = Some((dbic, ei, f2, cv, Some((tau, tau_err, d2))));
@@ -523,9 +555,10 @@ pub fn diagnose(
                 continue;
             };
             let dbic = delta_bic(&f2, &current);
-            let (_, cv) = loro(&design, &f2, nr);
+            let (per, cv) = loro(&design, &f2, nr);
             if dbic < -opts.bic_threshold
                 && cv < current_cv
+                && generalises(&per, &current_per)
                 && best.as_ref().map(|b| dbic < b.0).unwrap_or(true)
             {
                 best = Some((dbic, ei, f2, cv, None));
@@ -561,7 +594,7 @@ pub fn diagnose(
             dictionary_terms: vec![],
         });
         current = newfit;
-        current_cv = loro(&design, &current, nr).1;
+        (current_per, current_cv) = loro(&design, &current, nr);
     }
     // ---- sparse search beyond the catalog
     progress("sparse dictionary search");
@@ -569,6 +602,7 @@ pub fn diagnose(
     let mut dict_terms: Vec<Term> = Vec::new();
     let mut dict_fit = current.clone();
     let mut dict_cv = current_cv;
+    let mut dict_per = current_per.clone();
     let dict_cv0 = current_cv;
     let dict_rms0 = current.rms;
     let mut dict_dbic = 0.0;
@@ -586,13 +620,14 @@ pub fn diagnose(
             };
             let db = delta_bic(&f2, &dict_fit);
             if db < -opts.bic_threshold && best.as_ref().map(|b| db < b.0).unwrap_or(true) {
-                let (_, cv) = loro(&design, &f2, nr);
-                if cv < dict_cv {
+                let (per, cv) = loro(&design, &f2, nr);
+                if cv < dict_cv && generalises(&per, &dict_per) {
                     best = Some((db, t, f2, cv));
                 }
             }
         }
         let Some((db, t, f2, cv)) = best else { break };
+        dict_per = loro(&design, &f2, nr).0;
         dict_terms.push(t);
         dict_dbic += db;
         dict_fit = f2;
@@ -742,7 +777,57 @@ pub fn diagnose(
                 .flatten()
                 .collect()
         } else {
-            effect_params(a.effect.id, &final_map, final_eta, final_g)
+            let mut p = effect_params(a.effect.id, &final_map, final_eta, final_g);
+            if a.effect.id == "load_dependent_friction" {
+                // the force shape is evaluated on the geometry refined from the final Δ; the
+                // systematic: how Θ, Φ split that Δ within the tolerance
+                let delta_final = final_map
+                    .get(&Term::CosASinB.name())
+                    .map(|v| v.0 / final_g)
+                    .unwrap_or(delta);
+                let geo_c = refine_geometry(&geo_nominal, delta_final);
+                let cols: Vec<usize> = (0..model_terms.len()).collect();
+                let dc = build(&runs, &geo_c, &model_terms, &opts.weak, latency);
+                if let Some(fc) = fit(&dc, &cols) {
+                    let mc = coef_map(&fc, &dc);
+                    let ec = mc.get(&Term::Eta.name()).map(|v| v.0).unwrap_or(final_eta);
+                    let gc = mc
+                        .get(&Term::SinACosB.name())
+                        .map(|v| -v.0)
+                        .unwrap_or(final_g);
+                    p = effect_params(a.effect.id, &mc, ec, gc);
+                }
+                let mut sys: f64 = 0.0;
+                for sgn in [-1.0, 1.0] {
+                    let th = geo_c.theta + sgn * tol_split;
+                    if let Some(ph) = solve_phi(th, delta_final, geo_c.phi) {
+                        let g2 = Geometry { theta: th, phi: ph };
+                        let d2 = build(&runs, &g2, &model_terms, &opts.weak, latency);
+                        if let Some(f2) = fit(&d2, &cols) {
+                            let m2 = coef_map(&f2, &d2);
+                            let e2 = m2.get(&Term::Eta.name()).map(|v| v.0).unwrap_or(final_eta);
+                            if let Some(l2) = m2.get(&Term::LoadFric.name()) {
+                                let k2 = l2.0 / e2;
+                                if let Some(k) = p.get("k") {
+                                    sys = sys.max((k2 - k).abs());
+                                }
+                            }
+                        }
+                    }
+                }
+                if let (Some(k), Some(ke)) = (p.get("k").copied(), p.get("k_err").copied()) {
+                    p.insert("k_err".into(), (ke * ke + sys * sys).sqrt());
+                    p.insert("k_sys_geometry".into(), sys);
+                    if let Some(el) = p.get("eta_load").copied() {
+                        p.insert(
+                            "eta_load_err".into(),
+                            (p["eta_load_err"].powi(2) + (sys * el / k.abs().max(1e-12)).powi(2))
+                                .sqrt(),
+                        );
+                    }
+                }
+            }
+            p
         };
         if p.is_empty() {
             p.insert("size".into(), f64::NAN);
@@ -890,4 +975,69 @@ fn profile_latency(
     let f = fit(&d, &cols)?;
     let dbic = ne * (f.chi2 / cur.chi2).ln() + ne.ln();
     Some((tau, tau_err, dbic, d, f))
+}
+
+/// Δ(Θ, Φ).
+fn shaft_delta(theta: f64, phi: f64) -> f64 {
+    theta.cos() * phi.cos() - 2.0 * theta.sin() * phi.sin()
+}
+
+/// The geometry with both shaft angles shifted by a common amount so that Δ matches the fitted
+/// value (within ±15°; the nominal geometry when no shift matches).
+pub fn refine_geometry(nominal: &Geometry, delta_fit: f64) -> Geometry {
+    if !delta_fit.is_finite() {
+        return *nominal;
+    }
+    let mut best = (f64::INFINITY, 0.0);
+    for k in -1500..=1500 {
+        let s = (k as f64 * 0.01).to_radians();
+        let e = (shaft_delta(nominal.theta + s, nominal.phi + s) - delta_fit).abs();
+        if e < best.0 {
+            best = (e, s);
+        }
+    }
+    if best.0 < 1e-3 {
+        Geometry {
+            theta: nominal.theta + best.1,
+            phi: nominal.phi + best.1,
+        }
+    } else {
+        *nominal
+    }
+}
+
+/// Φ such that Δ(Θ, Φ) = Δ, the solution closest to `guess`.
+fn solve_phi(theta: f64, delta: f64, guess: f64) -> Option<f64> {
+    let rr = (theta.cos().powi(2) + 4.0 * theta.sin().powi(2)).sqrt();
+    let psi = (2.0 * theta.sin()).atan2(theta.cos());
+    let c = delta / rr;
+    if c.abs() > 1.0 {
+        return None;
+    }
+    let a = c.acos();
+    let cands = [a - psi, -a - psi];
+    let wrap = |x: f64| {
+        (x - guess + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI
+            + guess
+    };
+    cands
+        .iter()
+        .map(|&x| wrap(x))
+        .min_by(|x, y| (x - guess).abs().total_cmp(&(y - guess).abs()))
+}
+
+/// A term generalises when it lowers the held-out error of at least half of the runs that have
+/// rows (whole runs left out): an improvement carried by one or two runs is not accepted.
+fn generalises(new: &[f64], old: &[f64]) -> bool {
+    let mut better = 0;
+    let mut total = 0;
+    for (a, b) in new.iter().zip(old) {
+        if *b > 0.0 {
+            total += 1;
+            if a < b {
+                better += 1;
+            }
+        }
+    }
+    total > 0 && 2 * better >= total
 }

@@ -24,6 +24,8 @@ pub struct CleanRun {
     pub outliers: usize,
     /// Estimated camera noise σ_β, rad.
     pub sigma_beta: f64,
+    /// Camera noise of the set, rad (the per-run estimate until the set's is known).
+    pub sigma_camera: f64,
     /// Noise gain of the velocity estimator: σ_v = gain · σ_β.
     pub v_gain: f64,
     /// α̇ (0 for ring-downs).
@@ -154,6 +156,7 @@ pub fn clean(run: &Run, noise_hint: Option<f64>) -> CleanRun {
         dt,
         outliers,
         sigma_beta: sigma.max(1e-6),
+        sigma_camera: sigma.max(1e-6),
         v_gain,
         alpha_rate: run.alpha_rate(),
         ringdown: run.is_ringdown(),
