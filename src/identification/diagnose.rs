@@ -178,6 +178,9 @@ fn fingerprint_group(
     Some((x.norm(), dchi, p))
 }
 
+/// (ΔBIC, effect index, fit, CV score, latency (τ, σ_τ, design) when profiled).
+type Candidate = (f64, usize, LinFit, f64, Option<(f64, f64, Design)>);
+
 /// Runs the diagnosis of a recording set. `progress` receives one line per step.
 pub fn diagnose(
     set: &RecordingSet,
@@ -526,7 +529,7 @@ pub fn diagnose(
     let mut tried_latency = false;
     for round in 0..opts.max_effects {
         progress(&format!("selecting effects, round {}", round + 1));
-        let mut best: Option<(f64, usize, LinFit, f64, Option<(f64, f64, Design)>)> = None;
+        let mut best: Option<Candidate> = None;
         for (ei, e) in effects.iter().enumerate() {
             if accepted.iter().any(|a| a.effect.id == e.id) {
                 continue;

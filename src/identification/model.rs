@@ -213,7 +213,7 @@ mod tests {
         for k in 0..20 {
             let (a, b) = (0.3 * k as f64, 1.1 - 0.2 * k as f64);
             let h = force_shape(&geo, a, b);
-            assert!(h >= 0.0 && h <= 5.0);
+            assert!((0.0..=5.0).contains(&h));
             // (α, β) → (α + π, β + π) flips both moments: F unchanged
             let h2 = force_shape(&geo, a + std::f64::consts::PI, b + std::f64::consts::PI);
             assert!((h - h2).abs() < 1e-12);

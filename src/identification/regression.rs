@@ -178,6 +178,9 @@ fn term_value(term: Term, geo: &Geometry, al: f64, b: f64, v: f64) -> (f64, bool
     }
 }
 
+/// The previous sample inside a window: (t, φ, v, term values).
+type Prev = (f64, f64, f64, Vec<(f64, bool)>);
+
 /// Builds the weak-form rows of `runs` for `terms`. `latency` (s) shifts α back by α̇·latency
 /// (a β recorded late by `latency`).
 pub fn build(
@@ -253,7 +256,8 @@ pub fn build(
             let mut w1b = 0.0;
             let mut noise2 = 0.0;
             let mut cols = vec![0.0; p];
-            let mut prev: Option<(f64, f64, f64, Vec<(f64, bool)>)> = None; // (t, φ, v, values)
+            let mut prev: Option<Prev> = None;
+            #[allow(clippy::needless_range_loop)]
             for i in first..=last {
                 let wq = 0.5
                     * (if i > first { r.t[i] - r.t[i - 1] } else { 0.0 }
@@ -526,17 +530,17 @@ pub fn loro(d: &Design, full: &LinFit, nruns: usize) -> (Vec<f64>, f64) {
     let cols = &full.cols;
     let (a, b) = normal_eq(d, cols, &full.w, 0..d.rows());
     let mut per = vec![0.0; nruns];
-    for r in 0..nruns {
+    for (r, per_r) in per.iter_mut().enumerate() {
         let rows: Vec<usize> = (0..d.rows()).filter(|&i| d.run[i] == r).collect();
         if rows.is_empty() {
             continue;
         }
         let (ar, br) = normal_eq(d, cols, &full.w, rows.iter().copied());
         let Some((x, _)) = solve(&(&a - ar), &(&b - br)) else {
-            per[r] = f64::INFINITY;
+            *per_r = f64::INFINITY;
             continue;
         };
-        per[r] = rows
+        *per_r = rows
             .iter()
             .map(|&i| {
                 let pred: f64 = cols

@@ -47,7 +47,7 @@ pub struct RingdownFit {
 /// Simulates eq. `model` at the given times.
 pub fn simulate_model(p: &[f64], t0: f64, times: &[f64]) -> Option<Vec<f64>> {
     let (kappa, beta0, zeta, eta) = (p[0], p[1], p[2] * p[2], p[3] * p[3]);
-    if !(kappa > 0.0) || !p.iter().all(|v| v.is_finite()) {
+    if kappa.is_nan() || kappa <= 0.0 || !p.iter().all(|v| v.is_finite()) {
         return None;
     }
     let sys = AugmentedGear {

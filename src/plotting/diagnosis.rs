@@ -36,18 +36,21 @@ fn binned(
         .collect()
 }
 
+/// (file, x label, x of a fingerprint point, x range).
+type Spec<'a> = (
+    &'a str,
+    &'a str,
+    Box<dyn Fn(&(f64, f64, f64, f64, f64)) -> f64>,
+    f64,
+    f64,
+);
+
 /// Writes the figures into `dir`; returns their paths.
 pub fn write_figures(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     let fp = &d.fingerprint;
     let vmax = fp.iter().map(|f| f.2.abs()).fold(0.0, f64::max).max(1e-6);
-    let specs: Vec<(
-        &str,
-        &str,
-        Box<dyn Fn(&(f64, f64, f64, f64, f64)) -> f64>,
-        f64,
-        f64,
-    )> = vec![
+    let specs: Vec<Spec> = vec![
         (
             "fingerprint_beta.svg",
             "output angle β mod 360° [deg]",
