@@ -36,6 +36,11 @@ pub struct DiagnoseOptions {
     pub ringdown_fits: bool,
     /// Latency grid half-width, s, for the `sensor_latency` profile.
     pub latency_span: f64,
+    /// The noise-level gate: an accepted term must lower χ² by at least this much per row, i.e.
+    /// explain at least this fraction of the camera-noise variance of a row. Below it the term is
+    /// statistically detectable on a large set but smaller than the systematic error of the weak
+    /// form, and the data are explained "to the noise level".
+    pub min_chi2_gain_per_row: f64,
 }
 
 impl Default for DiagnoseOptions {
@@ -47,6 +52,7 @@ impl Default for DiagnoseOptions {
             heldout_predictions: true,
             ringdown_fits: true,
             latency_span: 0.03,
+            min_chi2_gain_per_row: 0.005,
         }
     }
 }
@@ -543,6 +549,7 @@ pub fn diagnose(
                 {
                     let (per, cv) = loro(&d2, &f2, nr);
                     if dbic < -opts.bic_threshold
+                        && (current.chi2 - f2.chi2) / f2.n as f64 >= opts.min_chi2_gain_per_row
                         && cv < current_cv
                         && generalises(&per, &current_per)
                         && best.as_ref().map(|b| dbic < b.0).unwrap_or(true)
@@ -560,6 +567,7 @@ pub fn diagnose(
             let dbic = delta_bic(&f2, &current);
             let (per, cv) = loro(&design, &f2, nr);
             if dbic < -opts.bic_threshold
+                && (current.chi2 - f2.chi2) / f2.n as f64 >= opts.min_chi2_gain_per_row
                 && cv < current_cv
                 && generalises(&per, &current_per)
                 && best.as_ref().map(|b| dbic < b.0).unwrap_or(true)
@@ -622,7 +630,10 @@ pub fn diagnose(
                 continue;
             };
             let db = delta_bic(&f2, &dict_fit);
-            if db < -opts.bic_threshold && best.as_ref().map(|b| db < b.0).unwrap_or(true) {
+            if db < -opts.bic_threshold
+                && (dict_fit.chi2 - f2.chi2) / f2.n as f64 >= opts.min_chi2_gain_per_row
+                && best.as_ref().map(|b| db < b.0).unwrap_or(true)
+            {
                 let (per, cv) = loro(&design, &f2, nr);
                 if cv < dict_cv && generalises(&per, &dict_per) {
                     best = Some((db, t, f2, cv));
