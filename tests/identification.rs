@@ -103,7 +103,49 @@ fn output_dipole_tilt_is_a_rescale_and_gives_none() {
 fn static_torque_is_named_with_its_class_and_size() {
     let mut o = small("static_torque", 3.0, 24);
     o.noise_deg = 0.6;
-    let (d, _) = run(&o, false);
+    // through the files (wrapped angles), as another program would hand them over
+    let (set, _) = synthesize(&o).unwrap();
+    let dir = std::env::temp_dir().join(format!("gearbif-ident-{}", std::process::id()));
+    gearbif::io::recordings::write_set(&set, &dir, true).unwrap();
+    let set = gearbif::io::recordings::read_set(&dir).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    let d = diagnose(
+        &set,
+        &DiagnoseOptions {
+            heldout_predictions: false,
+            ..Default::default()
+        },
+        &|_| {},
+    )
+    .unwrap();
+    // report.json keys exactly as recordings.md
+    let v = serde_json::to_value(&d.report).unwrap();
+    assert_eq!(v["schema"], "gearbif.diagnosis/1");
+    for k in ["g", "delta", "zeta", "eta"] {
+        assert!(v["baseline"]["params"][k].is_f64());
+    }
+    assert!(v["baseline"]["rms_rad"].is_f64());
+    assert!(
+        v["baseline"]["runs"][0]["file"].is_string()
+            && v["baseline"]["runs"][0]["rms_rad"].is_f64()
+    );
+    assert!(v["mismatch"][0]["where"].is_string() && v["mismatch"][0]["evidence"].is_object());
+    for k in [
+        "effect",
+        "class",
+        "explanation",
+        "params",
+        "candidates",
+        "discriminating_experiment",
+        "rms_before_rad",
+        "rms_after_rad",
+        "heldout_rms_before_rad",
+        "heldout_rms_after_rad",
+        "evidence",
+    ] {
+        assert!(v["findings"][0].get(k).is_some(), "finding key {k}");
+    }
+    assert_eq!(v["verdict"], v["findings"][0]["effect"]);
     assert_eq!(d.report.verdict, "static_torque");
     let f = &d.report.findings[0];
     assert_eq!(f.class, "lab-fixed");

@@ -314,7 +314,8 @@ pub fn diagnose(
     if !bad.is_empty() {
         mismatch.push(Mismatch {
             where_: format!(
-                "{} of {} runs have equation-error residuals above twice the noise (χ²/row > 2)",
+                "{} of {} runs have equation-error residuals above twice the noise (χ²/row > 2; \
+                 missing physics, or sampling too coarse for the run's dynamics)",
                 bad.len(),
                 nr
             ),
@@ -390,7 +391,10 @@ pub fn diagnose(
                 .collect();
             if let Some((amp, dchi, dof)) = fingerprint_group(&r, &s, &rg, infl) {
                 // significant at a BIC-like level: Δχ² > dof·ln(n_eff) + 10
-                if dchi > dof as f64 * base_fit.n_eff.ln() + 10.0 {
+                // significant (BIC-like) and above the noise-level gate
+                if dchi > dof as f64 * base_fit.n_eff.ln() + 10.0
+                    && dchi * infl / r.len() as f64 >= opts.min_chi2_gain_per_row
+                {
                     mismatch.push(Mismatch {
                         where_: format!("residual acceleration varies {words}"),
                         evidence: [
