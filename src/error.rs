@@ -47,6 +47,16 @@ pub enum Error {
     /// The requested operation is not available for this system (e.g. no half-period symmetry).
     #[error("unsupported: {0}")]
     Unsupported(String),
+    /// A recording set (experiment.toml or a CSV file) is malformed.
+    #[error("{file}{}: {what}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Recording {
+        /// The file at fault.
+        file: String,
+        /// The 1-based line, when one line is at fault.
+        line: Option<usize>,
+        /// What is wrong.
+        what: String,
+    },
 }
 
 /// Result alias used throughout the crate.

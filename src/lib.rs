@@ -20,6 +20,7 @@ pub mod bench;
 pub mod cli;
 pub mod continuation;
 pub mod error;
+pub mod identification;
 pub mod integrator;
 pub mod io;
 pub mod maps;

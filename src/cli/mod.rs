@@ -9,11 +9,14 @@ mod bench;
 mod boundary;
 mod common;
 mod continue_;
+mod diagnose;
+mod fit;
 mod info;
 mod locate;
 mod map;
 mod methods;
 mod simulate;
+mod synth;
 
 pub use common::{GearArgs, Output};
 
@@ -47,6 +50,12 @@ pub enum Command {
     /// Work-precision diagram of the integrators (error, RHS evaluations, wall time) on one case
     /// (default Θ = 25°, f = 2.7 Hz, one P_T with its Jacobian).
     BenchIntegrators(bench::Args),
+    /// Fit a recording set: ring-downs (eq. `model`), κ(α0) → g, |Δ|, I, and the base model.
+    Fit(fit::Args),
+    /// Diagnose a recording set: locate the mismatch and name the missing physics (report.json).
+    Diagnose(diagnose::Args),
+    /// Make a synthetic recording set with a chosen effect at a chosen size.
+    Synth(synth::Args),
 }
 
 /// Runs a parsed command line.
@@ -59,6 +68,9 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Simulate(a) => simulate::run(a),
         Command::Map(a) => map::run(a),
         Command::BenchIntegrators(a) => bench::run(a),
+        Command::Fit(a) => fit::run(a),
+        Command::Diagnose(a) => diagnose::run(a),
+        Command::Synth(a) => synth::run(a),
     }
 }
 

@@ -1,6 +1,8 @@
 //! Input and output: atomic file writing (no half-written outputs), and readers/writers of the
 //! formats gearbif exchanges with other programs.
 
+pub mod recordings;
+
 use crate::error::{Error, Result};
 use std::path::Path;
 

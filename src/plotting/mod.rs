@@ -5,6 +5,7 @@
 //! `.png`) and writes atomically (to a temporary file, then renamed).
 
 pub mod branch;
+pub mod diagnosis;
 
 use crate::error::{Error, Result};
 use plotters::coord::Shift;

@@ -1,0 +1,67 @@
+//! `gearbif diagnose`: report.json, report.md and figures for a recording set.
+
+use crate::identification::diagnose::{diagnose, DiagnoseOptions};
+use crate::identification::report::markdown;
+use crate::io::recordings::read_set;
+use crate::io::{write_atomic, write_json_atomic};
+use crate::Result;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `gearbif diagnose`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The recording set (folder with experiment.toml).
+    set: PathBuf,
+    /// Output folder for report.json, report.md and figures.
+    #[arg(long)]
+    out: PathBuf,
+    /// Skip the held-out (leave-one-run-out) short-horizon predictions.
+    #[arg(long)]
+    no_heldout: bool,
+    /// Skip the figures.
+    #[arg(long)]
+    no_figures: bool,
+}
+
+/// Runs `gearbif diagnose`.
+pub fn run(a: Args) -> Result<()> {
+    let t0 = Instant::now();
+    let set = read_set(&a.set)?;
+    let opts = DiagnoseOptions {
+        heldout_predictions: !a.no_heldout,
+        ..DiagnoseOptions::default()
+    };
+    let d = diagnose(&set, &opts, &|s| {
+        eprintln!("[{:6.1} s] {s}", t0.elapsed().as_secs_f64())
+    })?;
+    let title = a
+        .set
+        .file_name()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    // figures first, then the report (so a report never points at missing figures)
+    if !a.no_figures {
+        crate::plotting::diagnosis::write_figures(&d, &a.out)?;
+    }
+    write_atomic(
+        a.out.join("report.md"),
+        markdown(&d.report, &title).as_bytes(),
+    )?;
+    write_json_atomic(a.out.join("report.json"), &d.report)?;
+    println!("verdict: {}", d.report.verdict);
+    for f in &d.report.findings {
+        let ps: Vec<String> = f
+            .params
+            .iter()
+            .map(|(k, v)| format!("{k} = {v:.4}"))
+            .collect();
+        println!("  {} [{}]: {}", f.effect, f.class, ps.join(", "));
+    }
+    eprintln!(
+        "[{:6.1} s] wrote {}",
+        t0.elapsed().as_secs_f64(),
+        a.out.display()
+    );
+    Ok(())
+}

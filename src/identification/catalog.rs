@@ -1,0 +1,203 @@
+//! The catalog of physically parameterised candidate terms (recordings.md) and the dictionary for
+//! the sparse search beyond it.
+//!
+//! Implemented (they enter the weak-form regression linearly, or through one profiled parameter):
+//! `coupling_geometry`, `static_torque`, `quadratic_drag`, `corotating_drag`,
+//! `load_dependent_friction`, `sensor_latency` (profiled time shift). Not implemented:
+//! `static_friction`, `input_compliance`, `drive_steps`, `parameter_drift`.
+
+use super::regression::Term;
+use std::collections::BTreeMap;
+
+/// A catalogued effect.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Effect {
+    /// Identifier (recordings.md).
+    pub id: &'static str,
+    /// Class: effects in one class leave the same fingerprint in these data.
+    pub class: &'static str,
+    /// What it is, in words.
+    pub explanation: &'static str,
+    /// Extra regression terms (empty for `sensor_latency`, which is profiled).
+    pub terms: Vec<Term>,
+    /// Physical causes that give the same term.
+    pub candidates: Vec<&'static str>,
+    /// The experiment that would separate the candidates.
+    pub discriminating_experiment: &'static str,
+}
+
+/// The implemented catalog.
+pub fn catalog() -> Vec<Effect> {
+    vec![
+        Effect {
+            id: "static_torque",
+            class: "lab-fixed",
+            explanation: "a torque on the output fixed in the lab, one cycle per output turn \
+                          (A sin β + B cos β): it breaks the (α, β) → (α+π, β+π) symmetry of the \
+                          base model",
+            terms: vec![Term::SinB, Term::CosB],
+            candidates: vec![
+                "input dipole tilt",
+                "output mass imbalance",
+                "stray static field",
+            ],
+            discriminating_experiment: "remove the input magnet and record ring-downs of the output \
+                alone: a remaining once-per-turn torque is mass imbalance (it scales with gravity: \
+                tilt the set-up by 90° and it changes) or a stray field (it follows a compass \
+                needle / moves with the set-up's position in the room); if it vanishes, the input \
+                dipole is tilted (rotate the input magnet in its socket by 180° and the torque \
+                changes sign)",
+        },
+        Effect {
+            id: "coupling_geometry",
+            class: "coupling",
+            explanation: "the bilinear coupling differs from the nominal one: terms cos α cos β and \
+                          sin α sin β appear (input angle zero offset, out-of-plane tilt or true \
+                          shaft angles other than nominal)",
+            terms: vec![Term::CosACosB, Term::SinASinB],
+            candidates: vec![
+                "input angle zero offset",
+                "out-of-plane tilt of a shaft",
+                "shaft angles other than nominal",
+            ],
+            discriminating_experiment: "measure the equilibrium β0(α0) of ring-downs over a full \
+                turn of α0 with the camera zero re-calibrated: a constant offset between α0 and the \
+                fitted coupling phase is a zero offset; a dependence on the shaft angle setting is \
+                a tilt",
+        },
+        Effect {
+            id: "quadratic_drag",
+            class: "velocity-dependent damping",
+            explanation: "drag proportional to β̇|β̇| (air drag of the rotating magnet)",
+            terms: vec![Term::Quad],
+            candidates: vec!["air drag", "turbulent drag of the rotor"],
+            discriminating_experiment: "ring-downs from larger initial amplitudes (faster peak \
+                velocities): the decrement grows with amplitude for quadratic drag",
+        },
+        Effect {
+            id: "corotating_drag",
+            class: "drive-dependent damping",
+            explanation: "viscous drag relative to the input, −c (β̇ − α̇): damping seen by the \
+                          driven runs but not the ring-downs (eddy currents in parts turning with \
+                          the input)",
+            terms: vec![Term::Corot],
+            candidates: vec![
+                "eddy currents in conductive parts turning with the input",
+                "air dragged along by the input rotor",
+            ],
+            discriminating_experiment: "ring-downs with the input turning slowly at a constant \
+                rate (or locked at different α0 and then at rest): a drift of the output's rest \
+                angle with the input rate identifies the corotating drag",
+        },
+        Effect {
+            id: "load_dependent_friction",
+            class: "friction",
+            explanation: "dry friction grows with the bearing load, which includes the magnetic force \
+                          between the magnets: η (1 + k h(α, β))",
+            terms: vec![Term::LoadFric],
+            candidates: vec!["bearing friction proportional to the radial load"],
+            discriminating_experiment: "ring-downs at a larger centre distance r (weaker magnetic \
+                force): the dry friction should fall towards the weight-only value",
+        },
+        Effect {
+            id: "sensor_latency",
+            class: "timing",
+            explanation: "β is recorded with a time offset relative to α (camera latency): an \
+                          effective input angle offset proportional to the drive frequency, absent \
+                          in ring-downs",
+            terms: vec![],
+            candidates: vec!["camera exposure/trigger delay", "clock offset between drive and camera"],
+            discriminating_experiment: "film a marker on the input shaft with the same camera: its \
+                recorded angle lags the commanded α by α̇·τ",
+        },
+    ]
+}
+
+/// Dictionary for the sparse search: trig(kα + lβ) with |k|, |l| ≤ 2 (not already in the base
+/// model or the catalog), and velocity/sign terms modulated by cos β, sin β.
+pub fn dictionary() -> Vec<Term> {
+    let mut v = Vec::new();
+    for k in 0..=2i8 {
+        for l in -2..=2i8 {
+            if k == 0 && l <= 0 {
+                continue;
+            }
+            // k = ±1, l = ±1 products are the coupling terms; k = 0, l = 1 the static torque
+            if (k == 1 && l.abs() == 1) || (k == 0 && l == 1) {
+                continue;
+            }
+            v.push(Term::Cos(k, l));
+            v.push(Term::Sin(k, l));
+        }
+    }
+    v.extend([Term::VCosB, Term::VSinB, Term::SCosB, Term::SSinB]);
+    v
+}
+
+/// Physical parameters of an effect from its fitted coefficients (value, 1σ), by term.
+pub fn effect_params(
+    id: &str,
+    coef: &BTreeMap<String, (f64, f64)>,
+    base_eta: f64,
+    g: f64,
+) -> BTreeMap<String, f64> {
+    let mut p = BTreeMap::new();
+    let get = |t: Term| coef.get(&t.name()).copied();
+    match id {
+        "static_torque" => {
+            if let (Some((a, sa)), Some((b, sb))) = (get(Term::SinB), get(Term::CosB)) {
+                let amp = (a * a + b * b).sqrt();
+                let err = ((a * sa).powi(2) + (b * sb).powi(2)).sqrt() / amp.max(1e-300);
+                p.insert("amplitude".into(), amp);
+                p.insert("amplitude_err".into(), err);
+                p.insert("phase_deg".into(), b.atan2(a).to_degrees());
+                p.insert(
+                    "phase_err_deg".into(),
+                    (((b * sa).powi(2) + (a * sb).powi(2)).sqrt() / (amp * amp).max(1e-300))
+                        .to_degrees(),
+                );
+                p.insert("a_sin_beta".into(), a);
+                p.insert("b_cos_beta".into(), b);
+            }
+        }
+        "coupling_geometry" => {
+            if let (Some((cc, scc)), Some((ss, sss))) = (get(Term::CosACosB), get(Term::SinASinB)) {
+                p.insert("c_cos_alpha_cos_beta".into(), cc);
+                p.insert("c_cos_alpha_cos_beta_err".into(), scc);
+                p.insert("c_sin_alpha_sin_beta".into(), ss);
+                p.insert("c_sin_alpha_sin_beta_err".into(), sss);
+                // an input angle zero offset ε gives c_cc = −g sin ε (with c_sc = −g cos ε)
+                let eps = (-cc).atan2(g);
+                p.insert("alpha_offset_deg".into(), eps.to_degrees());
+                p.insert(
+                    "alpha_offset_err_deg".into(),
+                    (scc / (g * g + cc * cc).sqrt()).to_degrees(),
+                );
+            }
+        }
+        "quadratic_drag" => {
+            if let Some((q, s)) = get(Term::Quad) {
+                p.insert("q".into(), q);
+                p.insert("q_err".into(), s);
+            }
+        }
+        "corotating_drag" => {
+            if let Some((c, s)) = get(Term::Corot) {
+                p.insert("c".into(), c);
+                p.insert("c_err".into(), s);
+            }
+        }
+        "load_dependent_friction" => {
+            if let Some((e, s)) = get(Term::LoadFric) {
+                p.insert("eta_load".into(), e);
+                p.insert("eta_load_err".into(), s);
+                if base_eta > 0.0 {
+                    p.insert("k".into(), e / base_eta);
+                    p.insert("k_err".into(), s / base_eta);
+                }
+            }
+        }
+        _ => {}
+    }
+    p
+}

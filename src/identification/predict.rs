@@ -1,0 +1,140 @@
+//! Short-horizon prediction: the check in angle units. Each run is cut into windows of a few dozen
+//! samples; in each window the initial state (β, β̇) is fitted (Levenberg–Marquardt) with the model
+//! held fixed and the model is simulated with the exact Filippov integrator over the window. The
+//! rms of β_measured − β_simulated (rad) measures how well the model predicts the motion over a
+//! horizon short enough for chaos not to matter; with a perfect model it is the camera noise.
+
+use super::lm::least_squares;
+use super::model::{AugmentedGear, Coefficients, Geometry};
+use super::preprocess::CleanRun;
+use crate::integrator::{EventDriven, FlowMethod, FlowOptions};
+
+/// Samples per prediction window (at most).
+pub const WINDOW: usize = 30;
+/// Longest prediction horizon, s (unless that leaves fewer than 8 samples).
+pub const HORIZON: f64 = 0.4;
+
+/// Prediction residuals of one run.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Prediction {
+    /// Times of the predicted samples.
+    pub t: Vec<f64>,
+    /// Simulated β.
+    pub beta: Vec<f64>,
+    /// Measured − simulated.
+    pub resid: Vec<f64>,
+    /// rms of the residuals, rad (degrees of freedom of the fitted initial states removed).
+    pub rms: f64,
+    /// Frames rejected as outliers (beyond 5σ of the camera noise).
+    pub rejected: usize,
+}
+
+fn sim(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<f64>> {
+    let t1 = *times.last()?;
+    let opts = FlowOptions::with_tol(1e-8).samples(times.to_vec());
+    let f = EventDriven.flow(sys, t0, x0, t1, &opts).ok()?;
+    if f.samples.len() != times.len() {
+        return None;
+    }
+    Some(f.samples.iter().map(|s| s.beta).collect())
+}
+
+/// Predicts a cleaned run with the model `c` (and a sensor latency `latency`, s).
+pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> Prediction {
+    let n = r.t.len();
+    let mut out = Prediction::default();
+    let mut ss = 0.0;
+    let mut dof = 0usize;
+    let mut i = 0;
+    while i + 8 <= n {
+        let mut j = (i + WINDOW).min(n);
+        // a short horizon in time as well (chaos), but at least 8 samples
+        while j > i + 8 && r.t[j - 1] - r.t[i] > HORIZON {
+            j -= 1;
+        }
+        // no large gap inside a window
+        if let Some(k) = (i..j - 1).find(|&k| r.t[k + 1] - r.t[k] > 2.5 * r.dt) {
+            j = k + 1;
+        }
+        if j - i < 8 {
+            i = j;
+            continue;
+        }
+        let t = &r.t[i..j];
+        let b = &r.beta[i..j];
+        let sys = AugmentedGear {
+            c: *c,
+            geo: *geo,
+            alpha0: r.alpha[i] - r.alpha_rate * (t[0] + latency),
+            alpha_rate: r.alpha_rate,
+        };
+        let f = |p: &[f64]| -> Option<Vec<f64>> {
+            let s = sim(&sys, t[0], [p[0], p[1]], t)?;
+            Some(s.iter().zip(b).map(|(s, m)| s - m).collect())
+        };
+        let mut fit = least_squares(&f, &[b[0], r.v[i]], &[1e-7, 1e-6], 20);
+        // coarse sampling can put the velocity estimate on the wrong branch (slip vs stick):
+        // further starts when the first fit is poor
+        let poor = |x: &Option<super::lm::LsqFit>| {
+            x.as_ref()
+                .map(|f| (f.rss / t.len() as f64).sqrt() > 2.0 * r.sigma_camera)
+                .unwrap_or(true)
+        };
+        if poor(&fit) {
+            let fd = (b[1] - b[0]) / (t[1] - t[0]);
+            for v0 in [fd, 0.0, 0.5 * fd, 2.0 * fd] {
+                let f2 = least_squares(&f, &[b[0], v0], &[1e-7, 1e-6], 20);
+                if let Some(f2) = f2 {
+                    if fit.as_ref().map(|f1| f2.rss < f1.rss).unwrap_or(true) {
+                        fit = Some(f2);
+                    }
+                }
+                if !poor(&fit) {
+                    break;
+                }
+            }
+        }
+        if let Some(mut fit) = fit {
+            // outlier frames the cleaning missed (coarse sampling): beyond 5σ of the camera noise,
+            // dropped and the window refitted once without them
+            let thr = 5.0 * r.sigma_camera;
+            let bad: Vec<bool> = fit.resid.iter().map(|x| x.abs() > thr).collect();
+            let nbad = bad.iter().filter(|&&x| x).count();
+            if nbad > 0 && nbad <= t.len() / 5 {
+                let fw = |p: &[f64]| -> Option<Vec<f64>> {
+                    let s = sim(&sys, t[0], [p[0], p[1]], t)?;
+                    Some(
+                        s.iter()
+                            .zip(b)
+                            .zip(&bad)
+                            .map(|((s, m), &o)| if o { 0.0 } else { s - m })
+                            .collect(),
+                    )
+                };
+                if let Some(f2) = least_squares(&fw, &fit.p, &[1e-7, 1e-6], 20) {
+                    fit = f2;
+                }
+            }
+            let mut kept = 0usize;
+            for k in 0..t.len() {
+                if nbad <= t.len() / 5 && bad[k] {
+                    out.rejected += 1;
+                    continue;
+                }
+                out.t.push(t[k]);
+                out.beta.push(b[k] + fit.resid[k]);
+                out.resid.push(-fit.resid[k]);
+                ss += fit.resid[k] * fit.resid[k];
+                kept += 1;
+            }
+            dof += kept.saturating_sub(2);
+        }
+        i = j;
+    }
+    out.rms = if dof > 0 {
+        (ss / dof as f64).sqrt()
+    } else {
+        f64::NAN
+    };
+    out
+}

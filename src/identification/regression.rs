@@ -1,0 +1,564 @@
+//! Equation-error regression in weak form.
+//!
+//! Driven runs are often chaotic, so one long simulation cannot be fitted. Instead the equation of
+//! motion β̈ = Σ_k θ_k T_k(α, β, β̇) is multiplied by a smooth bump φ(t) = (1 − u²)⁶,
+//! u = (t − t_c)/H, of compact support and integrated: ∫φ β̈ = ∫φ'' β exactly (integration by parts), and
+//! ∫φ β̇ = −∫φ' β, so no noisy second derivative of β is ever formed. Only the terms that
+//! need β̇ inside a nonlinearity (sgn β̇, β̇|β̇|) use the local-polynomial velocity. Each row is divided
+//! by ∫φ and so reads as a local mean acceleration in rad/s². Windows that contain a gap or a
+//! stick phase (where the sliding equation does not hold) are skipped.
+//!
+//! The rows are fitted by weighted least squares (weights 1/σ_y² from the propagated camera noise)
+//! with Huber reweighting (robust loss, k = 2.5 robust σ). Rows overlap and residuals are
+//! correlated: the effective sample size n_eff = Σ_runs n_run / τ_run, with τ the integrated
+//! autocorrelation time of the standardised residuals, scales the covariance and the BIC.
+
+use super::model::{force_shape, Geometry};
+use super::preprocess::CleanRun;
+use nalgebra::{DMatrix, DVector};
+
+/// A term of the equation of motion (a column of the regression).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Term {
+    /// −β̇ (coefficient ζ).
+    Zeta,
+    /// −sgn β̇ (coefficient η).
+    Eta,
+    /// sin α cos β (base: −g).
+    SinACosB,
+    /// cos α sin β (base: gΔ).
+    CosASinB,
+    /// cos α cos β (coupling geometry).
+    CosACosB,
+    /// sin α sin β (coupling geometry).
+    SinASinB,
+    /// sin β (static torque).
+    SinB,
+    /// cos β (static torque).
+    CosB,
+    /// −β̇|β̇| (quadratic drag).
+    Quad,
+    /// −(β̇ − α̇) (corotating drag).
+    Corot,
+    /// −sgn β̇ · h(α, β) (load-dependent friction).
+    LoadFric,
+    /// cos(kα + lβ) (dictionary).
+    Cos(i8, i8),
+    /// sin(kα + lβ) (dictionary).
+    Sin(i8, i8),
+    /// −β̇ · cos β (dictionary).
+    VCosB,
+    /// −β̇ · sin β (dictionary).
+    VSinB,
+    /// −sgn β̇ · cos β (dictionary).
+    SCosB,
+    /// −sgn β̇ · sin β (dictionary).
+    SSinB,
+}
+
+impl Term {
+    /// A short readable name.
+    pub fn name(&self) -> String {
+        match self {
+            Term::Zeta => "-dbeta".into(),
+            Term::Eta => "-sgn(dbeta)".into(),
+            Term::SinACosB => "sin(alpha)cos(beta)".into(),
+            Term::CosASinB => "cos(alpha)sin(beta)".into(),
+            Term::CosACosB => "cos(alpha)cos(beta)".into(),
+            Term::SinASinB => "sin(alpha)sin(beta)".into(),
+            Term::SinB => "sin(beta)".into(),
+            Term::CosB => "cos(beta)".into(),
+            Term::Quad => "-dbeta|dbeta|".into(),
+            Term::Corot => "-(dbeta-dalpha)".into(),
+            Term::LoadFric => "-sgn(dbeta)h(alpha,beta)".into(),
+            Term::Cos(k, l) => format!("cos({k}alpha{:+}beta)", l)
+                .replace("+1beta", "+beta")
+                .replace("-1beta", "-beta"),
+            Term::Sin(k, l) => format!("sin({k}alpha{:+}beta)", l)
+                .replace("+1beta", "+beta")
+                .replace("-1beta", "-beta"),
+            Term::VCosB => "-dbeta cos(beta)".into(),
+            Term::VSinB => "-dbeta sin(beta)".into(),
+            Term::SCosB => "-sgn(dbeta)cos(beta)".into(),
+            Term::SSinB => "-sgn(dbeta)sin(beta)".into(),
+        }
+    }
+    /// Whether the term breaks the symmetry (α, β) → (α + π, β + π).
+    pub fn breaks_symmetry(&self) -> bool {
+        match self {
+            Term::SinB | Term::CosB | Term::VCosB | Term::VSinB | Term::SCosB | Term::SSinB => true,
+            Term::Cos(k, l) | Term::Sin(k, l) => (k + l).rem_euclid(2) == 1,
+            _ => false,
+        }
+    }
+}
+
+/// The base model's terms.
+pub const BASE_TERMS: [Term; 4] = [Term::Zeta, Term::Eta, Term::SinACosB, Term::CosASinB];
+
+/// Options of the weak form.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WeakOptions {
+    /// Half-width H of the test function, in median sample intervals.
+    pub half_width: f64,
+    /// Distance between window centres, in samples.
+    pub stride: usize,
+    /// A sample is "at rest" when |v| < rest_sigmas · σ_v.
+    pub rest_sigmas: f64,
+    /// Windows with this many consecutive samples at rest are skipped (stick phases).
+    pub rest_run: usize,
+}
+
+impl Default for WeakOptions {
+    fn default() -> Self {
+        Self {
+            half_width: 8.0,
+            stride: 3,
+            rest_sigmas: 3.0,
+            rest_run: 2,
+        }
+    }
+}
+
+/// The stacked weak-form rows of all runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Design {
+    /// The terms (columns).
+    pub terms: Vec<Term>,
+    /// Left-hand sides ∫φ''β / ∫φ.
+    pub y: Vec<f64>,
+    /// Row-major columns, rows × terms.
+    pub x: Vec<f64>,
+    /// Noise σ of each row (camera noise propagated).
+    pub sigma: Vec<f64>,
+    /// Run index of each row.
+    pub run: Vec<usize>,
+    /// Window centre time of each row.
+    pub tc: Vec<f64>,
+    /// α and β at the window centre (for fingerprints).
+    pub centre: Vec<(f64, f64, f64)>,
+}
+
+impl Design {
+    /// Number of rows.
+    pub fn rows(&self) -> usize {
+        self.y.len()
+    }
+    /// Column index of a term.
+    pub fn col(&self, t: Term) -> Option<usize> {
+        self.terms.iter().position(|&x| x == t)
+    }
+    /// Value of row i, column j.
+    #[inline]
+    pub fn at(&self, i: usize, j: usize) -> f64 {
+        self.x[i * self.terms.len() + j]
+    }
+}
+
+/// The value of a term at one sample. Terms carrying sgn β̇ return their magnitude m with
+/// `true` (the term is −sgn(β̇)·m), so that the integral can be split at the velocity reversal.
+fn term_value(term: Term, geo: &Geometry, al: f64, b: f64, v: f64) -> (f64, bool) {
+    match term {
+        Term::Zeta | Term::Corot => (0.0, false), // handled by integration by parts
+        Term::Eta => (1.0, true),
+        Term::SinACosB => (al.sin() * b.cos(), false),
+        Term::CosASinB => (al.cos() * b.sin(), false),
+        Term::CosACosB => (al.cos() * b.cos(), false),
+        Term::SinASinB => (al.sin() * b.sin(), false),
+        Term::SinB => (b.sin(), false),
+        Term::CosB => (b.cos(), false),
+        Term::Quad => (-v * v.abs(), false),
+        Term::LoadFric => (force_shape(geo, al, b), true),
+        Term::Cos(k, l) => ((k as f64 * al + l as f64 * b).cos(), false),
+        Term::Sin(k, l) => ((k as f64 * al + l as f64 * b).sin(), false),
+        Term::VCosB => (-v * b.cos(), false),
+        Term::VSinB => (-v * b.sin(), false),
+        Term::SCosB => (b.cos(), true),
+        Term::SSinB => (b.sin(), true),
+    }
+}
+
+/// The previous sample inside a window: (t, φ, v, term values).
+type Prev = (f64, f64, f64, Vec<(f64, bool)>);
+
+/// Builds the weak-form rows of `runs` for `terms`. `latency` (s) shifts α back by α̇·latency
+/// (a β recorded late by `latency`).
+pub fn build(
+    runs: &[CleanRun],
+    geo: &Geometry,
+    terms: &[Term],
+    opts: &WeakOptions,
+    latency: f64,
+) -> Design {
+    let p = terms.len();
+    let mut d = Design {
+        terms: terms.to_vec(),
+        y: Vec::new(),
+        x: Vec::new(),
+        sigma: Vec::new(),
+        run: Vec::new(),
+        tc: Vec::new(),
+        centre: Vec::new(),
+    };
+    const POW: i32 = 6;
+    for (ri, r) in runs.iter().enumerate() {
+        let n = r.t.len();
+        if n < 8 {
+            continue;
+        }
+        let h = opts.half_width * r.dt;
+        let v_thr = opts.rest_sigmas * r.v_gain * r.sigma_beta;
+        let rest: Vec<bool> = r.v.iter().map(|v| v.abs() < v_thr).collect();
+        let alpha: Vec<f64> = r.alpha.iter().map(|a| a - r.alpha_rate * latency).collect();
+        let mut lo = 0usize;
+        let mut c = 0usize;
+        while c < n {
+            let tc = r.t[c];
+            while lo < n && r.t[lo] < tc - h {
+                lo += 1;
+            }
+            // window must be covered: a sample at or before tc − H (index lo − 1) and after tc + H
+            if lo == 0 {
+                c += 1;
+                continue;
+            }
+            let first = lo - 1;
+            let mut last = c;
+            while last < n && r.t[last] <= tc + h {
+                last += 1;
+            }
+            if last >= n {
+                break;
+            }
+            // no large gap inside, no stick phase
+            let ok_gap = (first..last).all(|i| r.t[i + 1] - r.t[i] <= 2.5 * r.dt);
+            let mut runlen = 0;
+            let mut ok_rest = true;
+            for &rs in &rest[first..=last] {
+                runlen = if rs { runlen + 1 } else { 0 };
+                if runlen >= opts.rest_run {
+                    ok_rest = false;
+                    break;
+                }
+            }
+            if !(ok_gap && ok_rest) {
+                c += opts.stride;
+                continue;
+            }
+            // β relative to a line through the window: ∫φ''(a + bt) = 0 and ∫φ' a = 0 exactly, and
+            // subtracting them keeps the quadrature error from being amplified by many windings
+            let bc = r.beta[c];
+            let slope = (r.beta[last] - r.beta[first]) / (r.t[last] - r.t[first]);
+            // trapezoid rule on [first, last]; terms with sgn β̇ are integrated piecewise, split
+            // at the reversal time interpolated from the velocity
+            let mut lhs = 0.0;
+            let mut w0 = 0.0;
+            let mut w1b = 0.0;
+            let mut noise2 = 0.0;
+            let mut cols = vec![0.0; p];
+            let mut prev: Option<Prev> = None;
+            #[allow(clippy::needless_range_loop)]
+            for i in first..=last {
+                let wq = 0.5
+                    * (if i > first { r.t[i] - r.t[i - 1] } else { 0.0 }
+                        + if i < last { r.t[i + 1] - r.t[i] } else { 0.0 });
+                let u = ((r.t[i] - tc) / h).clamp(-1.0, 1.0);
+                let q = 1.0 - u * u;
+                let phi = q.powi(POW);
+                let dphi = -2.0 * POW as f64 * u * q.powi(POW - 1) / h;
+                let ddphi = (-2.0 * POW as f64 * q.powi(POW - 1)
+                    + 4.0 * (POW * (POW - 1)) as f64 * u * u * q.powi(POW - 2))
+                    / (h * h);
+                let b = r.beta[i];
+                lhs += wq * ddphi * (b - bc - slope * (r.t[i] - tc));
+                noise2 += (wq * ddphi).powi(2);
+                w0 += wq * phi;
+                w1b += wq * dphi * (b - bc);
+                let vals: Vec<(f64, bool)> = terms
+                    .iter()
+                    .map(|&term| term_value(term, geo, alpha[i], b, r.v[i]))
+                    .collect();
+                if let Some((tp, php, vp, valp)) = &prev {
+                    let dtt = r.t[i] - tp;
+                    let (sp, si) = (vp.signum(), r.v[i].signum());
+                    for k in 0..p {
+                        let (mp, sg) = valp[k];
+                        let mi = vals[k].0;
+                        if !sg {
+                            cols[k] += 0.5 * dtt * (php * mp + phi * mi);
+                        } else if sp == si {
+                            cols[k] += -sp * 0.5 * dtt * (php * mp + phi * mi);
+                        } else {
+                            // reversal inside the interval: λ from linear interpolation of v
+                            let lam = (vp.abs() / (vp.abs() + r.v[i].abs())).clamp(0.0, 1.0);
+                            let mid = (1.0 - lam) * php * mp + lam * phi * mi;
+                            cols[k] += -sp * 0.5 * lam * dtt * (php * mp + mid)
+                                - si * 0.5 * (1.0 - lam) * dtt * (mid + phi * mi);
+                        }
+                    }
+                }
+                prev = Some((r.t[i], phi, r.v[i], vals));
+            }
+            if w0 <= 0.0 {
+                c += opts.stride;
+                continue;
+            }
+            for (k, &term) in terms.iter().enumerate() {
+                match term {
+                    Term::Zeta => cols[k] = w1b,
+                    Term::Corot => cols[k] = w1b + r.alpha_rate * w0,
+                    _ => {}
+                }
+            }
+            d.y.push(lhs / w0);
+            d.x.extend(cols.iter().map(|v| v / w0));
+            d.sigma.push(r.sigma_beta * noise2.sqrt() / w0);
+            d.run.push(ri);
+            d.tc.push(tc);
+            d.centre.push((alpha[c], r.beta[c], r.v[c]));
+            c += opts.stride;
+        }
+    }
+    d
+}
+
+/// A linear fit of the weak-form rows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinFit {
+    /// Column indices (into the design) fitted.
+    pub cols: Vec<usize>,
+    /// Coefficients, in the order of `cols`.
+    pub coef: Vec<f64>,
+    /// Covariance of the coefficients (n_eff-corrected).
+    pub cov: DMatrix<f64>,
+    /// Residuals y − Xθ of every row.
+    pub resid: Vec<f64>,
+    /// Final weights (1/σ² × Huber).
+    pub w: Vec<f64>,
+    /// Weighted residual sum of squares.
+    pub rss: f64,
+    /// Rows.
+    pub n: usize,
+    /// Effective sample size.
+    pub n_eff: f64,
+    /// Σ (r/σ)² / (n − p): 1 when the residual is camera noise only.
+    pub chi2_dof: f64,
+    /// rms of the residuals, rad/s².
+    pub rms: f64,
+    /// Σ (r/σ)² (plain, without the Huber weights): the likelihood used by the BIC.
+    pub chi2: f64,
+}
+
+/// BIC difference of `new` against `old` (nested fits of the same rows), both with the effective
+/// sample size of `old`: n_eff ln(χ²_new/χ²_old) + Δk ln n_eff.
+pub fn delta_bic(new: &LinFit, old: &LinFit) -> f64 {
+    let ne = old.n_eff.max(2.0);
+    ne * (new.chi2 / old.chi2).ln() + (new.cols.len() as f64 - old.cols.len() as f64) * ne.ln()
+}
+
+impl LinFit {
+    /// Coefficient of design column `col`, with its 1σ uncertainty.
+    pub fn get(&self, col: usize) -> Option<(f64, f64)> {
+        let k = self.cols.iter().position(|&c| c == col)?;
+        Some((self.coef[k], self.cov[(k, k)].max(0.0).sqrt()))
+    }
+    /// BIC with the effective sample size.
+    pub fn bic(&self) -> f64 {
+        let ne = self.n_eff.max(2.0);
+        ne * (self.rss / self.n as f64).max(1e-300).ln() + self.cols.len() as f64 * ne.ln()
+    }
+}
+
+/// Integrated autocorrelation time of a sequence (Sokal's automatic window).
+pub fn autocorr_time(e: &[f64]) -> f64 {
+    let n = e.len();
+    if n < 8 {
+        return 1.0;
+    }
+    let m = e.iter().sum::<f64>() / n as f64;
+    let c0: f64 = e.iter().map(|x| (x - m).powi(2)).sum::<f64>() / n as f64;
+    if c0 <= 0.0 {
+        return 1.0;
+    }
+    let mut tau = 1.0;
+    for lag in 1..n / 2 {
+        let c: f64 = (0..n - lag)
+            .map(|i| (e[i] - m) * (e[i + lag] - m))
+            .sum::<f64>()
+            / n as f64;
+        let rho = c / c0;
+        if rho <= 0.0 {
+            break;
+        }
+        tau += 2.0 * rho;
+        if lag as f64 >= 5.0 * tau {
+            break;
+        }
+    }
+    tau.max(1.0)
+}
+
+fn normal_eq(
+    d: &Design,
+    cols: &[usize],
+    w: &[f64],
+    rows: impl Iterator<Item = usize>,
+) -> (DMatrix<f64>, DVector<f64>) {
+    let p = cols.len();
+    let mut a = DMatrix::zeros(p, p);
+    let mut b = DVector::zeros(p);
+    let mut xr = vec![0.0; p];
+    for i in rows {
+        for (k, &c) in cols.iter().enumerate() {
+            xr[k] = d.at(i, c);
+        }
+        let wi = w[i];
+        for k in 0..p {
+            b[k] += wi * xr[k] * d.y[i];
+            for l in 0..=k {
+                a[(k, l)] += wi * xr[k] * xr[l];
+            }
+        }
+    }
+    for k in 0..p {
+        for l in 0..k {
+            a[(l, k)] = a[(k, l)];
+        }
+    }
+    (a, b)
+}
+
+fn solve(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    // equilibrate for conditioning
+    let p = a.nrows();
+    let s: Vec<f64> = (0..p)
+        .map(|k| 1.0 / a[(k, k)].abs().sqrt().max(1e-300))
+        .collect();
+    let sa = DMatrix::from_fn(p, p, |i, j| a[(i, j)] * s[i] * s[j]);
+    let inv = sa.clone().try_inverse()?;
+    let inv = DMatrix::from_fn(p, p, |i, j| inv[(i, j)] * s[i] * s[j]);
+    let x = &inv * b;
+    if x.iter().all(|v| v.is_finite()) {
+        Some((x, inv))
+    } else {
+        None
+    }
+}
+
+/// Fits columns `cols` of the design (Huber IRLS); `None` if singular or no rows.
+pub fn fit(d: &Design, cols: &[usize]) -> Option<LinFit> {
+    let n = d.rows();
+    let p = cols.len();
+    if n <= p + 2 {
+        return None;
+    }
+    let base_w: Vec<f64> = d.sigma.iter().map(|s| 1.0 / (s * s).max(1e-300)).collect();
+    let mut w = base_w.clone();
+    let mut sol = None;
+    for _ in 0..8 {
+        let (a, b) = normal_eq(d, cols, &w, 0..n);
+        let (x, inv) = solve(&a, &b)?;
+        let resid: Vec<f64> = (0..n)
+            .map(|i| {
+                d.y[i]
+                    - cols
+                        .iter()
+                        .enumerate()
+                        .map(|(k, &c)| x[k] * d.at(i, c))
+                        .sum::<f64>()
+            })
+            .collect();
+        let mut z: Vec<f64> = (0..n).map(|i| (resid[i] / d.sigma[i]).abs()).collect();
+        z.sort_by(|a, b| a.total_cmp(b));
+        let scale = 1.4826 * z[n / 2];
+        let k = 2.5 * scale.max(1e-12);
+        let neww: Vec<f64> = (0..n)
+            .map(|i| {
+                let zi = (resid[i] / d.sigma[i]).abs();
+                base_w[i] * if zi <= k { 1.0 } else { k / zi }
+            })
+            .collect();
+        let change = neww
+            .iter()
+            .zip(&w)
+            .map(|(a, b)| (a - b).abs() / b.max(1e-300))
+            .fold(0.0, f64::max);
+        w = neww;
+        sol = Some((x, inv, resid));
+        if change < 1e-3 {
+            break;
+        }
+    }
+    let (x, inv, resid) = sol?;
+    let rss: f64 = (0..n).map(|i| w[i] * resid[i] * resid[i]).sum();
+    let chi2: f64 = (0..n).map(|i| (resid[i] / d.sigma[i]).powi(2)).sum();
+    // effective n from the autocorrelation of standardised residuals, run by run
+    let mut n_eff = 0.0;
+    let mut i = 0;
+    while i < n {
+        let mut j = i;
+        while j < n && d.run[j] == d.run[i] {
+            j += 1;
+        }
+        let e: Vec<f64> = (i..j).map(|k| resid[k] / d.sigma[k]).collect();
+        n_eff += (j - i) as f64 / autocorr_time(&e);
+        i = j;
+    }
+    let n_eff = n_eff.max(p as f64 + 1.0);
+    let s2 = rss / (n - p) as f64;
+    let cov = inv * (s2 * n as f64 / n_eff);
+    let rms = (resid.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
+    Some(LinFit {
+        cols: cols.to_vec(),
+        coef: x.iter().copied().collect(),
+        cov,
+        resid,
+        w,
+        rss,
+        n,
+        n_eff,
+        chi2_dof: chi2 / (n - p) as f64,
+        rms,
+        chi2,
+    })
+}
+
+/// Leave-one-run-out cross-validation: for each run, the weighted squared prediction error of its
+/// rows by the fit of the other runs (weights of `full`). Returns the per-run errors (runs without
+/// rows give 0) and their sum.
+pub fn loro(d: &Design, full: &LinFit, nruns: usize) -> (Vec<f64>, f64) {
+    let cols = &full.cols;
+    let (a, b) = normal_eq(d, cols, &full.w, 0..d.rows());
+    let mut per = vec![0.0; nruns];
+    for (r, per_r) in per.iter_mut().enumerate() {
+        let rows: Vec<usize> = (0..d.rows()).filter(|&i| d.run[i] == r).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let (ar, br) = normal_eq(d, cols, &full.w, rows.iter().copied());
+        let Some((x, _)) = solve(&(&a - ar), &(&b - br)) else {
+            *per_r = f64::INFINITY;
+            continue;
+        };
+        *per_r = rows
+            .iter()
+            .map(|&i| {
+                let pred: f64 = cols
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &c)| x[k] * d.at(i, c))
+                    .sum();
+                (d.y[i] - pred).powi(2) / (d.sigma[i] * d.sigma[i])
+            })
+            .sum();
+    }
+    let tot = per.iter().sum();
+    (per, tot)
+}
+
+/// Coefficients fitted without run `r` (for held-out predictions), in the order of `full.cols`.
+pub fn coef_without(d: &Design, full: &LinFit, r: usize) -> Option<Vec<f64>> {
+    let cols = &full.cols;
+    let (a, b) = normal_eq(d, cols, &full.w, (0..d.rows()).filter(|&i| d.run[i] != r));
+    solve(&a, &b).map(|(x, _)| x.iter().copied().collect())
+}

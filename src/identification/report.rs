@@ -1,0 +1,170 @@
+//! The diagnosis report, schema `gearbif.diagnosis/1` (shared/design/recordings.md), and its
+//! Markdown rendering.
+
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// The schema identifier.
+pub const SCHEMA: &str = "gearbif.diagnosis/1";
+
+/// report.json.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// Always [`SCHEMA`].
+    pub schema: String,
+    /// The base model with refitted parameters.
+    pub baseline: Baseline,
+    /// Where the base model fails, in words with evidence.
+    pub mismatch: Vec<Mismatch>,
+    /// Findings, most supported first.
+    pub findings: Vec<Finding>,
+    /// `effect` of the first finding, or `none`.
+    pub verdict: String,
+    /// Optional (added key): the fits behind the report.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fits: Option<serde_json::Value>,
+}
+
+/// The refitted base model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Baseline {
+    /// g, delta, zeta, eta (and their `_err`, and inertia when known).
+    pub params: BTreeMap<String, f64>,
+    /// rms of the short-horizon prediction over all runs, rad.
+    pub rms_rad: f64,
+    /// Per run.
+    pub runs: Vec<RunRms>,
+}
+
+/// rms of one run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunRms {
+    /// CSV file.
+    pub file: String,
+    /// rms, rad (base model fitted on all runs).
+    pub rms_rad: f64,
+    /// Optional: rms when the run was left out of the fit, rad.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heldout_rms_rad: Option<f64>,
+    /// Optional: equation-error χ²/row of the base model in this run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chi2_per_row: Option<f64>,
+}
+
+/// One located mismatch.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Mismatch {
+    /// Where the model fails, in words.
+    #[serde(rename = "where")]
+    pub where_: String,
+    /// Numbers behind it.
+    pub evidence: BTreeMap<String, serde_json::Value>,
+}
+
+/// A named piece of missing physics.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Finding {
+    /// Effect identifier (recordings.md table).
+    pub effect: String,
+    /// Class of indistinguishable effects.
+    pub class: String,
+    /// In words.
+    pub explanation: String,
+    /// Fitted physical parameters (with `_err` = 1σ).
+    pub params: BTreeMap<String, f64>,
+    /// Physical causes that leave the same fingerprint.
+    pub candidates: Vec<String>,
+    /// How to tell the candidates apart.
+    pub discriminating_experiment: String,
+    /// Short-horizon prediction rms before adding it, rad (null if it cannot be simulated).
+    pub rms_before_rad: Option<f64>,
+    /// After, rad.
+    pub rms_after_rad: Option<f64>,
+    /// On held-out runs (leave-one-run-out), before, rad.
+    pub heldout_rms_before_rad: Option<f64>,
+    /// On held-out runs, after, rad.
+    pub heldout_rms_after_rad: Option<f64>,
+    /// ΔBIC (effective n), cross-validation scores, equation-error rms.
+    pub evidence: BTreeMap<String, serde_json::Value>,
+}
+
+fn f(x: Option<f64>) -> String {
+    match x {
+        Some(v) if v.is_finite() => format!("{v:.4}"),
+        _ => "–".into(),
+    }
+}
+
+/// Renders report.md.
+pub fn markdown(r: &Report, title: &str) -> String {
+    let mut s = format!(
+        "# Diagnosis of `{title}`\n\n**Verdict: `{}`**\n\n",
+        r.verdict
+    );
+    s.push_str("## Base model, refitted\n\n| parameter | value |\n|---|---|\n");
+    for (k, v) in &r.baseline.params {
+        s.push_str(&format!("| {k} | {v:.6} |\n"));
+    }
+    s.push_str(&format!(
+        "\nShort-horizon prediction rms over all runs: {:.4} rad ({:.2}°)\n\n",
+        r.baseline.rms_rad,
+        r.baseline.rms_rad.to_degrees()
+    ));
+    s.push_str("| run | rms (rad) | held-out rms (rad) | eq.-error χ²/row |\n|---|---|---|---|\n");
+    for run in &r.baseline.runs {
+        s.push_str(&format!(
+            "| {} | {:.4} | {} | {} |\n",
+            run.file,
+            run.rms_rad,
+            f(run.heldout_rms_rad),
+            f(run.chi2_per_row)
+        ));
+    }
+    s.push_str("\n## Where the base model fails\n\n");
+    if r.mismatch.is_empty() {
+        s.push_str("Nowhere significant: the residuals are at the noise level.\n");
+    }
+    for m in &r.mismatch {
+        s.push_str(&format!(
+            "- {} (evidence: `{}`)\n",
+            m.where_,
+            serde_json::to_string(&m.evidence).unwrap_or_default()
+        ));
+    }
+    s.push_str("\n## Findings\n\n");
+    if r.findings.is_empty() {
+        s.push_str("None: no catalogued or dictionary term improves held-out runs and the BIC.\n");
+    }
+    for (i, fi) in r.findings.iter().enumerate() {
+        s.push_str(&format!(
+            "### {}. `{}` (class: {})\n\n{}\n\n",
+            i + 1,
+            fi.effect,
+            fi.class,
+            fi.explanation
+        ));
+        s.push_str("| parameter | value |\n|---|---|\n");
+        for (k, v) in &fi.params {
+            s.push_str(&format!("| {k} | {v:.6} |\n"));
+        }
+        s.push_str(&format!(
+            "\nrms before → after: {} → {} rad; held-out runs: {} → {} rad\n\n",
+            f(fi.rms_before_rad),
+            f(fi.rms_after_rad),
+            f(fi.heldout_rms_before_rad),
+            f(fi.heldout_rms_after_rad)
+        ));
+        if !fi.candidates.is_empty() {
+            s.push_str(&format!(
+                "Candidates (same fingerprint): {}.\n\nTo separate them: {}\n\n",
+                fi.candidates.join("; "),
+                fi.discriminating_experiment
+            ));
+        }
+        s.push_str(&format!(
+            "Evidence: `{}`\n\n",
+            serde_json::to_string(&fi.evidence).unwrap_or_default()
+        ));
+    }
+    s
+}
