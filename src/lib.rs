@@ -15,6 +15,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod analysis;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod error;
@@ -24,5 +25,6 @@ pub mod maps;
 pub mod model;
 #[cfg(feature = "plot")]
 pub mod plotting;
+pub mod sweep;
 
 pub use error::{Error, Result};
