@@ -290,9 +290,7 @@ impl SweepSpec {
             }
             let res = match self.method {
                 Method::EventDriven => classify_point(&gear, x, &EventDriven, &self.classify)?,
-                Method::FixedStep => {
-                    classify_point(&gear, x, &FixedStep::default(), &fixed_opts)?
-                }
+                Method::FixedStep => classify_point(&gear, x, &FixedStep::default(), &fixed_opts)?,
             };
             x = res.end_state;
             points.push(PointRecord::new(row, col, rv, cv, &gear, &res));

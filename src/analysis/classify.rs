@@ -59,7 +59,7 @@ impl Default for ClassifyOptions {
             analysis_turns: 60,
             max_half_periods: 16,
             period_tol: 1e-3,
-            lyapunov_threshold: 0.02,
+            lyapunov_threshold: 0.1,
             tol: 1e-9,
             thd: ThdDefinition::Standard,
             keep_samples: false,
@@ -107,6 +107,8 @@ pub enum Dynamics {
         multipliers: [f64; 2],
         /// Residual of the Newton solve.
         residual: f64,
+        /// A point of the orbit on the section t ≡ 0 mod T (β on the lift, symmetry-reduced).
+        orbit: [f64; 2],
     },
     /// No period up to the search limit, |λ| below the threshold.
     QuasiPeriodic,
@@ -263,8 +265,7 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
             })
             .collect()
     });
-    let net_rotation_hz =
-        (win.x[0] - settled.x[0]) / (TAU * opts.record_turns as f64 * period);
+    let net_rotation_hz = (win.x[0] - settled.x[0]) / (TAU * opts.record_turns as f64 * period);
     let mut end = win.x;
     let rigorous = if opts.rigorous {
         let (rc, x_end) = rigorous_classify(gear, end, opts)?;
@@ -455,5 +456,6 @@ fn confirm_period<S: DrivenOscillator + ?Sized>(
         symmetric: sym.is_some() && k % 2 == 1,
         multipliers: mods,
         residual: res,
+        orbit: xi,
     }))
 }

@@ -311,7 +311,10 @@ mod tests {
             .map(|a| 200.0 + 0.5 * a.cos() + 0.4 * (2.0 * a).sin())
             .collect();
         let fit = fit_harmonics(&al, &d, 7).unwrap();
-        assert_eq!(paper_class(&fit, ThdDefinition::Standard), PaperClass::Period);
+        assert_eq!(
+            paper_class(&fit, ThdDefinition::Standard),
+            PaperClass::Period
+        );
         assert_eq!(
             paper_class(&fit, ThdDefinition::Printed),
             PaperClass::HalfPeriod
