@@ -25,6 +25,7 @@ pub mod maps;
 pub mod model;
 #[cfg(feature = "plot")]
 pub mod plotting;
+pub mod report;
 pub mod sweep;
 
 pub use error::{Error, Result};

@@ -274,9 +274,19 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
     } else {
         None
     };
-    let agree = rigorous
-        .as_ref()
-        .map(|r| classes_agree(paper.class, &r.dynamics));
+    // a flat δ (constant lock angle) is T- and T/2-periodic at once: it agrees with a symmetric
+    // orbit of period T/2
+    let agree = rigorous.as_ref().map(|r| {
+        classes_agree(paper.class, &r.dynamics)
+            || (paper.fit.is_flat()
+                && matches!(
+                    r.dynamics,
+                    Dynamics::Periodic {
+                        half_periods: 1,
+                        ..
+                    }
+                ))
+    });
     Ok(PointResult {
         paper,
         rigorous,

@@ -18,6 +18,9 @@ pub const PAPER_RMS_THRESHOLD: f64 = 20.0;
 /// The paper's T/2 threshold on THD_F.
 pub const PAPER_THD_THRESHOLD: f64 = 1.0;
 
+/// Harmonic amplitudes below this (degrees) count as zero: δ is flat.
+pub const FLAT_AMPLITUDE: f64 = 1e-6;
+
 /// A harmonic fit δ_harm(α) = b₀ + Σ_{i=1..n} aᵢ sin iα + bᵢ cos iα (eq. `d_harm`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HarmonicFit {
@@ -63,14 +66,26 @@ impl HarmonicFit {
             .sqrt()
     }
 
+    /// True if no harmonic exceeds [`FLAT_AMPLITUDE`]: δ is constant (a locked orbit at Δ = ±1);
+    /// the THD is then reported as 0 (the ratio of rounding noise would be meaningless).
+    pub fn is_flat(&self) -> bool {
+        (1..=self.a.len()).all(|i| self.amplitude(i) < FLAT_AMPLITUDE)
+    }
+
     /// THD_F with the standard denominator √(a₁² + b₁²) (Shmilovitz); +∞ when the fundamental
-    /// vanishes exactly and the higher harmonics do not, 0 when both vanish.
+    /// vanishes exactly and the higher harmonics do not, 0 for a flat δ ([`Self::is_flat`]).
     pub fn thd(&self) -> f64 {
+        if self.is_flat() {
+            return 0.0;
+        }
         ratio(self.higher(), self.amplitude(1))
     }
 
     /// THD_F as printed in the paper's eq. `thd` (denominator a₁² + b₁², δ in degrees).
     pub fn thd_printed(&self) -> f64 {
+        if self.is_flat() {
+            return 0.0;
+        }
         ratio(self.higher(), self.amplitude(1).powi(2))
     }
 }

@@ -5,8 +5,11 @@
 //! units with angles in degrees; `--json` prints machine-readable output on stdout; errors go to
 //! stderr with exit code 2; output files are written atomically.
 
+mod classify;
 mod common;
 mod info;
+mod report;
+mod sweep;
 
 pub use common::{GearArgs, Output};
 
@@ -27,12 +30,21 @@ pub struct Cli {
 pub enum Command {
     /// Derived quantities of a gear: g, Δ, f_c, lock angles, cogging-free shaft angles.
     Info(info::Args),
+    /// Classify one point: the paper's flowchart (harmonic fit, RMS, THD) and the rigorous class.
+    Classify(classify::Args),
+    /// Two-parameter atlas (Θ × f, …), parallel, resumable; CSV/JSON and an RMS_δ map.
+    Sweep(sweep::Args),
+    /// The report of a gear: derived quantities, lock branch, classification map, operating advice.
+    Report(report::Args),
 }
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> crate::Result<()> {
     match cli.command {
         Command::Info(a) => info::run(a),
+        Command::Classify(a) => classify::run(a),
+        Command::Sweep(a) => sweep::run(a),
+        Command::Report(a) => report::run(a),
     }
 }
 

@@ -4,6 +4,8 @@
 //! A figure implements [`Figure`]; [`save`] picks the backend from the file extension (`.svg` or
 //! `.png`) and writes atomically (to a temporary file, then renamed).
 
+pub mod atlas;
+
 use crate::error::{Error, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
