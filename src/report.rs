@@ -192,9 +192,7 @@ pub fn section_lock_branch(
     }
     let max_dev = rows
         .iter()
-        .filter_map(|v| {
-            Some((v["analytic_deg"].as_f64()? - v["simulated_deg"].as_f64()?).abs())
-        })
+        .filter_map(|v| Some((v["analytic_deg"].as_f64()? - v["simulated_deg"].as_f64()?).abs()))
         .fold(0.0, f64::max);
     md += &format!(
         "\nLargest |simulated − analytic| over the {} locked points: {:.2e}°. f_c = {} Hz.\n",
@@ -402,7 +400,8 @@ pub fn build_report(
 ) -> Result<Report> {
     gear.validate()?;
     let dir = dir.as_ref();
-    let fig_dir: Option<PathBuf> = (opts.figures && cfg!(feature = "plot")).then(|| dir.join("figures"));
+    let fig_dir: Option<PathBuf> =
+        (opts.figures && cfg!(feature = "plot")).then(|| dir.join("figures"));
     let classify = ClassifyOptions {
         settle_turns: opts.settle_turns,
         analysis_turns: 40,

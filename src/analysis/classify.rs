@@ -161,6 +161,10 @@ pub struct PointResult {
     pub net_rotation_hz: f64,
     /// State (β mod 2π, ω) at the end, at a drive phase α ≡ α₀ (for semi-static sweeps).
     pub end_state: [f64; 2],
+    /// Symmetry-reduced section points z_j = R⁻ʲ x(jT/2) of the analysis (β mod 2π, ω), if
+    /// samples were requested (orbit diagrams).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub section: Option<Vec<[f64; 2]>>,
     /// The recorded window, if requested.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub samples: Option<Vec<WindowSample>>,
@@ -267,9 +271,13 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
     });
     let net_rotation_hz = (win.x[0] - settled.x[0]) / (TAU * opts.record_turns as f64 * period);
     let mut end = win.x;
+    let mut section = None;
     let rigorous = if opts.rigorous {
-        let (rc, x_end) = rigorous_classify(gear, end, opts)?;
+        let (rc, x_end, z) = rigorous_classify_with_section(gear, end, opts)?;
         end = x_end;
+        if opts.keep_samples {
+            section = Some(z.iter().map(|v| [v[0].rem_euclid(TAU), v[1]]).collect());
+        }
         Some(rc)
     } else {
         None
@@ -293,6 +301,7 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
         agree,
         net_rotation_hz,
         end_state: [end[0].rem_euclid(TAU), end[1]],
+        section,
         samples,
     })
 }
@@ -311,6 +320,15 @@ pub fn rigorous_classify<S: DrivenOscillator + ?Sized>(
     x: [f64; 2],
     opts: &ClassifyOptions,
 ) -> Result<(RigorousClass, [f64; 2])> {
+    rigorous_classify_with_section(sys, x, opts).map(|(c, e, _)| (c, e))
+}
+
+/// [`rigorous_classify`], also returning the symmetry-reduced section points z_j = R⁻ʲ x(jT/2).
+pub fn rigorous_classify_with_section<S: DrivenOscillator + ?Sized>(
+    sys: &S,
+    x: [f64; 2],
+    opts: &ClassifyOptions,
+) -> Result<(RigorousClass, [f64; 2], Vec<[f64; 2]>)> {
     opts.validate()?;
     let period = sys.period();
     let sym = sys.half_period_symmetry();
@@ -391,6 +409,7 @@ pub fn rigorous_classify<S: DrivenOscillator + ?Sized>(
             lyapunov,
         },
         end,
+        z,
     ))
 }
 

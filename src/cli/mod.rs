@@ -7,6 +7,7 @@
 
 mod classify;
 mod common;
+mod figure;
 mod info;
 mod report;
 mod sweep;
@@ -36,6 +37,8 @@ pub enum Command {
     Sweep(sweep::Args),
     /// The report of a gear: derived quantities, lock branch, classification map, operating advice.
     Report(report::Args),
+    /// The paper's figures (fig5 … fig10), orbit diagram, Lyapunov exponent: SVG and PNG.
+    Figure(figure::Args),
 }
 
 /// Runs a parsed command line.
@@ -45,6 +48,7 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Classify(a) => classify::run(a),
         Command::Sweep(a) => sweep::run(a),
         Command::Report(a) => report::run(a),
+        Command::Figure(a) => figure::run(a),
     }
 }
 

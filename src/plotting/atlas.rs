@@ -18,10 +18,18 @@ fn diverging(v: f64) -> RGBColor {
     let lerp = |a: f64, b: f64, t: f64| (a + (b - a) * t).round() as u8;
     if v < 0.5 {
         let t = v / 0.5;
-        RGBColor(lerp(40.0, 245.0, t), lerp(70.0, 245.0, t), lerp(200.0, 245.0, t))
+        RGBColor(
+            lerp(40.0, 245.0, t),
+            lerp(70.0, 245.0, t),
+            lerp(200.0, 245.0, t),
+        )
     } else {
         let t = (v - 0.5) / 0.5;
-        RGBColor(lerp(245.0, 200.0, t), lerp(245.0, 30.0, t), lerp(245.0, 30.0, t))
+        RGBColor(
+            lerp(245.0, 200.0, t),
+            lerp(245.0, 30.0, t),
+            lerp(245.0, 30.0, t),
+        )
     }
 }
 
@@ -196,12 +204,21 @@ impl Figure for RmsMap {
                             }
                             2 => {
                                 chart
-                                    .draw_series(std::iter::once(EmptyElement::at(at) + PathElement::new(vec![(-4, 0), (4, 0)], st)))
+                                    .draw_series(std::iter::once(
+                                        EmptyElement::at(at)
+                                            + PathElement::new(vec![(-4, 0), (4, 0)], st),
+                                    ))
                                     .map_err(plot_err)?;
                             }
                             _ => {
                                 chart
-                                    .draw_series(std::iter::once(EmptyElement::at(at) + plotters::element::Rectangle::new([(-3, -3), (3, 3)], st)))
+                                    .draw_series(std::iter::once(
+                                        EmptyElement::at(at)
+                                            + plotters::element::Rectangle::new(
+                                                [(-3, -3), (3, 3)],
+                                                st,
+                                            ),
+                                    ))
                                     .map_err(plot_err)?;
                             }
                         }
