@@ -477,7 +477,7 @@ impl SweepResult {
 #[derive(Debug, Clone, PartialEq)]
 pub enum SweepOutcome {
     /// All rows are done.
-    Complete(SweepResult),
+    Complete(Box<SweepResult>),
     /// Stopped early (row limit); the finished rows are in the checkpoint.
     Stopped {
         /// Rows finished (including loaded ones).
@@ -608,10 +608,10 @@ impl<'a> SweepRunner<'a> {
                 rows_total: rows.len(),
             });
         }
-        Ok(SweepOutcome::Complete(SweepResult {
+        Ok(SweepOutcome::Complete(Box::new(SweepResult {
             spec: self.spec.clone(),
             rows: rows.into_iter().flatten().collect(),
-        }))
+        })))
     }
 }
 
@@ -637,7 +637,7 @@ pub fn hysteresis(
     opts: &ClassifyOptions,
     observer: &dyn SweepObserver,
 ) -> Result<Hysteresis> {
-    if f_values.is_empty() || f_values.windows(2).any(|w| !(w[1] > w[0])) {
+    if f_values.is_empty() || f_values.windows(2).any(|w| w[1] <= w[0] || w[1].is_nan()) {
         return Err(Error::InvalidInput(
             "hysteresis needs ascending frequencies".into(),
         ));

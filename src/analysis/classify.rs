@@ -182,22 +182,25 @@ pub fn delta_sense(gear: &Gear) -> f64 {
 
 /// Do a paper class and a rigorous class agree?
 pub fn classes_agree(paper: PaperClass, rig: &Dynamics) -> bool {
-    match (paper, rig) {
-        (PaperClass::Chaotic, Dynamics::Chaotic | Dynamics::QuasiPeriodic) => true,
+    matches!(
+        (paper, rig),
         (
+            PaperClass::Chaotic,
+            Dynamics::Chaotic | Dynamics::QuasiPeriodic
+        ) | (
             PaperClass::HalfPeriod,
             Dynamics::Periodic {
-                half_periods: 1, ..
-            },
-        ) => true,
-        (
+                half_periods: 1,
+                ..
+            }
+        ) | (
             PaperClass::Period,
             Dynamics::Periodic {
-                half_periods: 2, ..
-            },
-        ) => true,
-        _ => false,
-    }
+                half_periods: 2,
+                ..
+            }
+        )
+    )
 }
 
 /// Label of a period of k half drive periods: "T/2", "T", "3T/2", "3T", …

@@ -146,7 +146,7 @@ pub fn fit_harmonics(alpha: &[f64], delta: &[f64], n: usize) -> Result<HarmonicF
     let svd = x.clone().svd(true, true);
     let smax = svd.singular_values.max();
     let smin = svd.singular_values.min();
-    if !(smin > 1e-10 * smax) {
+    if smin.is_nan() || smin <= 1e-10 * smax {
         return Err(Error::InvalidInput(
             "harmonic fit: the sample angles do not determine all harmonics".into(),
         ));
@@ -337,7 +337,7 @@ mod tests {
         // an incommensurate component leaves a residual above 20°
         let d: Vec<f64> = al
             .iter()
-            .map(|a| 200.0 + 40.0 * (0.7071 * a).sin())
+            .map(|a| 200.0 + 40.0 * (0.6180 * a).sin())
             .collect();
         assert_eq!(
             paper_metrics(&al, &d, 10, ThdDefinition::Standard)

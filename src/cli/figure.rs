@@ -68,14 +68,15 @@ fn save_both(fig: &impl Figure, dir: &Path, stem: &str, out: &mut Vec<PathBuf>) 
     Ok(())
 }
 
-/// The paper's start of Fig. 6: α = 90°, β = 270° (paper convention).
+/// The paper's start of Fig. 6: α = 90°, β = 270° (paper convention) = 90° physical. Simulated
+/// and shown in the physical convention, where δ = β − α stays near 180° (no wrap at 0/360°).
 fn paper_gear(p: &GearParams, theta: f64, f: f64) -> Result<(Gear, [f64; 2])> {
     let g = p
         .with_parallel_shafts_deg(theta)
         .driven(f)?
-        .with_convention(Convention::Paper)
+        .with_convention(Convention::Physical)
         .with_alpha0(90f64.to_radians())?;
-    Ok((g, [270f64.to_radians(), 0.0]))
+    Ok((g, [90f64.to_radians(), 0.0]))
 }
 
 fn window(g: &Gear, x0: [f64; 2], settle: usize) -> Result<crate::analysis::PointResult> {
