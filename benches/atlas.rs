@@ -28,5 +28,10 @@ fn bench(c: &mut Criterion) {
     grp.finish();
 }
 
-criterion_group!(benches, bench);
+criterion_group! {
+    name = benches;
+    // no HTML plots: they need a system font that a fresh machine may lack
+    config = Criterion::default().without_plots();
+    targets = bench
+}
 criterion_main!(benches);
