@@ -308,6 +308,14 @@ pub fn section_map(res: &SweepResult, fig_dir: Option<&Path>) -> Result<ReportSe
     })
 }
 
+/// The mean relative step of an ascending axis, percent.
+fn ramp_step_percent(v: &[f64]) -> f64 {
+    if v.len() < 2 || v[0] <= 0.0 {
+        return 0.0;
+    }
+    100.0 * ((v[v.len() - 1] / v[0]).powf(1.0 / (v.len() - 1) as f64) - 1.0)
+}
+
 /// Section: operating advice, computed from the map and the hysteresis loop.
 pub fn section_advice(
     res: &SweepResult,
@@ -319,7 +327,10 @@ pub fn section_advice(
     let mut md = format!(
         "A point is a *good operating point* if the output is locked (|rotation number| = 1), \
          periodic and RMS_δ ≤ {smooth}°. Safe frequency: the highest f of the ramp-up up to which \
-         every step was good.\n\n| Θ [°] | Δ | safe up to f [Hz] |\n|---|---|---|\n"
+         every step was good (a property of this ramp: {} steps of {:.1} % each; finer ramps keep \
+         the lock longer near f_c).\n\n| Θ [°] | Δ | safe up to f [Hz] |\n|---|---|---|\n",
+        res.spec.cols.values.len(),
+        ramp_step_percent(&res.spec.cols.values)
     );
     for (th, f) in &safe {
         let d = gear.with_parallel_shafts_deg(*th).delta();

@@ -231,3 +231,35 @@ fn lock_loss_is_hysteretic() {
         assert!(r.net_rotation_hz.abs() < 0.1 * r.f_hz);
     }
 }
+
+#[test]
+fn report_has_its_sections() {
+    use gearbif::report::{build_report, ReportOptions};
+    let dir = std::env::temp_dir().join(format!("gearbif-atlas-report-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    let opts = ReportOptions {
+        theta_deg: Axis::range(SweepParam::ThetaDeg, 0.0, 40.0, 40.0).unwrap(),
+        f_hz: Axis::log(SweepParam::F, 0.5, 4.0, 4).unwrap(),
+        settle_turns: 30,
+        hysteresis_f: vec![1.0, 2.0, 3.0],
+        hysteresis_settle: 30,
+        smooth_rms_deg: 20.0,
+        figures: false,
+    };
+    let rep = build_report(&GearParams::paper(), &opts, &dir, &Silent).unwrap();
+    let ids: Vec<&str> = rep.sections.iter().map(|s| s.id.as_str()).collect();
+    assert_eq!(ids, ["derived", "lock_branch", "map", "advice"]);
+    rep.write(&dir).unwrap();
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(md.contains("## Operating advice") && md.contains("f_c"));
+    let js: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    // f_c in the JSON is the analytic value, and Θ = 0 is safe over this short ramp
+    let fc = js["sections"][0]["data"]["f_c_hz"].as_f64().unwrap();
+    assert!((fc - 39.84).abs() < 0.01);
+    let safe0 = js["sections"][3]["data"]["safe_f_hz"][0]["f_hz"]
+        .as_f64()
+        .unwrap();
+    assert!((safe0 - 4.0).abs() < 1e-9, "{safe0}");
+    std::fs::remove_dir_all(&dir).ok();
+}
