@@ -200,6 +200,7 @@ pub fn section_lock_branch(
         max_dev,
         fmt_opt(fc, 3)
     );
+    #[cfg_attr(not(feature = "plot"), allow(unused_mut))]
     let mut figures = vec![];
     #[cfg(feature = "plot")]
     if let Some(dir) = fig_dir {
@@ -254,6 +255,7 @@ pub fn section_map(res: &SweepResult, fig_dir: Option<&Path>) -> Result<ReportSe
     let asym = count(&|p| p.half_periods > 0 && !p.symmetric);
     let slip = count(&|p| p.locked == Some(false));
     let dis = count(&|p| p.agree == Some(false));
+    #[cfg_attr(not(feature = "plot"), allow(unused_mut))]
     let mut md = format!(
         "Semi-static ramp-up: for each Θ the drive frequency rises through {} log-spaced values \
          from {:.2} to {:.1} Hz, carrying the state, {} settling turns per step, start α = {}°, \
@@ -277,6 +279,7 @@ pub fn section_map(res: &SweepResult, fig_dir: Option<&Path>) -> Result<ReportSe
         slip,
         dis
     );
+    #[cfg_attr(not(feature = "plot"), allow(unused_mut))]
     let mut figures = vec![];
     #[cfg(feature = "plot")]
     if let Some(dir) = fig_dir {
