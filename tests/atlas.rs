@@ -263,3 +263,40 @@ fn report_has_its_sections() {
     assert!((safe0 - 4.0).abs() < 1e-9, "{safe0}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn early_settling_matches_full_settling() {
+    // a converging periodic point (Θ = 25°, 2.7 Hz, T/2) and a chaotic one (Θ = 31°, 1.65 Hz)
+    for (th, f) in [(25.0, 2.7), (31.0, 1.65)] {
+        let (gear, x0) = paper_start(th, f);
+        let full = ClassifyOptions {
+            settle_turns: 400,
+            analysis_turns: 20,
+            ..ClassifyOptions::default()
+        };
+        let early = ClassifyOptions {
+            settle_tol: Some(1e-9),
+            ..full.clone()
+        };
+        let a = classify_point(&gear, x0, &EventDriven, &full).unwrap();
+        let b = classify_point(&gear, x0, &EventDriven, &early).unwrap();
+        assert_eq!(a.paper.class, b.paper.class);
+        let (ra, rb) = (a.rigorous.unwrap(), b.rigorous.unwrap());
+        assert_eq!(ra.label, rb.label);
+        if ra.label == "T/2" {
+            assert!((a.paper.rms_delta_deg - b.paper.rms_delta_deg).abs() < 1e-6);
+            assert!((a.paper.delta_avg_deg - b.paper.delta_avg_deg).abs() < 1e-6);
+        }
+    }
+    let bad = ClassifyOptions {
+        settle_tol: Some(-1.0),
+        ..ClassifyOptions::default()
+    };
+    assert!(classify_point(
+        &Gear::paper(0.0, 1.0).unwrap(),
+        [0.0, 0.0],
+        &EventDriven,
+        &bad
+    )
+    .is_err());
+}

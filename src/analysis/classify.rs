@@ -47,6 +47,12 @@ pub struct ClassifyOptions {
     pub thd: ThdDefinition,
     /// Keep the samples of the window (for figures).
     pub keep_samples: bool,
+    /// Early end of the settling phase: once the turn-by-turn states repeat with a period of
+    /// m ≤ 8 turns to within this distance (twice in a row), the rest of the settling is skipped
+    /// and the state the full settling would reach on that cycle is used. `None` (default): always
+    /// integrate every settling turn, as the paper did.
+    #[serde(default)]
+    pub settle_tol: Option<f64>,
 }
 
 impl Default for ClassifyOptions {
@@ -63,6 +69,7 @@ impl Default for ClassifyOptions {
             tol: 1e-9,
             thd: ThdDefinition::Standard,
             keep_samples: false,
+            settle_tol: None,
         }
     }
 }
@@ -89,6 +96,9 @@ impl ClassifyOptions {
         crate::error::positive("tol", self.tol)?;
         crate::error::positive("period_tol", self.period_tol)?;
         crate::error::positive("lyapunov_threshold", self.lyapunov_threshold)?;
+        if let Some(e) = self.settle_tol {
+            crate::error::positive("settle_tol", e)?;
+        }
         Ok(())
     }
 }
@@ -232,7 +242,10 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
     let period = gear.period();
     let fopts = FlowOptions::with_tol(opts.tol);
     let t_settle = opts.settle_turns as f64 * period;
-    let settled = method.flow(gear, 0.0, x0, t_settle, &fopts)?;
+    let settled_x = match opts.settle_tol {
+        None => method.flow(gear, 0.0, x0, t_settle, &fopts)?.x,
+        Some(eps) => settle_early(gear, x0, method, opts.settle_turns, &fopts, eps)?,
+    };
     // the window
     let n = opts.record_turns * opts.samples_per_turn;
     let times: Vec<f64> = (0..n)
@@ -240,7 +253,7 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
         .collect();
     let t_end = (opts.settle_turns + opts.record_turns) as f64 * period;
     let wopts = FlowOptions::with_tol(opts.tol).samples(times);
-    let win = method.flow(gear, t_settle, settled.x, t_end, &wopts)?;
+    let win = method.flow(gear, t_settle, settled_x, t_end, &wopts)?;
     if win.samples.len() != n {
         return Err(Error::Integration {
             t: t_end,
@@ -272,7 +285,7 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
             })
             .collect()
     });
-    let net_rotation_hz = (win.x[0] - settled.x[0]) / (TAU * opts.record_turns as f64 * period);
+    let net_rotation_hz = (win.x[0] - settled_x[0]) / (TAU * opts.record_turns as f64 * period);
     let mut end = win.x;
     let mut section = None;
     let rigorous = if opts.rigorous {
@@ -307,6 +320,40 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
         section,
         samples,
     })
+}
+
+/// Settles turn by turn; stops early when the states repeat with a period m ≤ 8 turns (to `eps`,
+/// over two consecutive cycles) and returns the state the full settling reaches on that cycle.
+fn settle_early<M: FlowMethod<Gear> + ?Sized>(
+    gear: &Gear,
+    x0: [f64; 2],
+    method: &M,
+    turns: usize,
+    fopts: &FlowOptions,
+    eps: f64,
+) -> Result<[f64; 2]> {
+    const M_MAX: usize = 8;
+    let period = gear.period();
+    let mut hist: Vec<[f64; 2]> = Vec::with_capacity(turns + 1);
+    hist.push(x0);
+    let mut x = x0;
+    for c in 1..=turns {
+        let fl = method.flow(gear, (c - 1) as f64 * period, x, c as f64 * period, fopts)?;
+        x = fl.x;
+        hist.push(x);
+        if c < 2 * M_MAX + 1 || c == turns {
+            continue;
+        }
+        for m in 1..=M_MAX {
+            if cyl_dist(hist[c], hist[c - m], period) < eps
+                && cyl_dist(hist[c - m], hist[c - 2 * m], period) < eps
+            {
+                let i = c - m + (turns - c) % m;
+                return Ok(hist[i]);
+            }
+        }
+    }
+    Ok(x)
 }
 
 /// Distance on the cylinder: max(|Δβ mod 2π|, |Δω|·T/2π).

@@ -59,6 +59,10 @@ pub struct Args {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// End the settling early once the state repeats (period ≤ 8 turns) to this distance
+    /// (e.g. 1e-8); default: integrate every settling turn as the paper did.
+    #[arg(long)]
+    settle_tol: Option<f64>,
 }
 
 /// `--protocol` values.
@@ -143,6 +147,7 @@ pub fn spec(a: &Args) -> Result<SweepSpec> {
         s.classify.settle_turns = 1000;
     }
     s.classify.record_turns = a.record;
+    s.classify.settle_tol = a.settle_tol;
     s.classify.tol = a.tol;
     if a.analysis == 0 || a.rk4 {
         s.classify.rigorous = false;
