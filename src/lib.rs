@@ -15,6 +15,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod analysis;
 pub mod bench;
 #[cfg(feature = "cli")]
 pub mod cli;
@@ -28,6 +29,8 @@ pub mod model;
 pub mod orbits;
 #[cfg(feature = "plot")]
 pub mod plotting;
+pub mod report;
+pub mod sweep;
 
 pub use error::{Error, Result};
 

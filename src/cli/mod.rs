@@ -7,15 +7,19 @@
 
 mod bench;
 mod boundary;
+mod classify;
 mod common;
 mod continue_;
 mod diagnose;
+mod figure;
 mod fit;
 mod info;
 mod locate;
 mod map;
 mod methods;
+mod report;
 mod simulate;
+mod sweep;
 mod synth;
 
 pub use common::{GearArgs, Output};
@@ -56,6 +60,14 @@ pub enum Command {
     Diagnose(diagnose::Args),
     /// Make a synthetic recording set with a chosen effect at a chosen size.
     Synth(synth::Args),
+    /// Classify one point: the paper's flowchart (harmonic fit, RMS, THD) and the rigorous class.
+    Classify(classify::Args),
+    /// Two-parameter atlas (Θ × f, …), parallel, resumable; CSV/JSON and an RMS_δ map.
+    Sweep(sweep::Args),
+    /// The report of a gear: derived quantities, lock branch, classification map, operating advice.
+    Report(report::Args),
+    /// The paper's figures (fig5 … fig10), orbit diagram, Lyapunov exponent: SVG and PNG.
+    Figure(figure::Args),
 }
 
 /// Runs a parsed command line.
@@ -71,6 +83,10 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Fit(a) => fit::run(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Synth(a) => synth::run(a),
+        Command::Classify(a) => classify::run(a),
+        Command::Sweep(a) => sweep::run(a),
+        Command::Report(a) => report::run(a),
+        Command::Figure(a) => figure::run(a),
     }
 }
 

@@ -4,6 +4,7 @@
 //! A figure implements [`Figure`]; [`save`] picks the backend from the file extension (`.svg` or
 //! `.png`) and writes atomically (to a temporary file, then renamed).
 
+pub mod atlas;
 pub mod branch;
 pub mod diagnosis;
 

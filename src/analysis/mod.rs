@@ -1,0 +1,13 @@
+//! Analysis of simulated responses: the paper's classification (harmonic fit, RMS, THD_F,
+//! flowchart; [`harmonic`]), the rigorous classification (period on the Poincaré section modulo the
+//! symmetry, rotation number, Lyapunov exponent; [`classify`], [`lyapunov`]).
+
+pub mod classify;
+pub mod harmonic;
+pub mod lyapunov;
+
+pub use classify::{
+    classify_point, rigorous_classify, ClassifyOptions, Dynamics, PointResult, RigorousClass,
+};
+pub use harmonic::{fit_harmonics, HarmonicFit, PaperClass, PaperMetrics, ThdDefinition};
+pub use lyapunov::{LyapunovAccumulator, LyapunovEstimate};

@@ -1,0 +1,339 @@
+//! `gearbif figure <name>`: the paper's figures that the model can make (Figs. 5–10), an orbit
+//! diagram and the Lyapunov exponent against f, as SVG and PNG in an output folder.
+
+use super::common::GearArgs;
+use super::sweep::Progress;
+use crate::analysis::classify::WindowSample;
+use crate::analysis::{classify_point, ClassifyOptions};
+use crate::integrator::EventDriven;
+use crate::model::{Convention, Gear, GearParams};
+use crate::plotting::atlas::{
+    fit_plot, hysteresis_lock_plot, lyapunov_plot, orbit_diagram, Landscape, Markers, PolarDelta,
+    RmsMap,
+};
+use crate::plotting::{save, Figure, LinePlot, Series};
+use crate::sweep::{
+    hysteresis, Axis, Hysteresis, PointRecord, SweepObserver, SweepOutcome, SweepParam,
+    SweepRunner, SweepSpec,
+};
+use crate::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// The figures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Name {
+    /// δ over α with the 7-harmonic fit at Θ = 31°: chaos, T/2, T (Fig. 5).
+    Fig5,
+    /// Polar δ diagrams at Θ = 31° for the paper's seven frequencies (Fig. 6).
+    Fig6,
+    /// RMS_δ map, fresh start at every point, Θ 0–55°, f 0.5–3 Hz (Fig. 7b).
+    Fig7,
+    /// RMS_δ map, semi-static ramp-up, Θ −90–90°, f 0.1–100 Hz (Fig. 8; coarse unless --full).
+    Fig8,
+    /// Hysteresis of the T/2 ↔ T transition at Θ = 25°: THD⁻¹, δ_fund, δ_avg, insets (Fig. 9).
+    Fig9,
+    /// Lock loss at Θ = 0: δ_avg with the analytic branch, net rotation, insets (Fig. 10).
+    Fig10,
+    /// Orbit diagram (symmetry-reduced section points) against f at Θ = 31°.
+    Orbit,
+    /// Largest Lyapunov exponent against f at Θ = 31°.
+    Lyapunov,
+}
+
+/// Arguments of `gearbif figure`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Which figure.
+    #[arg(value_enum)]
+    name: Name,
+    #[command(flatten)]
+    gear: GearArgs,
+    /// Output folder.
+    #[arg(long, default_value = "figures")]
+    out: PathBuf,
+    /// Fig. 8 at the paper's full resolution (37 × 4996 points, 1000 settling turns each), at
+    /// tolerance 1e-6 with early settling and the paper's classification only (minutes).
+    #[arg(long)]
+    full: bool,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+fn save_both(fig: &impl Figure, dir: &Path, stem: &str, out: &mut Vec<PathBuf>) -> Result<()> {
+    for ext in ["svg", "png"] {
+        let p = dir.join(format!("{stem}.{ext}"));
+        save(fig, &p)?;
+        out.push(p);
+    }
+    Ok(())
+}
+
+/// The paper's start of Fig. 6: α = 90°, β = 270° (paper convention) = 90° physical. Simulated
+/// and shown in the physical convention, where δ = β − α stays near 180° (no wrap at 0/360°).
+fn paper_gear(p: &GearParams, theta: f64, f: f64) -> Result<(Gear, [f64; 2])> {
+    let g = p
+        .with_parallel_shafts_deg(theta)
+        .driven(f)?
+        .with_convention(Convention::Physical)
+        .with_alpha0(90f64.to_radians())?;
+    Ok((g, [90f64.to_radians(), 0.0]))
+}
+
+fn window(g: &Gear, x0: [f64; 2], settle: usize) -> Result<crate::analysis::PointResult> {
+    let o = ClassifyOptions {
+        settle_turns: settle,
+        keep_samples: true,
+        ..ClassifyOptions::default()
+    };
+    classify_point(g, x0, &EventDriven, &o)
+}
+
+/// The attractor of a hysteresis point, re-simulated from its end state with samples.
+fn inset(p: &GearParams, r: &PointRecord, alpha0_deg: f64, title: &str) -> Result<Landscape> {
+    let g = p
+        .driven(r.f_hz)?
+        .with_convention(Convention::Paper)
+        .with_alpha0(alpha0_deg.to_radians())?;
+    let w = window(&g, [r.beta_end, r.omega_end], 2)?;
+    Ok(Landscape {
+        title: title.into(),
+        delta: g.delta,
+        convention: Convention::Paper,
+        samples: w.samples.unwrap_or_default(),
+    })
+}
+
+fn series(label: &str, pts: Vec<(f64, f64)>, color: usize) -> Series {
+    Series {
+        label: label.into(),
+        points: pts,
+        markers: true,
+        color,
+    }
+}
+
+fn updown_plot(
+    h: &Hysteresis,
+    title: &str,
+    y: &str,
+    val: impl Fn(&PointRecord) -> Option<f64>,
+) -> LinePlot {
+    let pts = |v: &[PointRecord]| {
+        v.iter()
+            .filter_map(|r| val(r).map(|y| (r.f_hz, y)))
+            .collect::<Vec<_>>()
+    };
+    LinePlot {
+        title: title.into(),
+        x_label: "f [Hz]".into(),
+        y_label: y.into(),
+        series: vec![
+            series("f increasing", pts(&h.up), 1),
+            series("f decreasing", pts(&h.down), 3),
+        ],
+        ..Default::default()
+    }
+}
+
+/// Builds figure `name` into `dir`; returns the files written.
+pub fn make(
+    name: Name,
+    p: &GearParams,
+    dir: &Path,
+    full: bool,
+    progress: &Progress,
+) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    match name {
+        Name::Fig5 => {
+            for (f, tag) in [(1.65, "a"), (1.48, "b"), (1.33, "c")] {
+                let (g, x0) = paper_gear(p, 31.0, f)?;
+                let r = window(&g, x0, 90)?;
+                let s = r.samples.clone().unwrap_or_default();
+                let title = format!(
+                    "Θ = 31°, f = {f} Hz: paper class {} (RMS {:.2}°, THD {:.3}), rigorous {}",
+                    r.paper.class.label(),
+                    r.paper.rms_fit_deg,
+                    r.paper.thd,
+                    r.rigorous.as_ref().map(|c| c.label.as_str()).unwrap_or("")
+                );
+                save_both(
+                    &fit_plot(&title, &s, &r.paper.fit),
+                    dir,
+                    &format!("fig5{tag}"),
+                    &mut out,
+                )?;
+            }
+        }
+        Name::Fig6 => {
+            let mut panels: Vec<(String, Vec<WindowSample>)> = Vec::new();
+            for f in [1.00, 1.07, 1.33, 1.48, 1.63, 1.65, 1.68] {
+                let (g, x0) = paper_gear(p, 31.0, f)?;
+                let r = window(&g, x0, 90)?;
+                let lab = r
+                    .rigorous
+                    .as_ref()
+                    .map(|c| c.label.clone())
+                    .unwrap_or_default();
+                panels.push((
+                    format!("{f:.2} Hz: {} / {lab}", r.paper.class.label()),
+                    r.samples.unwrap_or_default(),
+                ));
+            }
+            save_both(&PolarDelta { panels }, dir, "fig6", &mut out)?;
+        }
+        Name::Fig7 | Name::Fig8 => {
+            let spec = if name == Name::Fig7 {
+                let mut s = SweepSpec::paper_fig7(
+                    Axis::range(SweepParam::ThetaDeg, 0.0, 55.0, 5.0)?,
+                    Axis::range(SweepParam::F, 0.5, 3.0, 0.1)?,
+                );
+                s.gear = *p;
+                s
+            } else {
+                let mut s = SweepSpec::paper_fig8()?;
+                s.gear = *p;
+                if full {
+                    // the paper's grid with the settings measured in docs/atlas.md (≈ 4 min):
+                    // tolerance 1e-6, early settling at 1e-6, the paper's classification only
+                    s.classify.tol = 1e-6;
+                    s.classify.settle_tol = Some(1e-6);
+                    s.classify.rigorous = false;
+                } else {
+                    s.rows = Axis::range(SweepParam::ThetaDeg, -90.0, 90.0, 10.0)?;
+                    s.cols = Axis::log(SweepParam::F, 0.1, 100.0, 80)?;
+                    s.classify.settle_turns = 300;
+                }
+                s
+            };
+            let stem = if name == Name::Fig7 { "fig7" } else { "fig8" };
+            let res = match SweepRunner::new(spec)
+                .checkpoint(dir.join(format!("{stem}-checkpoint")))
+                .observer(progress)
+                .run()?
+            {
+                SweepOutcome::Complete(r) => r,
+                SweepOutcome::Stopped { .. } => {
+                    return Err(Error::InvalidInput("sweep stopped".into()))
+                }
+            };
+            res.write(dir.join(format!("{stem}-data")))?;
+            let mut fig = RmsMap::from_sweep(&res);
+            fig.title = format!("{stem}: RMS_δ, paper classes (○ chaos, × T/2, — T)");
+            save_both(&fig, dir, stem, &mut out)?;
+            fig.markers = Markers::Rigorous;
+            fig.title =
+                format!("{stem}: RMS_δ, rigorous classes (○ chaos/QP, × sym., — asym., □ ?)");
+            save_both(&fig, dir, &format!("{stem}-rigorous"), &mut out)?;
+        }
+        Name::Fig9 => {
+            let fs: Vec<f64> = (0..=30).map(|i| 1.5 + 0.05 * i as f64).collect();
+            let o = ClassifyOptions {
+                settle_turns: 1000,
+                analysis_turns: 20,
+                ..ClassifyOptions::default()
+            };
+            let pp = p.with_parallel_shafts_deg(25.0);
+            let h = hysteresis(pp, &fs, 0.0, 180.0, Convention::Paper, &o, progress)?;
+            crate::io::write_json_atomic(dir.join("fig9-data.json"), &h)?;
+            let inv = updown_plot(&h, "Θ = 25°: THD_F⁻¹", "1/THD_F", |r| {
+                Some(
+                    r.thd
+                        .map(|t| if t > 0.0 { 1.0 / t } else { f64::INFINITY })
+                        .unwrap_or(0.0),
+                )
+                .filter(|v| v.is_finite())
+            });
+            save_both(&inv, dir, "fig9-thd-inv", &mut out)?;
+            let fund = updown_plot(&h, "Θ = 25°: δ_fund", "δ_fund [deg]", |r| {
+                Some(r.delta_fund_deg)
+            });
+            save_both(&fund, dir, "fig9-fund", &mut out)?;
+            let avg = updown_plot(&h, "Θ = 25°: δ_avg", "δ_avg [deg]", |r| {
+                Some(r.delta_avg_deg)
+            });
+            save_both(&avg, dir, "fig9-avg", &mut out)?;
+            for (f, stem) in [(2.1, "fig9-inset-2.1-down"), (2.7, "fig9-inset-2.7-down")] {
+                if let Some(r) = h.down.iter().find(|r| (r.f_hz - f).abs() < 1e-9) {
+                    let l = inset(&pp, r, 0.0, &format!("Θ = 25°, {f} Hz, f decreasing"))?;
+                    save_both(&l, dir, stem, &mut out)?;
+                }
+            }
+        }
+        Name::Fig10 => {
+            let fs: Vec<f64> = (1..=45).map(|i| i as f64).collect();
+            let o = ClassifyOptions {
+                settle_turns: 1000,
+                analysis_turns: 10,
+                ..ClassifyOptions::default()
+            };
+            let pp = p.with_parallel_shafts_deg(0.0);
+            let h = hysteresis(pp, &fs, 0.0, 180.0, Convention::Paper, &o, progress)?;
+            crate::io::write_json_atomic(dir.join("fig10-data.json"), &h)?;
+            save_both(&hysteresis_lock_plot(&h, &pp)?, dir, "fig10a", &mut out)?;
+            let rot = updown_plot(
+                &h,
+                "Θ = 0: net rotation frequency of the output",
+                "f_out [Hz]",
+                |r| Some(r.net_rotation_hz),
+            );
+            save_both(&rot, dir, "fig10b", &mut out)?;
+            for (branch, stem) in [(&h.up, "fig10-inset-6-up"), (&h.down, "fig10-inset-6-down")] {
+                if let Some(r) = branch.iter().find(|r| (r.f_hz - 6.0).abs() < 1e-9) {
+                    let l = inset(&pp, r, 0.0, &format!("Θ = 0, 6 Hz ({stem})"))?;
+                    save_both(&l, dir, stem, &mut out)?;
+                }
+            }
+        }
+        Name::Orbit | Name::Lyapunov => {
+            let mut orbit = Vec::new();
+            let mut lyap = Vec::new();
+            for i in 0..=90 {
+                let f = 0.9 + 0.01 * i as f64;
+                let (g, x0) = paper_gear(p, 31.0, f)?;
+                let r = window(&g, x0, 90)?;
+                if let Some(z) = &r.section {
+                    let n = z.len();
+                    for v in &z[n.saturating_sub(40)..] {
+                        orbit.push((f, v[0].to_degrees()));
+                    }
+                }
+                if let Some(l) = r.rigorous.as_ref().and_then(|c| c.lyapunov.per_period) {
+                    lyap.push((f, l));
+                }
+                progress.point_done(0, i);
+            }
+            if name == Name::Orbit {
+                let fig = orbit_diagram(
+                    "Θ = 31°, fresh start (paper Fig. 6 protocol)",
+                    &orbit,
+                    false,
+                );
+                save_both(&fig, dir, "orbit", &mut out)?;
+            } else {
+                let fig = lyapunov_plot(
+                    "Θ = 31°, fresh start: largest Lyapunov exponent",
+                    &lyap,
+                    false,
+                );
+                save_both(&fig, dir, "lyapunov", &mut out)?;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Runs `gearbif figure`.
+pub fn run(a: Args) -> Result<()> {
+    let p = a.gear.params()?;
+    let progress = Progress::new(a.quiet);
+    let t = std::time::Instant::now();
+    let files = make(a.name, &p, &a.out, a.full, &progress)?;
+    progress.finish();
+    for f in files {
+        eprintln!("wrote {}", f.display());
+    }
+    eprintln!("in {:.1} s", t.elapsed().as_secs_f64());
+    Ok(())
+}

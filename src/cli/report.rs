@@ -1,0 +1,44 @@
+//! `gearbif report`: the self-contained report folder of a gear (report.md, report.json, figures).
+
+use super::common::GearArgs;
+use super::sweep::Progress;
+use crate::report::{build_report, ReportOptions};
+use crate::Result;
+use std::path::PathBuf;
+
+/// Arguments of `gearbif report`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    gear: GearArgs,
+    /// Output folder.
+    #[arg(long, default_value = "gearbif-report")]
+    out: PathBuf,
+    /// A finer map and hysteresis (minutes instead of seconds).
+    #[arg(long)]
+    fine: bool,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Runs `gearbif report`.
+pub fn run(a: Args) -> Result<()> {
+    let gear = a.gear.params()?;
+    let opts = if a.fine {
+        ReportOptions::fine()?
+    } else {
+        ReportOptions::coarse()?
+    };
+    let t = std::time::Instant::now();
+    let progress = Progress::new(a.quiet);
+    let rep = build_report(&gear, &opts, &a.out, &progress)?;
+    progress.finish();
+    rep.write(&a.out)?;
+    eprintln!(
+        "wrote {}/report.md and report.json in {:.1} s",
+        a.out.display(),
+        t.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

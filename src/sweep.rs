@@ -1,0 +1,667 @@
+//! Two-parameter sweeps ("the atlas") with the paper's protocols, run as a resumable state
+//! machine: rows are computed in parallel (feature `parallel`, one row per task; the semi-static
+//! protocol is sequential along a row), every finished row is checkpointed atomically as one JSON
+//! file, and a restarted sweep loads the finished rows and computes only the missing ones. Each
+//! row depends only on the spec, so a resumed sweep ends bit-identical to an uninterrupted one.
+//!
+//! Progress and checkpoint reporting are observers ([`SweepObserver`]), outside the numerics.
+//!
+//! Protocols:
+//! - [`Protocol::Fresh`] (Fig. 7b): every point starts from the same initial state.
+//! - [`Protocol::SemiStatic`] (Fig. 8): along a row the state at the end of one point is the start
+//!   of the next (the drive phase is the same at both, α ≡ α₀ mod 2π).
+
+use crate::analysis::classify::{classify_point, ClassifyOptions, Dynamics, PointResult};
+use crate::error::{Error, Result};
+use crate::integrator::{EventDriven, FixedStep};
+use crate::model::{Convention, Gear, GearParams};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// A swept parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SweepParam {
+    /// Parallel shaft angle Θ = Φ, degrees.
+    ThetaDeg,
+    /// Drive frequency f, Hz.
+    F,
+    /// Viscous damping ζ, 1/s.
+    Zeta,
+    /// Dry friction η, 1/s².
+    Eta,
+    /// Output inertia I, kg m².
+    Inertia,
+}
+
+impl SweepParam {
+    /// Parses `theta`, `f`, `zeta`, `eta`, `inertia`.
+    pub fn parse(s: &str) -> Result<Self> {
+        Ok(match s {
+            "theta" | "theta_deg" => Self::ThetaDeg,
+            "f" => Self::F,
+            "zeta" => Self::Zeta,
+            "eta" => Self::Eta,
+            "inertia" => Self::Inertia,
+            _ => {
+                return Err(Error::InvalidInput(format!(
+                    "unknown sweep parameter `{s}` (theta, f, zeta, eta, inertia)"
+                )))
+            }
+        })
+    }
+    /// Column name in outputs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::ThetaDeg => "theta_deg",
+            Self::F => "f_hz",
+            Self::Zeta => "zeta",
+            Self::Eta => "eta",
+            Self::Inertia => "inertia",
+        }
+    }
+}
+
+/// One axis of a sweep: a parameter and its values.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Axis {
+    /// The parameter.
+    pub param: SweepParam,
+    /// Its values, in sweep order.
+    pub values: Vec<f64>,
+}
+
+impl Axis {
+    /// Values start, start + step, … up to stop (inclusive within step/1000), computed as
+    /// start + i·step (no accumulated rounding).
+    pub fn range(param: SweepParam, start: f64, stop: f64, step: f64) -> Result<Self> {
+        crate::error::finite("start", start)?;
+        crate::error::finite("stop", stop)?;
+        crate::error::finite("step", step)?;
+        if step == 0.0 || (stop - start) / step < 0.0 {
+            return Err(Error::InvalidInput(format!(
+                "axis {}: step {step} does not lead from {start} to {stop}",
+                param.name()
+            )));
+        }
+        let n = ((stop - start) / step + 1e-3).floor() as usize + 1;
+        if n > 10_000_000 {
+            return Err(Error::InvalidInput("axis has more than 1e7 points".into()));
+        }
+        let values = (0..n).map(|i| start + i as f64 * step).collect();
+        Ok(Self { param, values })
+    }
+
+    /// `n` log-spaced values from `start` to `stop` (both > 0).
+    pub fn log(param: SweepParam, start: f64, stop: f64, n: usize) -> Result<Self> {
+        crate::error::positive("start", start)?;
+        crate::error::positive("stop", stop)?;
+        if n < 2 {
+            return Err(Error::InvalidInput("a log axis needs >= 2 points".into()));
+        }
+        let (a, b) = (start.ln(), stop.ln());
+        let values = (0..n)
+            .map(|i| (a + (b - a) * i as f64 / (n - 1) as f64).exp())
+            .collect();
+        Ok(Self { param, values })
+    }
+
+    /// Parses `param:start:stop:step` or `param:start:stop:nlog` with a trailing `log`
+    /// (e.g. `theta:-90:90:5`, `f:0.1:100:0.02`, `f:0.5:50:40:log`).
+    pub fn parse(s: &str) -> Result<Self> {
+        let parts: Vec<&str> = s.split(':').collect();
+        let num = |x: &str| -> Result<f64> {
+            x.trim()
+                .parse::<f64>()
+                .map_err(|_| Error::InvalidInput(format!("axis `{s}`: `{x}` is not a number")))
+        };
+        match parts.as_slice() {
+            [p, a, b, st] => Self::range(SweepParam::parse(p)?, num(a)?, num(b)?, num(st)?),
+            [p, a, b, n, "log"] => {
+                let n = num(n)?;
+                if n.fract() != 0.0 || n < 2.0 {
+                    return Err(Error::InvalidInput(format!("axis `{s}`: bad count")));
+                }
+                Self::log(SweepParam::parse(p)?, num(a)?, num(b)?, n as usize)
+            }
+            _ => Err(Error::InvalidInput(format!(
+                "axis `{s}`: expected param:start:stop:step or param:start:stop:n:log"
+            ))),
+        }
+    }
+}
+
+/// How successive points of a row start.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Protocol {
+    /// Every point from the spec's initial state (paper Fig. 7b).
+    #[default]
+    Fresh,
+    /// The end state of one point is the start of the next along a row (paper Fig. 8).
+    SemiStatic,
+}
+
+/// Which integrator simulates the points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// The exact event-driven Filippov integrator.
+    #[default]
+    EventDriven,
+    /// The paper's fixed-step RK4 with 50 steps per period (no rigorous classification).
+    FixedStep,
+}
+
+/// A sweep: the gear, the two axes, the protocol, the initial state and the per-point options.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SweepSpec {
+    /// The gear (fields not swept keep these values).
+    pub gear: GearParams,
+    /// Drive frequency if f is not swept, Hz.
+    pub f: f64,
+    /// Rows (computed in parallel).
+    pub rows: Axis,
+    /// Columns (sequential along a row; the semi-static protocol carries the state along them).
+    pub cols: Axis,
+    /// The protocol.
+    pub protocol: Protocol,
+    /// Drive phase α₀ at t = 0, degrees.
+    pub alpha0_deg: f64,
+    /// Initial output angle β₀, degrees, in `convention`.
+    pub beta0_deg: f64,
+    /// Convention of β₀ and of the reported angles.
+    pub convention: Convention,
+    /// The integrator.
+    pub method: Method,
+    /// Per-point options.
+    pub classify: ClassifyOptions,
+}
+
+impl SweepSpec {
+    /// The paper's Fig. 8 protocol (Θ from −90° to 90° in 5°, f from 0.1 to 100 Hz in 0.02 Hz
+    /// as in the caption, semi-static, 1000 settling turns, start α = 0°, β = 180° paper
+    /// convention).
+    pub fn paper_fig8() -> Result<Self> {
+        Ok(Self {
+            gear: GearParams::paper(),
+            f: 1.0,
+            rows: Axis::range(SweepParam::ThetaDeg, -90.0, 90.0, 5.0)?,
+            cols: Axis::range(SweepParam::F, 0.1, 100.0, 0.02)?,
+            protocol: Protocol::SemiStatic,
+            alpha0_deg: 0.0,
+            beta0_deg: 180.0,
+            convention: Convention::Paper,
+            method: Method::EventDriven,
+            classify: ClassifyOptions {
+                settle_turns: 1000,
+                ..ClassifyOptions::default()
+            },
+        })
+    }
+
+    /// The paper's Fig. 7b protocol on the given axes: fresh start at α = 90°, β = 270° (paper
+    /// convention), 90 settling turns and 10 recorded.
+    pub fn paper_fig7(rows: Axis, cols: Axis) -> Self {
+        Self {
+            gear: GearParams::paper(),
+            f: 1.0,
+            rows,
+            cols,
+            protocol: Protocol::Fresh,
+            alpha0_deg: 90.0,
+            beta0_deg: 270.0,
+            convention: Convention::Paper,
+            method: Method::EventDriven,
+            classify: ClassifyOptions::paper(),
+        }
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.rows.values.len() * self.cols.values.len()
+    }
+
+    /// True if an axis is empty.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Validates the spec.
+    pub fn validate(&self) -> Result<()> {
+        self.gear.validate()?;
+        crate::error::positive("f", self.f)?;
+        crate::error::finite("alpha0_deg", self.alpha0_deg)?;
+        crate::error::finite("beta0_deg", self.beta0_deg)?;
+        self.classify.validate()?;
+        if self.rows.param == self.cols.param {
+            return Err(Error::InvalidInput(
+                "the two sweep axes must be different parameters".into(),
+            ));
+        }
+        if self.is_empty() {
+            return Err(Error::InvalidInput("empty sweep".into()));
+        }
+        for ax in [&self.rows, &self.cols] {
+            for &v in &ax.values {
+                crate::error::finite("axis value", v)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The gear at a grid point.
+    pub fn gear_at(&self, row_value: f64, col_value: f64) -> Result<Gear> {
+        let mut p = self.gear;
+        let mut f = self.f;
+        for (param, v) in [(self.rows.param, row_value), (self.cols.param, col_value)] {
+            match param {
+                SweepParam::ThetaDeg => p = p.with_parallel_shafts_deg(v),
+                SweepParam::F => f = v,
+                SweepParam::Zeta => p.zeta = v,
+                SweepParam::Eta => p.eta = v,
+                SweepParam::Inertia => p.inertia = v,
+            }
+        }
+        p.driven(f)?
+            .with_convention(self.convention)
+            .with_alpha0(self.alpha0_deg.to_radians())
+    }
+
+    /// Computes one row (sequential along the columns).
+    pub fn compute_row(&self, row: usize, observer: &dyn SweepObserver) -> Result<RowResult> {
+        let rv = *self
+            .rows
+            .values
+            .get(row)
+            .ok_or_else(|| Error::InvalidInput(format!("row {row} out of range")))?;
+        let x_start = [self.beta0_deg.to_radians(), 0.0];
+        let mut x = x_start;
+        let mut points = Vec::with_capacity(self.cols.values.len());
+        let fixed_opts = ClassifyOptions {
+            rigorous: false,
+            ..self.classify.clone()
+        };
+        for (col, &cv) in self.cols.values.iter().enumerate() {
+            let gear = self.gear_at(rv, cv)?;
+            if self.protocol == Protocol::Fresh {
+                x = x_start;
+            }
+            let res = match self.method {
+                Method::EventDriven => classify_point(&gear, x, &EventDriven, &self.classify)?,
+                Method::FixedStep => classify_point(&gear, x, &FixedStep::default(), &fixed_opts)?,
+            };
+            x = res.end_state;
+            points.push(PointRecord::new(row, col, rv, cv, &gear, &res));
+            observer.point_done(row, col);
+        }
+        Ok(RowResult {
+            row,
+            row_value: rv,
+            points,
+        })
+    }
+}
+
+/// One point of a sweep, flat (one CSV line).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PointRecord {
+    /// Row index.
+    pub row: usize,
+    /// Column index.
+    pub col: usize,
+    /// Row parameter value.
+    pub row_value: f64,
+    /// Column parameter value.
+    pub col_value: f64,
+    /// Drive frequency, Hz.
+    pub f_hz: f64,
+    /// Shaft orientation index Δ.
+    pub delta: f64,
+    /// Standard deviation of δ over the window, degrees (RMS_δ of Figs. 7–8).
+    pub rms_delta_deg: f64,
+    /// RMS of the 7-harmonic fit residual, degrees (eq. `rms`).
+    pub rms_fit_deg: f64,
+    /// THD_F, standard definition (may be +∞ → JSON null).
+    pub thd: Option<f64>,
+    /// THD_F, as printed (denominator a₁² + b₁²).
+    pub thd_printed: Option<f64>,
+    /// Mean δ, degrees.
+    pub delta_avg_deg: f64,
+    /// DFT amplitude of δ at the drive frequency, degrees.
+    pub delta_fund_deg: f64,
+    /// Net output rotation frequency over the window, Hz.
+    pub net_rotation_hz: f64,
+    /// The paper's class: chaos, T/2, T.
+    pub paper_class: String,
+    /// The rigorous class: T/2, T, 3T, 3T/2, QP, chaos, ? (empty if not computed).
+    pub class: String,
+    /// Minimal period in half periods (0 if not periodic).
+    pub half_periods: usize,
+    /// Symmetric periodic orbit.
+    pub symmetric: bool,
+    /// Rotation number per drive period.
+    pub rotation_number: Option<f64>,
+    /// Locked (|rotation number| = 1).
+    pub locked: Option<bool>,
+    /// Largest Lyapunov exponent per drive period (null: −∞ or not computed).
+    pub lyapunov: Option<f64>,
+    /// Do the classes agree?
+    pub agree: Option<bool>,
+    /// Final β (mod 2π), rad.
+    pub beta_end: f64,
+    /// Final ω, rad/s.
+    pub omega_end: f64,
+}
+
+fn fin(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+impl PointRecord {
+    /// Flattens a point result.
+    pub fn new(row: usize, col: usize, rv: f64, cv: f64, gear: &Gear, r: &PointResult) -> Self {
+        let rig = r.rigorous.as_ref();
+        let (hp, sym) = match rig.map(|r| &r.dynamics) {
+            Some(Dynamics::Periodic {
+                half_periods,
+                symmetric,
+                ..
+            }) => (*half_periods, *symmetric),
+            _ => (0, false),
+        };
+        Self {
+            row,
+            col,
+            row_value: rv,
+            col_value: cv,
+            f_hz: gear.f,
+            delta: gear.delta,
+            rms_delta_deg: r.paper.rms_delta_deg,
+            rms_fit_deg: r.paper.rms_fit_deg,
+            thd: fin(r.paper.thd),
+            thd_printed: fin(r.paper.thd_printed),
+            delta_avg_deg: r.paper.delta_avg_deg,
+            delta_fund_deg: r.paper.delta_fund_deg,
+            net_rotation_hz: r.net_rotation_hz,
+            paper_class: r.paper.class.label().to_string(),
+            class: rig.map(|r| r.label.clone()).unwrap_or_default(),
+            half_periods: hp,
+            symmetric: sym,
+            rotation_number: rig.map(|r| r.rotation_number),
+            locked: rig.map(|r| r.locked),
+            lyapunov: rig.and_then(|r| r.lyapunov.per_period),
+            agree: r.agree,
+            beta_end: r.end_state[0],
+            omega_end: r.end_state[1],
+        }
+    }
+}
+
+/// A finished row.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RowResult {
+    /// Row index.
+    pub row: usize,
+    /// Row parameter value.
+    pub row_value: f64,
+    /// Its points, in column order.
+    pub points: Vec<PointRecord>,
+}
+
+/// Observes a running sweep (progress bars, logging). Called from worker threads.
+pub trait SweepObserver: Sync {
+    /// The sweep starts: `total` points, `done` of them already finished (loaded from checkpoints).
+    fn started(&self, total: usize, done: usize) {
+        let _ = (total, done);
+    }
+    /// A point finished.
+    fn point_done(&self, row: usize, col: usize) {
+        let _ = (row, col);
+    }
+    /// A row finished and was checkpointed (to `path`, if checkpointing).
+    fn row_done(&self, row: usize, path: Option<&Path>) {
+        let _ = (row, path);
+    }
+}
+
+/// An observer that does nothing.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+impl SweepObserver for Silent {}
+
+/// The result of a complete sweep: the spec and every row.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SweepResult {
+    /// The spec.
+    pub spec: SweepSpec,
+    /// Rows in order.
+    pub rows: Vec<RowResult>,
+}
+
+impl SweepResult {
+    /// All points, row-major.
+    pub fn points(&self) -> impl Iterator<Item = &PointRecord> {
+        self.rows.iter().flat_map(|r| r.points.iter())
+    }
+
+    /// CSV text: one line per point, a header naming the two axes.
+    pub fn to_csv(&self) -> Result<String> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        for p in self.points() {
+            w.serialize(p).map_err(|e| Error::Io(e.to_string()))?;
+        }
+        let bytes = w.into_inner().map_err(|e| Error::Io(e.to_string()))?;
+        let mut s = String::from_utf8(bytes).map_err(|e| Error::Io(e.to_string()))?;
+        let header = format!(
+            "# rows = {}, cols = {}, protocol = {:?}, method = {:?}\n",
+            self.spec.rows.param.name(),
+            self.spec.cols.param.name(),
+            self.spec.protocol,
+            self.spec.method
+        );
+        s.insert_str(0, &header);
+        Ok(s)
+    }
+
+    /// Writes `points.csv` and `sweep.json` into `dir`, atomically.
+    pub fn write(&self, dir: impl AsRef<Path>) -> Result<()> {
+        let dir = dir.as_ref();
+        crate::io::write_atomic(dir.join("points.csv"), self.to_csv()?.as_bytes())?;
+        crate::io::write_json_atomic(dir.join("sweep.json"), self)
+    }
+}
+
+/// Progress of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SweepOutcome {
+    /// All rows are done.
+    Complete(Box<SweepResult>),
+    /// Stopped early (row limit); the finished rows are in the checkpoint.
+    Stopped {
+        /// Rows finished (including loaded ones).
+        rows_done: usize,
+        /// Rows in the sweep.
+        rows_total: usize,
+    },
+}
+
+/// Runs a [`SweepSpec`], optionally with a checkpoint directory, a row limit and an observer.
+pub struct SweepRunner<'a> {
+    spec: SweepSpec,
+    checkpoint: Option<PathBuf>,
+    max_new_rows: Option<usize>,
+    observer: &'a dyn SweepObserver,
+}
+
+impl<'a> SweepRunner<'a> {
+    /// A runner without checkpoints or observer.
+    pub fn new(spec: SweepSpec) -> Self {
+        Self {
+            spec,
+            checkpoint: None,
+            max_new_rows: None,
+            observer: &Silent,
+        }
+    }
+    /// Checkpoints rows into `dir` (`spec.json` and `rows/row-NNNNN.json`) and resumes from them.
+    pub fn checkpoint(mut self, dir: impl Into<PathBuf>) -> Self {
+        self.checkpoint = Some(dir.into());
+        self
+    }
+    /// Stops after computing `n` new rows (used to test resumption; a killed run behaves the same).
+    pub fn max_new_rows(mut self, n: usize) -> Self {
+        self.max_new_rows = Some(n);
+        self
+    }
+    /// Sets the observer.
+    pub fn observer(mut self, o: &'a dyn SweepObserver) -> Self {
+        self.observer = o;
+        self
+    }
+
+    fn row_path(dir: &Path, row: usize) -> PathBuf {
+        dir.join("rows").join(format!("row-{row:05}.json"))
+    }
+
+    /// Loads finished rows from the checkpoint (checking that it belongs to the same spec).
+    fn load(&self) -> Result<Vec<Option<RowResult>>> {
+        let n = self.spec.rows.values.len();
+        let mut rows = vec![None; n];
+        let Some(dir) = &self.checkpoint else {
+            return Ok(rows);
+        };
+        let spec_path = dir.join("spec.json");
+        if spec_path.exists() {
+            let text = std::fs::read_to_string(&spec_path)
+                .map_err(|e| Error::Io(format!("{}: {e}", spec_path.display())))?;
+            let old: SweepSpec = serde_json::from_str(&text)
+                .map_err(|e| Error::Io(format!("{}: {e}", spec_path.display())))?;
+            if old != self.spec {
+                return Err(Error::InvalidInput(format!(
+                    "checkpoint {} belongs to a different sweep; use another directory",
+                    dir.display()
+                )));
+            }
+            for (i, slot) in rows.iter_mut().enumerate() {
+                let p = Self::row_path(dir, i);
+                if p.exists() {
+                    let text = std::fs::read_to_string(&p)
+                        .map_err(|e| Error::Io(format!("{}: {e}", p.display())))?;
+                    let r: RowResult = serde_json::from_str(&text)
+                        .map_err(|e| Error::Io(format!("{}: {e}", p.display())))?;
+                    if r.row == i && r.points.len() == self.spec.cols.values.len() {
+                        *slot = Some(r);
+                    }
+                }
+            }
+        } else {
+            crate::io::write_json_atomic(&spec_path, &self.spec)?;
+        }
+        Ok(rows)
+    }
+
+    /// Runs (or resumes) the sweep.
+    pub fn run(&self) -> Result<SweepOutcome> {
+        self.spec.validate()?;
+        let mut rows = self.load()?;
+        let ncols = self.spec.cols.values.len();
+        let done = rows.iter().filter(|r| r.is_some()).count();
+        self.observer.started(self.spec.len(), done * ncols);
+        let pending: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].is_none()).collect();
+        let started = AtomicUsize::new(0);
+        let limit = self.max_new_rows.unwrap_or(usize::MAX);
+        let work = |i: usize| -> Result<Option<RowResult>> {
+            if started.fetch_add(1, Ordering::SeqCst) >= limit {
+                return Ok(None);
+            }
+            let r = self.spec.compute_row(i, self.observer)?;
+            let path = match &self.checkpoint {
+                Some(dir) => {
+                    let p = Self::row_path(dir, i);
+                    crate::io::write_json_atomic(&p, &r)?;
+                    Some(p)
+                }
+                None => None,
+            };
+            self.observer.row_done(i, path.as_deref());
+            Ok(Some(r))
+        };
+        #[cfg(feature = "parallel")]
+        let new: Vec<Result<Option<RowResult>>> = {
+            use rayon::prelude::*;
+            pending.par_iter().map(|&i| work(i)).collect()
+        };
+        #[cfg(not(feature = "parallel"))]
+        let new: Vec<Result<Option<RowResult>>> = pending.iter().map(|&i| work(i)).collect();
+        for r in new {
+            if let Some(row) = r? {
+                let i = row.row;
+                rows[i] = Some(row);
+            }
+        }
+        let rows_done = rows.iter().filter(|r| r.is_some()).count();
+        if rows_done < rows.len() {
+            return Ok(SweepOutcome::Stopped {
+                rows_done,
+                rows_total: rows.len(),
+            });
+        }
+        Ok(SweepOutcome::Complete(Box::new(SweepResult {
+            spec: self.spec.clone(),
+            rows: rows.into_iter().flatten().collect(),
+        })))
+    }
+}
+
+/// A hysteresis sweep (Figs. 9–10): f up then down at fixed gear, carrying the state.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Hysteresis {
+    /// Frequencies of the upward branch (the downward branch visits them in reverse).
+    pub f: Vec<f64>,
+    /// Points while f increases.
+    pub up: Vec<PointRecord>,
+    /// Points while f decreases (in decreasing f).
+    pub down: Vec<PointRecord>,
+}
+
+/// Runs f up through `f_values` (ascending) and back down, semi-static, starting from
+/// (α₀, β₀) in `convention`; the paper's protocol for Figs. 9–10.
+pub fn hysteresis(
+    gear: GearParams,
+    f_values: &[f64],
+    alpha0_deg: f64,
+    beta0_deg: f64,
+    convention: Convention,
+    opts: &ClassifyOptions,
+    observer: &dyn SweepObserver,
+) -> Result<Hysteresis> {
+    if f_values.is_empty() || f_values.windows(2).any(|w| w[1] <= w[0] || w[1].is_nan()) {
+        return Err(Error::InvalidInput(
+            "hysteresis needs ascending frequencies".into(),
+        ));
+    }
+    let mut x = [beta0_deg.to_radians(), 0.0];
+    let mut run = |fs: &mut dyn Iterator<Item = (usize, f64)>| -> Result<Vec<PointRecord>> {
+        let mut out = Vec::new();
+        for (i, f) in fs {
+            let g = gear
+                .driven(f)?
+                .with_convention(convention)
+                .with_alpha0(alpha0_deg.to_radians())?;
+            let r = classify_point(&g, x, &EventDriven, opts)?;
+            x = r.end_state;
+            out.push(PointRecord::new(0, i, gear.theta.to_degrees(), f, &g, &r));
+            observer.point_done(0, i);
+        }
+        Ok(out)
+    };
+    let up = run(&mut f_values.iter().copied().enumerate())?;
+    let down = run(&mut f_values.iter().copied().enumerate().rev())?;
+    Ok(Hysteresis {
+        f: f_values.to_vec(),
+        up,
+        down,
+    })
+}
