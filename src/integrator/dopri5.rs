@@ -6,52 +6,10 @@
 //! (β, ω). At each event the saltation matrix S = I + (F₊ − F₋)∇hᵀ/(∇h·F₋) multiplies Z:
 //! diag(1, a₊/a₋) at a crossing, diag(1, 0) at stick entry, I at a release (numerics.md).
 
-use super::{
-    check_interval, Event, EventKind, Flow, FlowMethod, FlowOptions, Mode, Sample, Sensitivity,
-    Stats,
-};
+use super::augmented::{augmented_rhs, Layout, NMAX, V};
+use super::{check_interval, Event, EventKind, Flow, FlowMethod, FlowOptions, Mode, Sample, Stats};
 use crate::error::{Error, Result};
-use crate::model::{release_function, DrivenOscillator, MAX_PARAMS};
-use nalgebra::{Matrix2, Matrix2xX};
-
-/// Largest augmented dimension: 2 state + 2 rows × (2 + MAX_PARAMS) columns.
-pub(super) const NMAX: usize = 2 + 2 * (2 + MAX_PARAMS);
-pub(super) type V = [f64; NMAX];
-
-/// Right-hand side of the augmented system (state and `ncols` Jacobian columns) on side `s`
-/// (s = ±1 slipping; s = 0 gives the friction-free field, used by naive schemes at ω = 0).
-#[inline(always)]
-pub(super) fn augmented_rhs<S: DrivenOscillator + ?Sized>(
-    sys: &S,
-    ncols: usize,
-    with_params: bool,
-    t: f64,
-    y: &V,
-    s: f64,
-    out: &mut V,
-) {
-    if ncols == 0 {
-        let f = sys.forces(t, y[0], y[1]);
-        out[0] = y[1];
-        out[1] = f.a - s * f.r;
-        return;
-    }
-    let j = sys.forces_jet(t, y[0], y[1], with_params);
-    out[0] = y[1];
-    out[1] = j.a - s * j.r;
-    let db = j.a_beta - s * j.r_beta;
-    let dw = j.a_omega - s * j.r_omega;
-    for c in 0..ncols {
-        let zb = y[2 + 2 * c];
-        let zw = y[3 + 2 * c];
-        out[2 + 2 * c] = zw;
-        let mut v = db * zb + dw * zw;
-        if c >= 2 {
-            v += j.a_p[c - 2] - s * j.r_p[c - 2];
-        }
-        out[3 + 2 * c] = v;
-    }
-}
+use crate::model::{release_function, DrivenOscillator};
 
 // Dormand–Prince 5(4) coefficients (Dormand & Prince 1980; dense output of Hairer, Nørsett & Wanner).
 const C2: f64 = 1.0 / 5.0;
@@ -123,7 +81,9 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for EventDriven {
 struct Solver<'a, S: ?Sized> {
     sys: &'a S,
     opts: &'a FlowOptions,
-    /// Number of Jacobian columns propagated (0, 2 or 2 + n_params).
+    /// Which Jacobian columns are propagated.
+    layout: Layout,
+    /// Number of Jacobian columns (0, 2 or 2 + n_params).
     ncols: usize,
     /// Augmented dimension 2 + 2·ncols.
     n: usize,
@@ -137,18 +97,14 @@ struct Solver<'a, S: ?Sized> {
 
 impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
     fn new(sys: &'a S, opts: &'a FlowOptions) -> Self {
-        let np = sys.n_params().min(MAX_PARAMS);
-        let (ncols, with_params) = match opts.sensitivity {
-            Sensitivity::None => (0, false),
-            Sensitivity::State => (2, false),
-            Sensitivity::StateAndParams => (2 + np, true),
-        };
+        let layout = Layout::new(sys, opts.sensitivity);
         Self {
             sys,
             opts,
-            ncols,
-            n: 2 + 2 * ncols,
-            with_params,
+            layout,
+            ncols: layout.ncols,
+            n: layout.dim(),
+            with_params: layout.with_params,
             angle_scale: true,
             stats: Stats::default(),
             events: Vec::new(),
@@ -160,7 +116,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
     #[inline(always)]
     fn rhs(&mut self, t: f64, y: &V, s: f64, out: &mut V) {
         self.stats.rhs_evals += 1;
-        augmented_rhs(self.sys, self.ncols, self.with_params, t, y, s, out);
+        augmented_rhs(self.sys, self.layout, t, y, s, out);
     }
 
     fn record_event(&mut self, t: f64, beta: f64, kind: EventKind) {
@@ -190,12 +146,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         let period = sys.period();
         let hmax = self.opts.max_step_fraction * period;
         let mut y: V = [0.0; NMAX];
-        y[0] = x0[0];
-        y[1] = x0[1];
-        if self.ncols > 0 {
-            y[2] = 1.0; // ∂β/∂β₀
-            y[5] = 1.0; // ∂ω/∂ω₀
-        }
+        self.layout.init(x0, &mut y);
         // skip samples before t0
         while self
             .opts
@@ -518,23 +469,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         if self.next_sample < self.opts.sample_times.len() && mode == Mode::Stick {
             self.samples_constant(t, y[0]);
         }
-        let (jac_x, jac_p) = if self.ncols > 0 {
-            let jx = Matrix2::new(y[2], y[4], y[3], y[5]);
-            let jp = if self.with_params {
-                let np = self.ncols - 2;
-                let mut m = Matrix2xX::zeros(np);
-                for c in 0..np {
-                    m[(0, c)] = y[2 + 2 * (c + 2)];
-                    m[(1, c)] = y[3 + 2 * (c + 2)];
-                }
-                Some(m)
-            } else {
-                None
-            };
-            (Some(jx), jp)
-        } else {
-            (None, None)
-        };
+        let (jac_x, jac_p) = self.layout.jacobians(&y);
         Ok(Flow {
             t,
             x: [y[0], y[1]],

@@ -6,11 +6,10 @@
 //! The Jacobian is the derivative of the smooth field on each side (no saltation), which is what a
 //! naive variational integration gives. Kept as a comparison method, not for production use.
 
-use super::dopri5::{augmented_rhs, NMAX, V};
+use super::augmented::{augmented_rhs, Layout, NMAX, V};
 use super::{check_interval, Flow, FlowMethod, FlowOptions, Mode, Sample, Sensitivity, Stats};
 use crate::error::{positive, Error, Result};
-use crate::model::{DrivenOscillator, MAX_PARAMS};
-use nalgebra::{Matrix2, Matrix2xX};
+use crate::model::DrivenOscillator;
 
 /// Fixed-step RK4 with a naive sgn(ω): `steps_per_period` steps per drive period (paper: 50).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -49,22 +48,12 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for FixedStep {
             return Err(Error::InvalidInput("steps_per_period must be >= 1".into()));
         }
         let period = positive("period", sys.period())?;
-        let np = sys.n_params().min(MAX_PARAMS);
-        let (ncols, with_params) = match opts.sensitivity {
-            Sensitivity::None => (0, false),
-            Sensitivity::State => (2, false),
-            Sensitivity::StateAndParams => (2 + np, true),
-        };
-        let n = 2 + 2 * ncols;
+        let layout = Layout::new(sys, opts.sensitivity);
+        let n = layout.dim();
         let dt = period / self.steps_per_period as f64;
         let nsteps = ((t1 - t0) / dt).ceil().max(0.0) as usize;
         let mut y: V = [0.0; NMAX];
-        y[0] = x0[0];
-        y[1] = x0[1];
-        if ncols > 0 {
-            y[2] = 1.0;
-            y[5] = 1.0;
-        }
+        layout.init(x0, &mut y);
         let mut stats = Stats::default();
         let mut samples = Vec::with_capacity(opts.sample_times.len());
         let mut next = 0usize;
@@ -77,7 +66,7 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for FixedStep {
             [0.0; NMAX],
         );
         let f = |t: f64, y: &V, out: &mut V| {
-            augmented_rhs(sys, ncols, with_params, t, y, sgn(y[1]), out);
+            augmented_rhs(sys, layout, t, y, sgn(y[1]), out);
         };
         for step in 0..nsteps {
             let h = if step + 1 == nsteps { t1 - t } else { dt };
@@ -113,7 +102,14 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for FixedStep {
                     th.powi(3) - th.powi(2),
                 );
                 let mut kn = [0.0; NMAX];
-                augmented_rhs(sys, 0, false, t + h, &yn, sgn(yn[1]), &mut kn);
+                augmented_rhs(
+                    sys,
+                    Layout::new(sys, Sensitivity::None),
+                    t + h,
+                    &yn,
+                    sgn(yn[1]),
+                    &mut kn,
+                );
                 let beta = h00 * y[0] + h10 * h * y[1] + h01 * yn[0] + h11 * h * yn[1];
                 let omega = h00 * y[1] + h10 * h * k1[1] + h01 * yn[1] + h11 * h * kn[1];
                 samples.push(Sample { t: ts, beta, omega });
@@ -135,20 +131,7 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for FixedStep {
         } else {
             Mode::Stick
         };
-        let (jac_x, jac_p) = if ncols > 0 {
-            let jx = Matrix2::new(y[2], y[4], y[3], y[5]);
-            let jp = with_params.then(|| {
-                let mut m = Matrix2xX::zeros(ncols - 2);
-                for c in 0..ncols - 2 {
-                    m[(0, c)] = y[2 + 2 * (c + 2)];
-                    m[(1, c)] = y[3 + 2 * (c + 2)];
-                }
-                m
-            });
-            (Some(jx), jp)
-        } else {
-            (None, None)
-        };
+        let (jac_x, jac_p) = layout.jacobians(&y);
         Ok(Flow {
             t: t1,
             x: [y[0], y[1]],

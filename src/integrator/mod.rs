@@ -13,6 +13,7 @@
 //! - `Regularised` (feature `diffsol-check`): friction η tanh(ω/ε) integrated as a stiff ODE by
 //!   diffsol; an independent cross-check.
 
+mod augmented;
 mod dopri5;
 mod fixed_step;
 #[cfg(feature = "diffsol-check")]

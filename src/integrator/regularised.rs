@@ -22,12 +22,11 @@
 //! `max_step_fraction · T` before every step (the first step too), which keeps the solver from stepping
 //! over the forcing when the right-hand side vanishes at the start (dependencies.md).
 
-use super::dopri5::{NMAX, V};
-use super::{check_interval, Flow, FlowMethod, FlowOptions, Mode, Sample, Sensitivity, Stats};
+use super::augmented::{augmented_rhs_law, Layout, NMAX, V};
+use super::{check_interval, Flow, FlowMethod, FlowOptions, Mode, Sample, Stats};
 use crate::error::{positive, Error, Result};
-use crate::model::{DrivenOscillator, MAX_PARAMS};
+use crate::model::DrivenOscillator;
 use diffsol::{NalgebraLU, NalgebraMat, OdeBuilder, OdeSolverMethod, OdeSolverStopReason};
-use nalgebra::{Matrix2, Matrix2xX};
 use serde::{Deserialize, Serialize};
 use std::cell::Cell;
 
@@ -88,29 +87,10 @@ fn reg_rhs<S: DrivenOscillator + ?Sized>(
     y: &[f64],
     out: &mut [f64],
 ) {
-    if ncols == 0 {
-        let f = sys.forces(t, y[0], y[1]);
-        out[0] = y[1];
-        out[1] = f.a - f.r * (y[1] / eps).tanh();
-        return;
-    }
-    let j = sys.forces_jet(t, y[0], y[1], with_params);
     let ph = (y[1] / eps).tanh();
     let dph = (1.0 - ph * ph) / eps;
-    out[0] = y[1];
-    out[1] = j.a - j.r * ph;
-    let db = j.a_beta - j.r_beta * ph;
-    let dw = j.a_omega - j.r_omega * ph - j.r * dph;
-    for c in 0..ncols {
-        let zb = y[2 + 2 * c];
-        let zw = y[3 + 2 * c];
-        out[2 + 2 * c] = zw;
-        let mut v = db * zb + dw * zw;
-        if c >= 2 {
-            v += j.a_p[c - 2] - j.r_p[c - 2] * ph;
-        }
-        out[3 + 2 * c] = v;
-    }
+    let layout = Layout { ncols, with_params };
+    augmented_rhs_law(sys, layout, t, y, ph, dph, out);
 }
 
 /// Jacobian-vector product of [`reg_rhs`]: exact in the Jacobian columns Z and for the state rows;
@@ -188,37 +168,14 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for Regularised {
         opts.validate()?;
         let eps = positive("epsilon", self.epsilon)?;
         let period = positive("period", sys.period())?;
-        let np = sys.n_params().min(MAX_PARAMS);
-        let (ncols, with_params) = match opts.sensitivity {
-            Sensitivity::None => (0, false),
-            Sensitivity::State => (2, false),
-            Sensitivity::StateAndParams => (2 + np, true),
-        };
-        let n = 2 + 2 * ncols;
+        let layout = Layout::new(sys, opts.sensitivity);
+        let (ncols, with_params) = (layout.ncols, layout.with_params);
+        let n = layout.dim();
         let mut y0 = vec![0.0; n];
-        y0[0] = x0[0];
-        y0[1] = x0[1];
-        if ncols > 0 {
-            y0[2] = 1.0;
-            y0[5] = 1.0;
-        }
+        layout.init(x0, &mut y0);
         let mut samples = Vec::with_capacity(opts.sample_times.len());
         let mut next = opts.sample_times.partition_point(|&ts| ts < t0);
-        let jac_of = |y: &[f64]| -> (Option<Matrix2<f64>>, Option<Matrix2xX<f64>>) {
-            if ncols == 0 {
-                return (None, None);
-            }
-            let jx = Matrix2::new(y[2], y[4], y[3], y[5]);
-            let jp = with_params.then(|| {
-                let mut m = Matrix2xX::zeros(ncols - 2);
-                for c in 0..ncols - 2 {
-                    m[(0, c)] = y[2 + 2 * (c + 2)];
-                    m[(1, c)] = y[3 + 2 * (c + 2)];
-                }
-                m
-            });
-            (Some(jx), jp)
-        };
+        let jac_of = |y: &[f64]| layout.jacobians(y);
         let mode_of = |w: f64| {
             if w > 0.0 {
                 Mode::Positive

@@ -1,0 +1,120 @@
+//! The augmented state y = (β, ω, Z) shared by all integrators: Z = ∂(β, ω)/∂(β₀, ω₀, p) stored
+//! column by column (row β at 2 + 2c, row ω at 3 + 2c), and its right-hand side
+//!
+//! ```text
+//!   β̇ = ω,  ω̇ = a − r φ(ω),   Ż = DF Z + [0 | ∂F/∂p],
+//! ```
+//!
+//! with the friction law φ: φ = s (a slip side, or 0 for a naive sgn at ω = 0) or φ = tanh(ω/ε)
+//! (regularised), and dφ/dω its derivative.
+
+use super::Sensitivity;
+use crate::model::{DrivenOscillator, MAX_PARAMS};
+use nalgebra::{Matrix2, Matrix2xX};
+
+/// Largest augmented dimension: 2 state + 2 rows × (2 + MAX_PARAMS) columns.
+pub(super) const NMAX: usize = 2 + 2 * (2 + MAX_PARAMS);
+/// A fixed-size augmented state (no heap traffic in the inner loop).
+pub(super) type V = [f64; NMAX];
+
+/// Which Jacobian columns an integration carries.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Layout {
+    /// Number of Jacobian columns (0, 2 or 2 + n_params).
+    pub ncols: usize,
+    /// Whether the parameter columns are carried.
+    pub with_params: bool,
+}
+
+impl Layout {
+    pub fn new<S: DrivenOscillator + ?Sized>(sys: &S, s: Sensitivity) -> Self {
+        let np = sys.n_params().min(MAX_PARAMS);
+        let (ncols, with_params) = match s {
+            Sensitivity::None => (0, false),
+            Sensitivity::State => (2, false),
+            Sensitivity::StateAndParams => (2 + np, true),
+        };
+        Self { ncols, with_params }
+    }
+
+    /// Dimension of the augmented state.
+    pub fn dim(&self) -> usize {
+        2 + 2 * self.ncols
+    }
+
+    /// Writes the initial augmented state: x₀ and Z = [I | 0].
+    pub fn init(&self, x0: [f64; 2], y: &mut [f64]) {
+        y[..self.dim()].fill(0.0);
+        y[0] = x0[0];
+        y[1] = x0[1];
+        if self.ncols > 0 {
+            y[2] = 1.0; // ∂β/∂β₀
+            y[5] = 1.0; // ∂ω/∂ω₀
+        }
+    }
+
+    /// The state and parameter Jacobians stored in `y`.
+    pub fn jacobians(&self, y: &[f64]) -> (Option<Matrix2<f64>>, Option<Matrix2xX<f64>>) {
+        if self.ncols == 0 {
+            return (None, None);
+        }
+        let jx = Matrix2::new(y[2], y[4], y[3], y[5]);
+        let jp = self.with_params.then(|| {
+            let np = self.ncols - 2;
+            let mut m = Matrix2xX::zeros(np);
+            for c in 0..np {
+                m[(0, c)] = y[2 + 2 * (c + 2)];
+                m[(1, c)] = y[3 + 2 * (c + 2)];
+            }
+            m
+        });
+        (Some(jx), jp)
+    }
+}
+
+/// Right-hand side of the augmented system with friction law φ(ω) (value `phi`, derivative `dphi`).
+#[inline(always)]
+pub(super) fn augmented_rhs_law<S: DrivenOscillator + ?Sized>(
+    sys: &S,
+    layout: Layout,
+    t: f64,
+    y: &[f64],
+    phi: f64,
+    dphi: f64,
+    out: &mut [f64],
+) {
+    if layout.ncols == 0 {
+        let f = sys.forces(t, y[0], y[1]);
+        out[0] = y[1];
+        out[1] = f.a - phi * f.r;
+        return;
+    }
+    let j = sys.forces_jet(t, y[0], y[1], layout.with_params);
+    out[0] = y[1];
+    out[1] = j.a - phi * j.r;
+    let db = j.a_beta - phi * j.r_beta;
+    let dw = j.a_omega - phi * j.r_omega - dphi * j.r;
+    for c in 0..layout.ncols {
+        let zb = y[2 + 2 * c];
+        let zw = y[3 + 2 * c];
+        out[2 + 2 * c] = zw;
+        let mut v = db * zb + dw * zw;
+        if c >= 2 {
+            v += j.a_p[c - 2] - phi * j.r_p[c - 2];
+        }
+        out[3 + 2 * c] = v;
+    }
+}
+
+/// Right-hand side on slip side `s` (s = ±1; s = 0 gives the friction-free field of a naive sgn).
+#[inline(always)]
+pub(super) fn augmented_rhs<S: DrivenOscillator + ?Sized>(
+    sys: &S,
+    layout: Layout,
+    t: f64,
+    y: &V,
+    s: f64,
+    out: &mut V,
+) {
+    augmented_rhs_law(sys, layout, t, y, s, 0.0, out);
+}
