@@ -676,7 +676,7 @@ pub fn section_bifurcations(
                 if let Some(fc) = gear.lock_loss_frequency() {
                     let th_rev = (2.0f64 / 3.0).sqrt().asin().to_degrees();
                     marks.push(("analytic f_c (Δ = +1)".to_string(), 0.0, fc));
-                    marks.push(("analytic f_c (Δ = −1)".to_string(), th_rev, fc));
+                    marks.push(("f_c (Δ = −1)".to_string(), th_rev, fc));
                 }
                 let fig = BoundaryPlot {
                     title: "lock-loss boundary f_c(Θ) (fold of the lock)".into(),
@@ -691,10 +691,10 @@ pub fn section_bifurcations(
             if !branches.is_empty() {
                 let fig = BranchDiagram {
                     title: format!(
-                        "Θ = {BIFURCATION_THETA_DEG}°: symmetric and asymmetric orbits (paper convention)"
+                        "Θ = {BIFURCATION_THETA_DEG}°: symmetric and asymmetric orbits (β physical convention)"
                     ),
                     branches: branches.clone(),
-                    paper_convention: true,
+                    paper_convention: false,
                     ..Default::default()
                 };
                 crate::plotting::save(&fig, dir.join("theta25_branches.svg"))?;
