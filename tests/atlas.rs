@@ -245,6 +245,8 @@ fn report_has_its_sections() {
         hysteresis_settle: 30,
         smooth_rms_deg: 20.0,
         figures: false,
+        bifurcations: false,
+        fc_step_deg: 1.0,
     };
     let rep = build_report(&GearParams::paper(), &opts, &dir, &Silent).unwrap();
     let ids: Vec<&str> = rep.sections.iter().map(|s| s.id.as_str()).collect();
@@ -261,6 +263,78 @@ fn report_has_its_sections() {
         .as_f64()
         .unwrap();
     assert!((safe0 - 4.0).abs() < 1e-9, "{safe0}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn report_locates_bifurcations() {
+    use gearbif::report::{build_report, ReportOptions};
+    let dir = std::env::temp_dir().join(format!("gearbif-atlas-bif-{}", std::process::id()));
+    std::fs::remove_dir_all(&dir).ok();
+    let opts = ReportOptions {
+        theta_deg: Axis::range(SweepParam::ThetaDeg, 0.0, 20.0, 10.0).unwrap(),
+        f_hz: Axis::log(SweepParam::F, 0.5, 4.0, 3).unwrap(),
+        settle_turns: 20,
+        hysteresis_f: vec![1.0, 2.0],
+        hysteresis_settle: 20,
+        smooth_rms_deg: 20.0,
+        figures: false,
+        bifurcations: true,
+        fc_step_deg: 1.0,
+    };
+    let gear = GearParams::paper();
+    let rep = build_report(&gear, &opts, &dir, &Silent).unwrap();
+    let ids: Vec<&str> = rep.sections.iter().map(|s| s.id.as_str()).collect();
+    assert_eq!(
+        ids,
+        ["derived", "lock_branch", "bifurcations", "map", "advice"]
+    );
+    rep.write(&dir).unwrap();
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(md.contains("## Located bifurcations") && md.contains("symmetry-breaking"));
+    let js: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let sec = js["sections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["id"] == "bifurcations")
+        .unwrap();
+    let d = &sec["data"];
+    assert_eq!(d["errors"].as_array().unwrap().len(), 0, "{}", d["errors"]);
+    // Θ = 0: the fold located by continuation is the analytic f_c = (g − η)/(2πζ)
+    let fc = gear.lock_loss_frequency().unwrap();
+    let fold = d["theta0"]["fold_f_hz"].as_f64().unwrap();
+    assert!((fold - fc).abs() < 1e-6, "{fold} vs {fc}");
+    // Θ = 25°: the two symmetry-breaking points of the symmetric branch, in the paper's ranges
+    // (period doublings of δ near 2.1 and 2.5 Hz)
+    let sb: Vec<f64> = d["theta25"]["specials"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["kind"] == "symmetry-breaking")
+        .map(|s| s["f_hz"].as_f64().unwrap())
+        .collect();
+    assert_eq!(sb.len(), 2, "{sb:?}");
+    assert!(sb.iter().any(|f| (2.0..=2.2).contains(f)), "{sb:?}");
+    assert!(sb.iter().any(|f| (2.4..=2.6).contains(f)), "{sb:?}");
+    // the asymmetric branch was switched onto and has special points of its own
+    assert!(d["theta25"]["specials"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|s| s["branch"].as_str().unwrap().starts_with("asymmetric")));
+    // f_c(Θ) reaches the advice: at Θ = 0 the limit is the located fold
+    let adv = js["sections"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["id"] == "advice")
+        .unwrap();
+    let lim0 = adv["data"]["lock_loss_limits"][0]["f_c_hz"]
+        .as_f64()
+        .unwrap();
+    assert!((lim0 - fc).abs() < 1e-6, "{lim0}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
