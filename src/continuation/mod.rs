@@ -855,31 +855,35 @@ pub fn switch_branch(
         let Ok(old) = shoot(&gear, &old_spec, special.x, opts) else {
             continue;
         };
-        let found = |o: PeriodicOrbit| {
-            let sep = distinct(&o, &old);
-            (sep > 1e-4).then_some((o, sep))
-        };
         let perturbed = |eps: f64, sgn: f64| {
             [
                 special.x[0] + sgn * eps * v[0],
                 special.x[1] + sgn * eps * v[1],
             ]
         };
+        // Newton from a start; a new orbit must lie at least 1e-4 from the old one
+        let mut attempt = |x0: [f64; 2]| -> Option<SwitchStart> {
+            match shoot(&gear, &spec, x0, opts) {
+                Ok(orbit) => {
+                    let separation = distinct(&orbit, &old);
+                    (separation > 1e-4).then_some(SwitchStart {
+                        gear,
+                        spec,
+                        orbit,
+                        separation,
+                    })
+                }
+                Err(e) => {
+                    last_err = Some(e);
+                    None
+                }
+            }
+        };
         // Newton from x* ± εv
         for &eps in &[0.02, 0.05, 0.1, 0.2] {
             for sgn in [1.0, -1.0] {
-                match shoot(&gear, &spec, perturbed(eps, sgn), opts) {
-                    Ok(o) => {
-                        if let Some((orbit, separation)) = found(o) {
-                            return Ok(SwitchStart {
-                                gear,
-                                spec,
-                                orbit,
-                                separation,
-                            });
-                        }
-                    }
-                    Err(e) => last_err = Some(e),
+                if let Some(start) = attempt(perturbed(eps, sgn)) {
+                    return Ok(start);
                 }
             }
         }
@@ -895,18 +899,8 @@ pub fn switch_branch(
             ) else {
                 continue;
             };
-            match shoot(&gear, &spec, d.x, opts) {
-                Ok(o) => {
-                    if let Some((orbit, separation)) = found(o) {
-                        return Ok(SwitchStart {
-                            gear,
-                            spec,
-                            orbit,
-                            separation,
-                        });
-                    }
-                }
-                Err(e) => last_err = Some(e),
+            if let Some(start) = attempt(d.x) {
+                return Ok(start);
             }
         }
     }
