@@ -259,8 +259,7 @@ fn ringdown_fits_recover_kappa_and_g() {
         };
         let cr = clean(r, None);
         let f = fit_ringdown(&cr, &r.file, alpha0, 1.1, 23.1).expect("fit");
-        let kappa_true =
-            c.g() * (alpha0.sin().powi(2) + c.delta().powi(2) * alpha0.cos().powi(2)).sqrt();
+        let kappa_true = gearbif::model::gear::kappa(c.g(), c.delta(), alpha0);
         if f.rms_rad < 2.0 * cr.sigma_beta {
             within(f.kappa, f.kappa_err, kappa_true, 4.0);
         }
@@ -270,7 +269,9 @@ fn ringdown_fits_recover_kappa_and_g() {
     let k = fit_kappa(&fits, &set.gear).unwrap();
     within(k.g, k.g_err, c.g(), 3.5);
     within(k.delta_abs, k.delta_err, c.delta().abs(), 3.5);
-    // inertia from g and the set-up within its tolerance-based uncertainty
-    let i_true = set.gear.coupling() / c.g();
-    within(k.inertia, k.inertia_err, i_true, 2.0);
+    // I = c/g from the fitted g (c nominal: the synthetic truth uses the nominal c, so a check
+    // against the true I would only repeat the g check); its uncertainty must carry at least the
+    // set-up's tolerance on c
+    assert!((k.inertia - set.gear.coupling() / k.g).abs() <= 1e-12 * k.inertia);
+    assert!(k.inertia_err / k.inertia >= set.gear.coupling_rel_tol());
 }

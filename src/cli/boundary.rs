@@ -103,7 +103,9 @@ pub fn run(a: Args) -> Result<()> {
             marks.push(("analytic f_c".to_string(), 0.0, fc));
             marks.push((
                 "analytic f_c".to_string(),
-                (2.0f64 / 3.0).sqrt().asin().to_degrees(),
+                crate::model::gear::cogging_free_parallel_angles()
+                    .2
+                    .to_degrees(),
                 fc,
             ));
         }

@@ -90,7 +90,8 @@ pub fn run(a: Args) -> Result<()> {
         ..Default::default()
     };
     let p1 = locate_augmented(&gear, &spec, kind, param, x, lam0, &o1)?;
-    let p2 = locate_augmented(&gear, &spec, kind, param, x, lam0, &o2)?;
+    // the tighter solve starts from the first one, so both refine the same point
+    let p2 = locate_augmented(&gear, &spec, kind, param, p1.x, p1.free, &o2)?;
     let te = (p1.free - p2.free).abs();
     let out = Located {
         kind,

@@ -93,9 +93,7 @@ pub fn run(a: Args) -> Result<()> {
         SectionArg::Strobe => Section::Stroboscopic,
         SectionArg::Half => Section::HalfPeriod,
     };
-    let opts = FlowOptions::with_tol(a.method.tol)
-        .sensitivity(Sensitivity::StateAndParams)
-        .record_events(true);
+    let opts = FlowOptions::with_tol(a.method.tol).sensitivity(Sensitivity::StateAndParams);
     let img = poincare_map(method.as_ref(), &gear, section, x, a.iterations, &opts)?;
     let jx = img
         .jac_x

@@ -104,8 +104,8 @@ impl Param {
         match self {
             Param::ThetaDeg => {
                 crate::error::finite("theta", v)?;
-                let s = v.to_radians().sin();
-                gear.with_param(Gear::P_DELTA, 1.0 - 3.0 * s * s)
+                let t = v.to_radians();
+                gear.with_param(Gear::P_DELTA, crate::model::gear::shaft_index(t, t))
             }
             p => gear.with_param(p.column(), v),
         }
@@ -576,8 +576,6 @@ impl Continuation {
         let w = self.weights();
         let ta = self.tangent;
         let sb = ta.dot(&(b.u.component_mul(&w) - a.u.component_mul(&w)));
-        let fa = a.floquet();
-        let fb = b.floquet();
         let mut specials = Vec::new();
         let smooth_tests = |f: &Floquet| [f.fold_test(), f.flip_test(), f.ns_test()];
         // nonsmooth events first: they split the step into smooth pieces
@@ -659,7 +657,6 @@ impl Continuation {
                 specials.push(sp);
             }
         }
-        let _ = (fa, fb);
         specials.sort_by(|x, y| {
             let d = |s: &SpecialPoint| (s.param - a.u[2]).abs();
             d(x).total_cmp(&d(y))

@@ -311,7 +311,9 @@ pub fn lock_loss_boundary(
     let fc = base
         .lock_loss_frequency()
         .ok_or_else(|| Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into()))?;
-    let th_rev = (2.0f64 / 3.0).sqrt().asin().to_degrees();
+    let th_rev = crate::model::gear::cogging_free_parallel_angles()
+        .2
+        .to_degrees();
     let mut out = Vec::new();
     for (p, from) in [(1, 0.0), (-1, th_rev)] {
         let g = Param::ThetaDeg.set(base, from)?;

@@ -995,11 +995,6 @@ fn profile_latency(
     Some((tau, tau_err, dbic, d, f))
 }
 
-/// Δ(Θ, Φ).
-fn shaft_delta(theta: f64, phi: f64) -> f64 {
-    theta.cos() * phi.cos() - 2.0 * theta.sin() * phi.sin()
-}
-
 /// The geometry with both shaft angles shifted by a common amount so that Δ matches the fitted
 /// value (within ±15°; the nominal geometry when no shift matches).
 pub fn refine_geometry(nominal: &Geometry, delta_fit: f64) -> Geometry {
@@ -1009,7 +1004,8 @@ pub fn refine_geometry(nominal: &Geometry, delta_fit: f64) -> Geometry {
     let mut best = (f64::INFINITY, 0.0);
     for k in -1500..=1500 {
         let s = (k as f64 * 0.01).to_radians();
-        let e = (shaft_delta(nominal.theta + s, nominal.phi + s) - delta_fit).abs();
+        let e =
+            (crate::model::gear::shaft_index(nominal.theta + s, nominal.phi + s) - delta_fit).abs();
         if e < best.0 {
             best = (e, s);
         }

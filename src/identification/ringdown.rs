@@ -215,7 +215,7 @@ pub fn fit_kappa(fits: &[RingdownFit], setup: &GearSetup) -> Option<KappaFit> {
     if pts.len() < 3 {
         return None;
     }
-    let model = |g: f64, d: f64, a: f64| g * (a.sin().powi(2) + d * d * a.cos().powi(2)).sqrt();
+    let model = crate::model::gear::kappa;
     let f = |p: &[f64]| -> Option<Vec<f64>> {
         Some(
             pts.iter()

@@ -134,7 +134,7 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
     let phi_true = theta_true;
     let inertia_true = 6.45e-5 * (1.0 + 0.1 * (rng.uniform() - 0.5));
     let mut g = setup.coupling() / inertia_true;
-    let delta = theta_true.cos() * phi_true.cos() - 2.0 * theta_true.sin() * phi_true.sin();
+    let delta = crate::model::gear::shaft_index(theta_true, phi_true);
     let zeta = 1.1 * (0.8 + 0.4 * rng.uniform());
     let eta = 23.1 * (0.8 + 0.4 * rng.uniform());
     let geo = Geometry {

@@ -83,12 +83,6 @@ struct Solver<'a, S: ?Sized> {
     opts: &'a FlowOptions,
     /// Which Jacobian columns are propagated.
     layout: Layout,
-    /// Number of Jacobian columns (0, 2 or 2 + n_params).
-    ncols: usize,
-    /// Augmented dimension 2 + 2·ncols.
-    n: usize,
-    with_params: bool,
-    angle_scale: bool,
     stats: Stats,
     events: Vec<Event>,
     samples: Vec<Sample>,
@@ -102,10 +96,6 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
             sys,
             opts,
             layout,
-            ncols: layout.ncols,
-            n: layout.dim(),
-            with_params: layout.with_params,
-            angle_scale: true,
             stats: Stats::default(),
             events: Vec::new(),
             samples: Vec::with_capacity(opts.sample_times.len()),
@@ -197,7 +187,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                         let s = if f.a >= 0.0 { 1.0 } else { -1.0 };
                         // the output leaves with a − s r; zero for r_s = r(t, β, 0) (tangential release)
                         let jump = f.a - s * f.r;
-                        if jump != 0.0 && self.ncols > 0 {
+                        if jump != 0.0 && self.layout.ncols > 0 {
                             self.release_saltation(&mut y, tr, jump, s);
                         }
                         if tr - last_event_t <= tiny {
@@ -223,9 +213,8 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
 
             let s = mode.side();
             if !fsal {
-                let y0 = y;
                 let mut k0 = [0.0; NMAX];
-                self.rhs(t, &y0, s, &mut k0);
+                self.rhs(t, &y, s, &mut k0);
                 k[0] = k0;
                 fsal = true;
             }
@@ -239,7 +228,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                     reason: format!("step size underflow (h = {hs:e})"),
                 });
             }
-            let n = self.n;
+            let n = self.layout.dim();
             let mut ys = [0.0; NMAX];
             let mut kt = [0.0; NMAX];
             // stage 2
@@ -298,7 +287,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                         + E5 * k[4][i]
                         + E6 * k[5][i]
                         + E7 * k[6][i]);
-                let scale = if i == 0 && self.angle_scale {
+                let scale = if i == 0 {
                     // β lives on the lift: measure its error in radians, not relative to windings
                     self.opts.atol + self.opts.rtol
                 } else {
@@ -353,26 +342,30 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
             last_rejected = false;
             self.stats.steps += 1;
 
-            // dense output coefficients
-            let mut rc: [V; 5] = [[0.0; NMAX]; 5];
-            for i in 0..n {
+            // dense output (Hairer's continuous extension of order 4). The coefficients of β and ω
+            // serve the event probes and samples on every step; those of the Jacobian columns are
+            // formed only when an event needs the augmented state inside the step.
+            let coeffs = |i: usize| -> [f64; 5] {
                 let ydiff = yn[i] - y[i];
                 let bspl = hs * k[0][i] - ydiff;
-                rc[0][i] = y[i];
-                rc[1][i] = ydiff;
-                rc[2][i] = bspl;
-                rc[3][i] = ydiff - hs * k[6][i] - bspl;
-                rc[4][i] = hs
-                    * (D1 * k[0][i]
+                [
+                    y[i],
+                    ydiff,
+                    bspl,
+                    ydiff - hs * k[6][i] - bspl,
+                    hs * (D1 * k[0][i]
                         + D3 * k[2][i]
                         + D4 * k[3][i]
                         + D5 * k[4][i]
                         + D6 * k[5][i]
-                        + D7 * k[6][i]);
-            }
+                        + D7 * k[6][i]),
+                ]
+            };
+            let state_coeffs = [coeffs(0), coeffs(1)];
             let dense = |i: usize, th: f64| -> f64 {
+                let c = if i < 2 { state_coeffs[i] } else { coeffs(i) };
                 let th1 = 1.0 - th;
-                rc[0][i] + th * (rc[1][i] + th1 * (rc[2][i] + th * (rc[3][i] + th1 * rc[4][i])))
+                c[0] + th * (c[1] + th1 * (c[2] + th * (c[3] + th1 * c[4])))
             };
 
             // event search: first θ with s·ω(θ) ≤ 0
@@ -526,7 +519,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         let a_before = f.a - s * f.r;
         let a_after = f.a - new_side * f.r;
         let ratio = a_after / a_before;
-        for c in 0..self.ncols {
+        for c in 0..self.layout.ncols {
             y[3 + 2 * c] *= ratio;
         }
         self.record_event(
@@ -542,7 +535,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
 
     /// Stick entry: S = diag(1, 0) (the sliding field vanishes).
     fn stick_saltation(&self, y: &mut V) {
-        for c in 0..self.ncols {
+        for c in 0..self.layout.ncols {
             y[3 + 2 * c] = 0.0;
         }
     }
@@ -562,8 +555,8 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         if gt == 0.0 || !gt.is_finite() {
             return;
         }
-        let jet = sys.forces_jet(tr, beta, 0.0, self.with_params);
-        for c in 0..self.ncols {
+        let jet = sys.forces_jet(tr, beta, 0.0, self.layout.with_params);
+        for c in 0..self.layout.ncols {
             let mut gz = gb * y[2 + 2 * c];
             if c >= 2 {
                 // ∂G/∂p = sgn(a) ∂a/∂p − ∂r_s/∂p, taking ∂r_s/∂p = ∂r/∂p

@@ -79,12 +79,11 @@ impl GearSetup {
     }
     /// c = μ0 m1 m2 / (4π r³), N m.
     pub fn coupling(&self) -> f64 {
-        1e-7 * self.m1 * self.m2 / self.r.powi(3)
+        crate::model::gear::MU0_OVER_4PI * self.m1 * self.m2 / self.r.powi(3)
     }
     /// Nominal shaft orientation index Δ = cos Θ cos Φ − 2 sin Θ sin Φ.
     pub fn delta(&self) -> f64 {
-        let (t, p) = (self.theta_deg.to_radians(), self.phi_deg.to_radians());
-        t.cos() * p.cos() - 2.0 * t.sin() * p.sin()
+        crate::model::gear::shaft_index(self.theta_deg.to_radians(), self.phi_deg.to_radians())
     }
     /// Relative 1σ uncertainty of c from the tolerances of m1, m2 and r (paper defaults).
     pub fn coupling_rel_tol(&self) -> f64 {

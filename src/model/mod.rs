@@ -165,7 +165,6 @@ pub fn default_next_release<S: DrivenOscillator + ?Sized>(
     }
     let dt = sys.period() / 512.0;
     let mut ta = t;
-    let mut ga = g0;
     while ta < t_max {
         let tb = (ta + dt).min(t_max);
         let gb = release_function(sys, tb, beta);
@@ -183,11 +182,9 @@ pub fn default_next_release<S: DrivenOscillator + ?Sized>(
                     lo = mid;
                 }
             }
-            let _ = ga;
             return Some(hi);
         }
         ta = tb;
-        ga = gb;
     }
     None
 }
