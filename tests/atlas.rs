@@ -221,6 +221,8 @@ fn lock_loss_is_hysteretic() {
     // early, as the paper notes for Fig. 10), unlocked from there on
     let first_unlocked = h.up.iter().position(|r| r.locked != Some(true)).unwrap();
     let f_loss = h.up[first_unlocked].f_hz;
+    // (measured: 30 Hz with these 2 Hz steps and short settling; the lock's basin shrinks to
+    // nothing at f_c, so how early it is lost depends on step and settling, not on the model)
     assert!(f_loss >= 20.0 && f_loss <= fc + 2.0, "lost at {f_loss}");
     assert!(h.up[first_unlocked..]
         .iter()

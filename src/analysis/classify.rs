@@ -464,18 +464,9 @@ pub fn rigorous_classify_with_section<S: DrivenOscillator + ?Sized>(
 }
 
 fn reduce(sym: Option<HalfPeriodSymmetry>, x: [f64; 2], j: usize) -> [f64; 2] {
+    // R⁻ʲ x: a shift by j·c for σ = +1 (the gear), the parity of j for σ = −1
     match sym {
-        Some(r) => {
-            let mut v = x;
-            for _ in 0..j % 2 {
-                v = r.invert(v);
-            }
-            // R² is a 2π shift for the gear; for σ = −1 symmetries R² = id: reduce by parity only
-            if r.sign > 0.0 {
-                v[0] -= (j / 2) as f64 * 2.0 * r.shift;
-            }
-            v
-        }
+        Some(r) => (0..j).fold(x, |v, _| r.invert(v)),
         None => x,
     }
 }

@@ -141,7 +141,7 @@ impl GearParams {
 
     /// Field energy U(α, β) = c (sin α sin β + Δ cos α cos β) of m₂ in the field of m₁, J (eq. `field_energy`).
     pub fn field_energy(&self, alpha: f64, beta: f64) -> f64 {
-        self.coupling() * (alpha.sin() * beta.sin() + self.delta() * alpha.cos() * beta.cos())
+        self.coupling() * energy_bracket(self.delta(), alpha, beta)
     }
 
     /// Axial torque on the output τ_ax = −∂U/∂β = c (−sin α cos β + Δ cos α sin β), N m (eq. `tauax`).
@@ -178,6 +178,11 @@ impl GearParams {
 /// Δ(Θ, Φ) = cos Θ cos Φ − 2 sin Θ sin Φ.
 pub fn shaft_index(theta: f64, phi: f64) -> f64 {
     theta.cos() * phi.cos() - 2.0 * theta.sin() * phi.sin()
+}
+
+/// The bracket sin α sin β + Δ cos α cos β of eq. `field_energy` (field energy over c).
+pub fn energy_bracket(delta: f64, alpha: f64, beta: f64) -> f64 {
+    alpha.sin() * beta.sin() + delta * alpha.cos() * beta.cos()
 }
 
 /// The bracket τ(α, β) = −sin α cos β + Δ cos α sin β of eq. `tauax` (torque over c).

@@ -371,7 +371,7 @@ impl Figure for Landscape {
                 let a = ((i as f64 + 0.5) * d).to_radians();
                 let b = ((j as f64 + 0.5) * d).to_radians() - off;
                 // E/c = sin α sin β + Δ cos α cos β, in [−max(1,|Δ|), max(1,|Δ|)]
-                let e = a.sin() * b.sin() + self.delta * a.cos() * b.cos();
+                let e = crate::model::gear::energy_bracket(self.delta, a, b);
                 let m = 1f64.max(self.delta.abs());
                 cells.push(Rectangle::new(
                     [
