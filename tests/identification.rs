@@ -275,3 +275,63 @@ fn ringdown_fits_recover_kappa_and_g() {
     assert!((k.inertia - set.gear.coupling() / k.g).abs() <= 1e-12 * k.inertia);
     assert!(k.inertia_err / k.inertia >= set.gear.coupling_rel_tol());
 }
+
+#[test]
+fn input_compliance_is_named_and_the_lag_recovered() {
+    let mut o = small("input_compliance", 2.0, 31);
+    o.noise_deg = 0.45;
+    let (d, _) = run(&o, false);
+    assert_eq!(
+        d.report.verdict, "input_compliance",
+        "{:#?}",
+        d.report.findings
+    );
+    within(
+        param(&d, "lag_at_peak_torque_deg"),
+        param(&d, "lag_at_peak_torque_err_deg"),
+        2.0,
+        3.0,
+    );
+}
+
+#[test]
+fn stepping_drive_is_named_with_half_a_step_lag() {
+    // the input rests between 7.2° steps and the sample is taken just after each step: on average
+    // the input lags the recorded angle by half a step in driven runs only
+    let mut o = small("drive_steps", 0.0, 32);
+    o.noise_deg = 0.5;
+    let (d, _) = run(&o, false);
+    assert_eq!(d.report.verdict, "drive_steps", "{:#?}", d.report.findings);
+    within(
+        param(&d, "offset_deg"),
+        param(&d, "offset_err_deg"),
+        -3.6,
+        3.0,
+    );
+    within(
+        param(&d, "offset_per_turn_deg"),
+        param(&d, "offset_per_turn_err_deg"),
+        0.0,
+        3.0,
+    );
+}
+
+#[test]
+fn parameter_drift_of_friction_is_named_and_sized() {
+    let mut o = small("parameter_drift", 0.3, 33);
+    o.noise_deg = 0.4;
+    o.samples_per_turn = 48;
+    let (d, t) = run(&o, false);
+    assert_eq!(
+        d.report.verdict, "parameter_drift",
+        "{:#?}",
+        d.report.findings
+    );
+    let change = t.eta_per_run.last().unwrap() - t.eta_per_run[0];
+    within(
+        param(&d, "eta_change"),
+        param(&d, "eta_change_err"),
+        change,
+        3.0,
+    );
+}

@@ -9,15 +9,19 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Effect in the truth model (none, rescale, static_torque, quadratic_drag, corotating_drag,
-    /// coupling_geometry, load_dependent_friction, sensor_latency).
+    /// coupling_geometry, load_dependent_friction, sensor_latency, input_compliance, drive_steps,
+    /// parameter_drift; `--list` explains the sizes).
+    #[arg(long, required_unless_present = "list")]
+    effect: Option<String>,
+    /// List the effects and the meaning of `--size`, then exit.
     #[arg(long)]
-    effect: String,
+    list: bool,
     /// Effect size (see `--list`; e.g. 6 for static_torque in 1/s²).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     size: f64,
     /// Output folder (experiment.toml and CSVs).
-    #[arg(long)]
-    out: PathBuf,
+    #[arg(long, required_unless_present = "list")]
+    out: Option<PathBuf>,
     /// Number of ring-downs.
     #[arg(long, default_value_t = 12)]
     ringdowns: usize,
@@ -64,8 +68,19 @@ pub struct Args {
 
 /// Runs `gearbif synth`.
 pub fn run(a: Args) -> Result<()> {
+    if a.list {
+        for (id, meaning) in SYNTH_EFFECTS {
+            println!("{id:<24} {meaning}");
+        }
+        return Ok(());
+    }
+    let (Some(effect), Some(out)) = (a.effect.clone(), a.out.clone()) else {
+        return Err(crate::Error::InvalidInput(
+            "synth needs --effect and --out".into(),
+        ));
+    };
     let opts = SynthOptions {
-        effect: a.effect.clone(),
+        effect: effect.clone(),
         size: a.size,
         ringdowns: a.ringdowns,
         driven: a.driven,
@@ -86,22 +101,24 @@ pub fn run(a: Args) -> Result<()> {
         a.ringdowns, a.driven
     );
     let (set, truth) = synthesize(&opts)?;
-    write_set(&set, &a.out, opts.wrap)?;
+    write_set(&set, &out, opts.wrap)?;
     if a.truth {
         let c = truth.coefficients;
         let v = serde_json::json!({
-            "effect": a.effect, "size": a.size,
+            "effect": effect, "size": a.size,
             "g": c.g(), "delta": c.delta(), "zeta": c.zeta, "eta": c.eta,
             "static_torque": [c.st_a, c.st_b], "quad": c.quad, "corot": c.corot,
             "eta_load": c.eta_load, "alpha_offset_deg": truth.alpha_offset.to_degrees(),
             "latency_s": truth.latency,
+            "compliance_s2": c.compliance,
+            "eta_per_run": truth.eta_per_run, "lost_steps_per_driven_run": truth.lost_steps,
         });
-        crate::io::write_json_atomic(a.out.join("truth.json"), &v)?;
+        crate::io::write_json_atomic(out.join("truth.json"), &v)?;
     }
     let known: Vec<&str> = SYNTH_EFFECTS.iter().map(|e| e.0).collect();
     eprintln!(
         "wrote {} (effects known: {})",
-        a.out.display(),
+        out.display(),
         known.join(", ")
     );
     Ok(())

@@ -3,10 +3,11 @@
 //!
 //! Implemented (they enter the weak-form regression linearly, or through one profiled parameter):
 //! `coupling_geometry`, `static_torque`, `quadratic_drag`, `corotating_drag`,
-//! `load_dependent_friction`, `sensor_latency` (profiled time shift). Not implemented:
-//! `static_friction`, `input_compliance`, `drive_steps`, `parameter_drift`.
+//! `load_dependent_friction`, `sensor_latency` (profiled time shift), `input_compliance`,
+//! `drive_steps`, `parameter_drift` (one entry per drifting parameter and session clock). Not
+//! implemented: `static_friction`.
 
-use super::regression::Term;
+use super::regression::{Clock, DriftParam, Term};
 use std::collections::BTreeMap;
 
 /// A catalogued effect.
@@ -28,7 +29,7 @@ pub struct Effect {
 
 /// The implemented catalog.
 pub fn catalog() -> Vec<Effect> {
-    vec![
+    let mut v = vec![
         Effect {
             id: "static_torque",
             class: "lab-fixed",
@@ -110,7 +111,90 @@ pub fn catalog() -> Vec<Effect> {
             discriminating_experiment: "film a marker on the input shaft with the same camera: its \
                 recorded angle lags the commanded α by α̇·τ",
         },
-    ]
+        Effect {
+            id: "input_compliance",
+            class: "input compliance",
+            explanation: "the input magnet lags the drive by the coupling torque on it over a \
+                          torsional stiffness k_in: α_in = α + χ τ_in(α, β), χ = I/k_in; the output \
+                          sees twice-per-turn harmonics of α and β that a rigid drive cannot make",
+            terms: vec![Term::Compliance],
+            candidates: vec![
+                "torsional compliance of the input shaft or shaft coupling",
+                "load angle of the stepper motor (its holding torque acts as a spring)",
+                "elastic motor mount",
+            ],
+            discriminating_experiment: "film a marker on the input magnet: its lag behind the \
+                commanded angle follows the coupling torque (twice per input turn); a stiffer \
+                coupling or a motor with more holding torque shrinks it",
+        },
+        Effect {
+            id: "drive_steps",
+            class: "input angle in driven runs",
+            explanation: "in driven runs the input's true angle departs from the recorded \
+                          (commanded) one, absent in ring-downs: a constant lag (a drive that rests \
+                          between steps lags its commanded angle by about half a step) and a lag \
+                          growing with the turns (lost steps)",
+            terms: vec![Term::DrivenOffset, Term::DrivenOffsetRate],
+            candidates: vec![
+                "stepping drive: the input rests between steps",
+                "lost steps of the stepper motor",
+                "drive angle zero set differently from the ring-downs' hold angle",
+            ],
+            discriminating_experiment: "film a marker on the input magnet at a frame rate well \
+                above the step rate (or read an encoder on the input shaft): steps, their phase \
+                to the commanded angle and lost steps show directly",
+        },
+    ];
+    for p in [DriftParam::Eta, DriftParam::Zeta, DriftParam::Coupling] {
+        for clock in [Clock::RunIndex, Clock::SessionTime] {
+            v.push(Effect {
+                id: "parameter_drift",
+                class: "drift",
+                explanation: match p {
+                    DriftParam::Eta => {
+                        "the dry friction η changes over the recording session (linear in the \
+                         session position of the runs)"
+                    }
+                    DriftParam::Zeta => {
+                        "the viscous damping ζ changes over the recording session (linear in the \
+                         session position of the runs)"
+                    }
+                    DriftParam::Coupling => {
+                        "the coupling strength g changes over the recording session (linear in \
+                         the session position of the runs)"
+                    }
+                },
+                terms: vec![Term::Drift(p, clock)],
+                candidates: match p {
+                    DriftParam::Eta => vec!["bearings warming up (lubricant viscosity)", "wear"],
+                    DriftParam::Zeta => vec![
+                        "air temperature",
+                        "eddy-current damping changing with temperature",
+                    ],
+                    DriftParam::Coupling => vec![
+                        "magnet temperature (NdFeB remanence falls ≈0.1 %/K)",
+                        "centre distance creeping",
+                    ],
+                },
+                discriminating_experiment: "repeat a reference ring-down every few runs (and at \
+                    the end of the session) and log the temperature of bearings and magnets: the \
+                    drift shows between the repeats and follows the temperature",
+            });
+        }
+    }
+    v
+}
+
+/// Whether two catalog entries fill the same slot (one finding per slot): the same effect, and
+/// for `parameter_drift` the same drifting parameter.
+pub fn same_slot(a: &Effect, b: &Effect) -> bool {
+    let drift_param = |e: &Effect| {
+        e.terms.iter().find_map(|t| match t {
+            Term::Drift(p, _) => Some(*p),
+            _ => None,
+        })
+    };
+    a.id == b.id && drift_param(a) == drift_param(b)
 }
 
 /// Dictionary for the sparse search: trig(kα + lβ) with |k|, |l| ≤ 2 (not already in the base
@@ -134,16 +218,68 @@ pub fn dictionary() -> Vec<Term> {
     v
 }
 
-/// Physical parameters of an effect from its fitted coefficients (value, 1σ), by term.
+/// Physical parameters of an effect from its fitted coefficients (value, 1σ), by term; `base`
+/// holds the fitted base values (ζ, η, g) the effect is measured against.
 pub fn effect_params(
-    id: &str,
+    effect: &Effect,
     coef: &BTreeMap<String, (f64, f64)>,
-    base_eta: f64,
-    g: f64,
+    base: (f64, f64, f64),
 ) -> BTreeMap<String, f64> {
+    let (base_zeta, base_eta, g) = base;
     let mut p = BTreeMap::new();
     let get = |t: Term| coef.get(&t.name()).copied();
-    match id {
+    match effect.id {
+        "parameter_drift" => {
+            for t in &effect.terms {
+                if let (Term::Drift(dp, clock), Some((v, s))) = (t, get(*t)) {
+                    let name = dp.name();
+                    let reference = match dp {
+                        DriftParam::Zeta => base_zeta,
+                        DriftParam::Eta => base_eta,
+                        DriftParam::Coupling => g,
+                    };
+                    // the column is s·(base term), s from −½ to ½: v is the change over the session
+                    p.insert(format!("{name}_change"), v);
+                    p.insert(format!("{name}_change_err"), s);
+                    if reference != 0.0 {
+                        p.insert(format!("{name}_relative_change"), v / reference);
+                        p.insert(format!("{name}_relative_change_err"), s / reference.abs());
+                    }
+                    p.insert(format!("{name}_start"), reference - 0.5 * v);
+                    p.insert(format!("{name}_end"), reference + 0.5 * v);
+                    p.insert(
+                        "clock_session_time".into(),
+                        f64::from(u8::from(*clock == Clock::SessionTime)),
+                    );
+                }
+            }
+        }
+        "input_compliance" => {
+            if let Some((v, s)) = get(Term::Compliance) {
+                // coefficient χ g²: the lag at the peak coupling torque (τ_in = g) is χ g
+                p.insert("chi_s2".into(), v / (g * g));
+                p.insert("chi_err_s2".into(), s / (g * g));
+                p.insert("lag_at_peak_torque_deg".into(), (v / g).to_degrees());
+                p.insert(
+                    "lag_at_peak_torque_err_deg".into(),
+                    (s / g.abs()).to_degrees(),
+                );
+                if v > 0.0 {
+                    p.insert("stiffness_over_inertia_s2".into(), g * g / v);
+                }
+            }
+        }
+        "drive_steps" => {
+            if let Some((v, s)) = get(Term::DrivenOffset) {
+                // coefficient −g ε
+                p.insert("offset_deg".into(), (-v / g).to_degrees());
+                p.insert("offset_err_deg".into(), (s / g.abs()).to_degrees());
+            }
+            if let Some((v, s)) = get(Term::DrivenOffsetRate) {
+                p.insert("offset_per_turn_deg".into(), (-v / g).to_degrees());
+                p.insert("offset_per_turn_err_deg".into(), (s / g.abs()).to_degrees());
+            }
+        }
         "static_torque" => {
             if let (Some((a, sa)), Some((b, sb))) = (get(Term::SinB), get(Term::CosB)) {
                 let amp = (a * a + b * b).sqrt();

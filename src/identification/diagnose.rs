@@ -7,12 +7,13 @@
 //! candidate passes both, the base model with refitted parameters explains the data at the noise
 //! level and the verdict is `none`.
 
-use super::catalog::{catalog, dictionary, effect_params, Effect};
+use super::catalog::{catalog, dictionary, effect_params, same_slot, Effect};
 use super::model::{Coefficients, Geometry};
 use super::predict::{predict, Prediction};
 use super::preprocess::{clean, CleanRun};
 use super::regression::{
-    build, coef_without, delta_bic, fit, loro, Design, LinFit, Term, WeakOptions, BASE_TERMS,
+    build, coef_without, delta_bic, fit, loro, session_positions, Clock, Design, DriftParam,
+    LinFit, Term, WeakOptions, BASE_TERMS,
 };
 use super::report::{Baseline, Finding, Mismatch, Report, RunRms, SCHEMA};
 use super::ringdown::{fit_kappa, fit_ringdown, KappaFit, RingdownFit};
@@ -85,9 +86,10 @@ pub struct Diagnosis {
 }
 
 /// Converts fitted columns to model coefficients (dictionary terms have no simulation form and
-/// are ignored here).
+/// are ignored here; drift terms need the run: see [`coefficients_for_run`]).
 pub fn to_coefficients(d: &Design, fitr: &LinFit, coef: &[f64]) -> Coefficients {
     let mut c = Coefficients::default();
+    let (mut compliance, mut offset, mut offset_rate) = (0.0, 0.0, 0.0);
     for (k, &col) in fitr.cols.iter().enumerate() {
         let v = coef[k];
         match d.terms[col] {
@@ -102,7 +104,57 @@ pub fn to_coefficients(d: &Design, fitr: &LinFit, coef: &[f64]) -> Coefficients 
             Term::Quad => c.quad = v,
             Term::Corot => c.corot = v,
             Term::LoadFric => c.eta_load = v,
+            Term::Compliance => compliance = v,
+            Term::DrivenOffset => offset = v,
+            Term::DrivenOffsetRate => offset_rate = v,
             _ => {}
+        }
+    }
+    // coefficients χg², −gε, −g·(ε per turn) (regression.rs)
+    let g = c.g();
+    if g != 0.0 {
+        c.compliance = compliance / (g * g);
+        c.alpha_offset = -offset / g;
+        c.alpha_offset_per_turn = -offset_rate / g;
+    }
+    c
+}
+
+/// The coefficients that hold in run `run`: [`to_coefficients`] plus the parameter drift at the
+/// run's session position (its middle) and the driven-run input offsets only on driven runs.
+pub fn coefficients_for_run(
+    d: &Design,
+    fitr: &LinFit,
+    coef: &[f64],
+    runs: &[CleanRun],
+    run: usize,
+) -> Coefficients {
+    let mut c = to_coefficients(d, fitr, coef);
+    if runs[run].ringdown {
+        c.alpha_offset = 0.0;
+        c.alpha_offset_per_turn = 0.0;
+    }
+    let pos = session_positions(runs)[run];
+    for (k, &col) in fitr.cols.iter().enumerate() {
+        if let Term::Drift(p, clock) = d.terms[col] {
+            let s = match clock {
+                Clock::RunIndex => pos.0,
+                Clock::SessionTime => pos.1,
+            };
+            let dv = coef[k] * s;
+            match p {
+                DriftParam::Zeta => c.zeta += dv,
+                DriftParam::Eta => c.eta += dv,
+                DriftParam::Coupling => {
+                    // g(s) = g + dv scales the base coupling −g sin α cos β + gΔ cos α sin β
+                    let g = c.g();
+                    if g != 0.0 {
+                        let scale = (g + dv) / g;
+                        c.c_sc *= scale;
+                        c.c_cs *= scale;
+                    }
+                }
+            }
         }
     }
     c
@@ -541,7 +593,7 @@ pub fn diagnose(
         progress(&format!("selecting effects, round {}", round + 1));
         let mut best: Option<Candidate> = None;
         for (ei, e) in effects.iter().enumerate() {
-            if accepted.iter().any(|a| a.effect.id == e.id) {
+            if accepted.iter().any(|a| same_slot(&a.effect, e)) {
                 continue;
             }
             if e.id == "sensor_latency" {
@@ -688,13 +740,17 @@ pub fn diagnose(
     };
     let design0 = build(&runs, &geo, &terms, &opts.weak, 0.0);
     let pred_stage = |d: &Design, f: &LinFit, lat: f64| -> (Vec<Prediction>, Vec<Option<f64>>) {
-        let c = to_coefficients(d, f, &f.coef);
-        let preds: Vec<Prediction> = runs.iter().map(|r| predict(r, &c, &geo, lat)).collect();
+        let preds: Vec<Prediction> = (0..nr)
+            .map(|r| {
+                let c = coefficients_for_run(d, f, &f.coef, &runs, r);
+                predict(&runs[r], &c, &geo, lat)
+            })
+            .collect();
         let held: Vec<Option<f64>> = if opts.heldout_predictions {
             (0..nr)
                 .map(|r| {
                     let cw = coef_without(d, f, r)?;
-                    let c = to_coefficients(d, f, &cw);
+                    let c = coefficients_for_run(d, f, &cw, &runs, r);
                     Some(predict(&runs[r], &c, &geo, lat).rms)
                 })
                 .collect()
@@ -795,7 +851,11 @@ pub fn diagnose(
                 .flatten()
                 .collect()
         } else {
-            let mut p = effect_params(a.effect.id, &final_map, final_eta, final_g);
+            let final_zeta = final_map
+                .get(&Term::Zeta.name())
+                .map(|v| v.0)
+                .unwrap_or(zeta);
+            let mut p = effect_params(&a.effect, &final_map, (final_zeta, final_eta, final_g));
             if a.effect.id == "load_dependent_friction" {
                 // the force shape is evaluated on the geometry refined from the final Δ; the
                 // systematic: how Θ, Φ split that Δ within the tolerance
@@ -813,7 +873,7 @@ pub fn diagnose(
                         .get(&Term::SinACosB.name())
                         .map(|v| -v.0)
                         .unwrap_or(final_g);
-                    p = effect_params(a.effect.id, &mc, ec, gc);
+                    p = effect_params(&a.effect, &mc, (final_zeta, ec, gc));
                 }
                 let mut sys: f64 = 0.0;
                 for sgn in [-1.0, 1.0] {

@@ -9,7 +9,10 @@
 //!     − q β̇|β̇|                                            (quadratic_drag)
 //!     − c_r (β̇ − α̇)                                       (corotating_drag)
 //! ```
-//! with α(t) = α₀ + α̇ t (α̇ = 0 for a ring-down) and h the magnitude of the dipole–dipole force
+//! with α(t) = α₀ + α̇ t (α̇ = 0 for a ring-down) in the coupling replaced by the input magnet's
+//! true angle α + ε + χ τ_in (a drive offset ε and the quasi-static input compliance χ, with
+//! τ_in = c_sc cos α sin β + c_cs sin α cos β − c_cc sin α sin β − c_ss cos α cos β the coupling
+//! torque on the input per output inertia, −∂V/∂α of the coupling potential V) and h the magnitude of the dipole–dipole force
 //! in units of 3 μ0 m1 m2 / (4π r⁴) ([`force_shape`]). The base model is c_sc = −g, c_cs = gΔ,
 //! everything else 0.
 
@@ -41,6 +44,15 @@ pub struct Coefficients {
     pub corot: f64,
     /// Load-dependent dry friction η_L, s⁻² per unit force shape.
     pub eta_load: f64,
+    /// Input compliance χ = I/k_in, s²: the input magnet sits at α + χ τ_in(α, β), τ_in the
+    /// coupling torque on it per output inertia (solved by fixed-point iteration).
+    pub compliance: f64,
+    /// Offset of the true input angle from the recorded one, rad (driven runs of a stepping
+    /// drive: about half a step).
+    pub alpha_offset: f64,
+    /// Growth of that offset per input turn since the start of the run, rad (lost steps). The
+    /// integrator does not use it: the predictions evaluate it per window into `alpha_offset`.
+    pub alpha_offset_per_turn: f64,
 }
 
 impl Coefficients {
@@ -114,7 +126,39 @@ impl AugmentedGear {
     pub fn alpha(&self, t: f64) -> f64 {
         self.alpha0 + self.alpha_rate * t
     }
+    /// The input magnet's angle: α + ε + χ τ_in(α_in, β) by fixed-point iteration (χg ≪ 1).
+    pub fn input_angle(&self, alpha: f64, beta: f64) -> f64 {
+        let c = &self.c;
+        let a0 = alpha + c.alpha_offset;
+        if c.compliance == 0.0 {
+            return a0;
+        }
+        let (sb, cb) = beta.sin_cos();
+        let mut a = a0;
+        for _ in 0..6 {
+            let (sa, ca) = a.sin_cos();
+            let tau = c.c_sc * ca * sb + c.c_cs * sa * cb - c.c_cc * sa * sb - c.c_ss * ca * cb;
+            a = a0 + c.compliance * tau;
+        }
+        a
+    }
     fn smooth(&self, alpha: f64, beta: f64, omega: f64) -> (f64, f64, f64) {
+        let c = &self.c;
+        if c.compliance != 0.0 {
+            // the input angle depends on β: ∂a/∂β by central difference
+            let a = self.smooth_at(self.input_angle(alpha, beta), beta, omega);
+            let h = 1e-6;
+            let ap = self
+                .smooth_at(self.input_angle(alpha, beta + h), beta + h, omega)
+                .0;
+            let am = self
+                .smooth_at(self.input_angle(alpha, beta - h), beta - h, omega)
+                .0;
+            return (a.0, (ap - am) / (2.0 * h), a.2);
+        }
+        self.smooth_at(alpha + c.alpha_offset, beta, omega)
+    }
+    fn smooth_at(&self, alpha: f64, beta: f64, omega: f64) -> (f64, f64, f64) {
         let c = &self.c;
         let (sa, ca) = alpha.sin_cos();
         let (sb, cb) = beta.sin_cos();

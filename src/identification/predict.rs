@@ -62,8 +62,15 @@ pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> 
         }
         let t = &r.t[i..j];
         let b = &r.beta[i..j];
+        // lost steps: the input offset grows with the turns, taken at the window's middle
+        let mut cw = *c;
+        if c.alpha_offset_per_turn != 0.0 {
+            let tm = 0.5 * (t[0] + t[t.len() - 1]);
+            cw.alpha_offset += c.alpha_offset_per_turn * r.alpha_rate.abs() * (tm - r.t[0])
+                / std::f64::consts::TAU;
+        }
         let sys = AugmentedGear {
-            c: *c,
+            c: cw,
             geo: *geo,
             alpha0: r.alpha[i] - r.alpha_rate * (t[0] + latency),
             alpha_rate: r.alpha_rate,

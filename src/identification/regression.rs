@@ -54,6 +54,63 @@ pub enum Term {
     SCosB,
     /// −sgn β̇ · sin β (dictionary).
     SSinB,
+    /// A base parameter varying linearly over the recording session: the base term of
+    /// `param` times the session position s ∈ [−½, ½] on `clock` (`parameter_drift`).
+    Drift(DriftParam, Clock),
+    /// Quasi-static input compliance (`input_compliance`): the input magnet sits at
+    /// α + χ τ_in(α, β) with τ_in = −∂V/∂α the coupling torque on it per output inertia, so the
+    /// output sees f(α + χτ_in) ≈ f + χ τ_in ∂f/∂α = χ g² (cos α sin β − Δ sin α cos β)
+    /// (cos α cos β + Δ sin α sin β). Column: the product of the brackets; coefficient χg².
+    Compliance,
+    /// Constant input angle offset ε in driven runs only (`drive_steps`: a stepping drive lags
+    /// its commanded angle by half a step between steps): ∂f/∂α·ε = −gε (cos α cos β +
+    /// Δ sin α sin β). Column: the bracket on driven rows, 0 on ring-downs; coefficient −gε.
+    DrivenOffset,
+    /// Input angle offset growing with the input turns n(t) since the start of a driven run
+    /// (`drive_steps`: lost steps): column n(t)·(cos α cos β + Δ sin α sin β); coefficient
+    /// −g·(offset per turn).
+    DrivenOffsetRate,
+}
+
+/// The base parameter that drifts in [`Term::Drift`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DriftParam {
+    /// ζ (column −β̇·s).
+    Zeta,
+    /// η (column −sgn β̇·s).
+    Eta,
+    /// g, the coupling strength (column s·(−sin α cos β + Δ cos α sin β)).
+    Coupling,
+}
+
+impl DriftParam {
+    /// Name of the parameter.
+    pub fn name(&self) -> &'static str {
+        match self {
+            DriftParam::Zeta => "zeta",
+            DriftParam::Eta => "eta",
+            DriftParam::Coupling => "g",
+        }
+    }
+}
+
+/// The session clock of [`Term::Drift`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Clock {
+    /// Position of the run in the set (file order), constant within a run.
+    RunIndex,
+    /// Recording time accumulated over the runs in file order (runs back to back).
+    SessionTime,
+}
+
+impl Clock {
+    /// Name of the clock.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Clock::RunIndex => "run_index",
+            Clock::SessionTime => "session_time",
+        }
+    }
 }
 
 impl Term {
@@ -81,6 +138,10 @@ impl Term {
             Term::VSinB => "-dbeta sin(beta)".into(),
             Term::SCosB => "-sgn(dbeta)cos(beta)".into(),
             Term::SSinB => "-sgn(dbeta)sin(beta)".into(),
+            Term::Drift(p, c) => format!("drift[{},{}]", p.name(), c.name()),
+            Term::Compliance => "input_compliance".into(),
+            Term::DrivenOffset => "driven_alpha_offset".into(),
+            Term::DrivenOffsetRate => "driven_alpha_offset_per_turn".into(),
         }
     }
     /// Whether the term breaks the symmetry (α, β) → (α + π, β + π).
@@ -155,11 +216,67 @@ impl Design {
     }
 }
 
+/// Where a sample sits in the session and its run (for drift and drive terms).
+#[derive(Debug, Clone, Copy)]
+struct SampleCtx {
+    /// Δ of the geometry.
+    delta: f64,
+    /// Session position of the run by index, in [−½, ½].
+    s_index: f64,
+    /// Session position by accumulated recording time, in [−½, ½].
+    s_time: f64,
+    /// Driven run.
+    driven: bool,
+    /// Input turns since the start of the run.
+    turns: f64,
+}
+
+impl SampleCtx {
+    fn s(&self, clock: Clock) -> f64 {
+        match clock {
+            Clock::RunIndex => self.s_index,
+            Clock::SessionTime => self.s_time,
+        }
+    }
+}
+
+/// The bracket cos α cos β + Δ sin α sin β = −(∂f/∂α)/g of the base coupling f.
+fn dalpha_bracket(delta: f64, al: f64, b: f64) -> f64 {
+    al.cos() * b.cos() + delta * al.sin() * b.sin()
+}
+
 /// The value of a term at one sample. Terms carrying sgn β̇ return their magnitude m with
 /// `true` (the term is −sgn(β̇)·m), so that the integral can be split at the velocity reversal.
-fn term_value(term: Term, geo: &Geometry, al: f64, b: f64, v: f64) -> (f64, bool) {
+fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f64) -> (f64, bool) {
     match term {
-        Term::Zeta | Term::Corot => (0.0, false), // handled by integration by parts
+        // handled by integration by parts
+        Term::Zeta | Term::Corot | Term::Drift(DriftParam::Zeta, _) => (0.0, false),
+        Term::Drift(DriftParam::Eta, c) => (ctx.s(c), true),
+        Term::Drift(DriftParam::Coupling, c) => (
+            ctx.s(c) * (-al.sin() * b.cos() + ctx.delta * al.cos() * b.sin()),
+            false,
+        ),
+        Term::Compliance => (
+            (al.cos() * b.sin() - ctx.delta * al.sin() * b.cos())
+                * dalpha_bracket(ctx.delta, al, b),
+            false,
+        ),
+        Term::DrivenOffset => (
+            if ctx.driven {
+                dalpha_bracket(ctx.delta, al, b)
+            } else {
+                0.0
+            },
+            false,
+        ),
+        Term::DrivenOffsetRate => (
+            if ctx.driven {
+                ctx.turns * dalpha_bracket(ctx.delta, al, b)
+            } else {
+                0.0
+            },
+            false,
+        ),
         Term::Eta => (1.0, true),
         Term::SinACosB => (al.sin() * b.cos(), false),
         Term::CosASinB => (al.cos() * b.sin(), false),
@@ -176,6 +293,51 @@ fn term_value(term: Term, geo: &Geometry, al: f64, b: f64, v: f64) -> (f64, bool
         Term::SCosB => (b.cos(), true),
         Term::SSinB => (b.sin(), true),
     }
+}
+
+/// Per run: (session position by index in [−½, ½], session time at its start, total session
+/// time). The session is the runs in file order, back to back.
+fn session_clocks(runs: &[CleanRun]) -> Vec<(f64, f64, f64)> {
+    let n = runs.len();
+    let durations: Vec<f64> = runs
+        .iter()
+        .map(|r| match (r.t.first(), r.t.last()) {
+            (Some(a), Some(b)) => (b - a).max(0.0),
+            _ => 0.0,
+        })
+        .collect();
+    let total: f64 = durations.iter().sum::<f64>().max(1e-300);
+    let mut start = 0.0;
+    durations
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            let s_index = if n > 1 {
+                i as f64 / (n - 1) as f64 - 0.5
+            } else {
+                0.0
+            };
+            let out = (s_index, start, total);
+            start += d;
+            out
+        })
+        .collect()
+}
+
+/// Session positions (by run index, by session time at the run's middle), each in [−½, ½], of
+/// the clocks of [`Term::Drift`].
+pub fn session_positions(runs: &[CleanRun]) -> Vec<(f64, f64)> {
+    session_clocks(runs)
+        .iter()
+        .zip(runs)
+        .map(|(&(si, start, total), r)| {
+            let d = match (r.t.first(), r.t.last()) {
+                (Some(a), Some(b)) => (b - a).max(0.0),
+                _ => 0.0,
+            };
+            (si, (start + 0.5 * d) / total - 0.5)
+        })
+        .collect()
 }
 
 /// The previous sample inside a window: (t, φ, v, term values).
@@ -201,11 +363,22 @@ pub fn build(
         centre: Vec::new(),
     };
     const POW: i32 = 6;
+    let delta = crate::model::gear::shaft_index(geo.theta, geo.phi);
+    let clocks = session_clocks(runs);
     for (ri, r) in runs.iter().enumerate() {
         let n = r.t.len();
         if n < 8 {
             continue;
         }
+        let t_first = r.t[0];
+        let (s_index, run_start, total) = clocks[ri];
+        let ctx_at = |t: f64| SampleCtx {
+            delta,
+            s_index,
+            s_time: (run_start + t - t_first) / total - 0.5,
+            driven: !r.ringdown,
+            turns: r.alpha_rate.abs() * (t - t_first) / std::f64::consts::TAU,
+        };
         let h = opts.half_width * r.dt;
         let v_thr = opts.rest_sigmas * r.v_gain * r.sigma_beta;
         let rest: Vec<bool> = r.v.iter().map(|v| v.abs() < v_thr).collect();
@@ -274,9 +447,10 @@ pub fn build(
                 noise2 += (wq * ddphi).powi(2);
                 w0 += wq * phi;
                 w1b += wq * dphi * (b - bc);
+                let ctx = ctx_at(r.t[i]);
                 let vals: Vec<(f64, bool)> = terms
                     .iter()
-                    .map(|&term| term_value(term, geo, alpha[i], b, r.v[i]))
+                    .map(|&term| term_value(term, geo, &ctx, alpha[i], b, r.v[i]))
                     .collect();
                 if let Some((tp, php, vp, valp)) = &prev {
                     let dtt = r.t[i] - tp;
@@ -307,6 +481,8 @@ pub fn build(
                 match term {
                     Term::Zeta => cols[k] = w1b,
                     Term::Corot => cols[k] = w1b + r.alpha_rate * w0,
+                    // s varies by < 1e-3 across a window: taken at its centre
+                    Term::Drift(DriftParam::Zeta, clock) => cols[k] = ctx_at(tc).s(clock) * w1b,
                     _ => {}
                 }
             }

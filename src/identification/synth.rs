@@ -34,6 +34,22 @@ pub const SYNTH_EFFECTS: &[(&str, &str)] = &[
         "sensor_latency",
         "β recorded `size` seconds late relative to α (e.g. 0.006)",
     ),
+    (
+        "input_compliance",
+        "the input magnet lags by its coupling torque over a torsional stiffness; `size` = the \
+         lag at the peak coupling torque, deg (e.g. 1.5)",
+    ),
+    (
+        "drive_steps",
+        "driven runs: the input rests between steps (one step per sample interval, the sample \
+         taken just after the step) and each step is lost with probability `size` (e.g. 0.001; \
+         0 = stepping only)",
+    ),
+    (
+        "parameter_drift",
+        "η drifts linearly over the session (runs in file order): relative change `size` from \
+         the first run to the last (e.g. 0.3)",
+    ),
 ];
 
 /// Options of the generator.
@@ -104,6 +120,10 @@ pub struct SynthTruth {
     pub alpha_offset: f64,
     /// Sensor latency, s.
     pub latency: f64,
+    /// `parameter_drift`: η of each run in file order (empty otherwise).
+    pub eta_per_run: Vec<f64>,
+    /// `drive_steps`: steps lost in each driven run (empty otherwise).
+    pub lost_steps: Vec<usize>,
 }
 
 /// Makes a synthetic recording set (not yet written; see [`crate::io::recordings::write_set`]).
@@ -156,6 +176,12 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
         "coupling_geometry" => alpha_offset = opts.size.to_radians(),
         "load_dependent_friction" => extra.eta_load = opts.size * eta,
         "sensor_latency" => latency += opts.size,
+        "input_compliance" => extra.compliance = opts.size.to_radians() / g,
+        "drive_steps" if !(0.0..1.0).contains(&opts.size) => {
+            return Err(Error::InvalidInput(
+                "drive_steps: the size is a probability per step, in [0, 1)".into(),
+            ))
+        }
         _ => {}
     }
     // coupling with the input angle offset: −g sin(α+ε) cos β + gΔ cos(α+ε) sin β
@@ -169,18 +195,39 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
         c_ss: -g * delta * se,
         ..extra
     };
-    let truth = SynthTruth {
+    let mut truth = SynthTruth {
         coefficients: coef,
         geometry: geo,
         alpha_offset,
         latency,
+        eta_per_run: vec![],
+        lost_steps: vec![],
     };
+    // parameter_drift: η of run k (file order: ring-downs, then driven runs)
+    let n_runs = opts.ringdowns + opts.driven;
+    let coef_of_run = |k: usize| -> Coefficients {
+        if opts.effect != "parameter_drift" {
+            return coef;
+        }
+        let s = if n_runs > 1 {
+            k as f64 / (n_runs - 1) as f64 - 0.5
+        } else {
+            0.0
+        };
+        Coefficients {
+            eta: coef.eta * (1.0 + opts.size * s),
+            ..coef
+        }
+    };
+    if opts.effect == "parameter_drift" {
+        truth.eta_per_run = (0..n_runs).map(|k| coef_of_run(k).eta).collect();
+    }
     let noise = opts.noise_deg.to_radians();
     let mut runs = Vec::new();
     for k in 0..opts.ringdowns {
         let alpha0 = TAU * (k as f64 + 0.37) / opts.ringdowns as f64;
         let sys = AugmentedGear {
-            c: coef,
+            c: coef_of_run(k),
             geo,
             alpha0,
             alpha_rate: 0.0,
@@ -215,7 +262,7 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
         let f = (f * 1000.0).round() / 1000.0;
         // the coefficients carry the input angle offset: the drive itself starts at α = 0
         let sys = AugmentedGear {
-            c: coef,
+            c: coef_of_run(opts.ringdowns + k),
             geo,
             alpha0: 0.0,
             alpha_rate: TAU * f,
@@ -224,7 +271,20 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
         let dt = 1.0 / (f * opts.samples_per_turn as f64);
         let times: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
         let beta_start = TAU * rng.uniform();
-        let (t, beta) = simulate(&sys, [beta_start, 0.0], &times, latency)?;
+        let (t, beta) = if opts.effect == "drive_steps" {
+            let (t, beta, lost) = simulate_stepped(
+                &sys,
+                [beta_start, 0.0],
+                &times,
+                TAU / opts.samples_per_turn as f64,
+                opts.size,
+                &mut rng,
+            )?;
+            truth.lost_steps.push(lost);
+            (t, beta)
+        } else {
+            simulate(&sys, [beta_start, 0.0], &times, latency)?
+        };
         let alpha: Vec<f64> = t
             .iter()
             .map(|&ti| TAU * (ti / dt / opts.samples_per_turn as f64))
@@ -267,6 +327,40 @@ fn simulate(
     let flow = EventDriven.flow(sys, t_start, x0, t_end.max(t_start), &opts)?;
     let beta = flow.samples.iter().map(|s| s.beta).collect();
     Ok((times.to_vec(), beta))
+}
+
+/// A stepping drive: the input steps by `step` at each sample time (the sample is taken just
+/// after the step) and rests in between; each step is lost with probability `p_lost`. Returns
+/// the times, β and the number of lost steps.
+fn simulate_stepped(
+    sys: &AugmentedGear,
+    x0: [f64; 2],
+    times: &[f64],
+    step: f64,
+    p_lost: f64,
+    rng: &mut Rng,
+) -> Result<(Vec<f64>, Vec<f64>, usize)> {
+    let mut x = x0;
+    let mut beta = Vec::with_capacity(times.len());
+    let mut lost = 0usize;
+    let opts = FlowOptions::with_tol(1e-9);
+    for (k, &tk) in times.iter().enumerate() {
+        beta.push(x[0]);
+        if k > 0 && rng.uniform() < p_lost {
+            lost += 1;
+        }
+        let Some(&t_next) = times.get(k + 1) else {
+            break;
+        };
+        let rest = AugmentedGear {
+            alpha0: sys.alpha0 + step * (k - lost) as f64,
+            alpha_rate: 0.0,
+            ..*sys
+        };
+        let flow = EventDriven.flow(&rest, tk, x, t_next, &opts)?;
+        x = flow.x;
+    }
+    Ok((times.to_vec(), beta, lost))
 }
 
 #[allow(clippy::too_many_arguments)]
