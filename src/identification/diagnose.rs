@@ -17,6 +17,7 @@ use super::regression::{
 };
 use super::report::{Baseline, Finding, Mismatch, Report, RunRms, SCHEMA};
 use super::ringdown::{fit_kappa, fit_ringdown, KappaFit, RingdownFit};
+use super::shooting::{refit_by_simulation, ShootingOptions, SimRefit};
 use crate::error::{Error, Result};
 use crate::io::recordings::{RecordingSet, RunKind};
 use serde_json::json;
@@ -42,6 +43,11 @@ pub struct DiagnoseOptions {
     /// statistically detectable on a large set but smaller than the systematic error of the weak
     /// form, and the data are explained "to the noise level".
     pub min_chi2_gain_per_row: f64,
+    /// Refit the base and the final augmented model by simulation (multiple shooting over short
+    /// windows, [`refit_by_simulation`]); the reported parameters then come from it.
+    pub simulation_refit: bool,
+    /// Options of that refit.
+    pub shooting: ShootingOptions,
 }
 
 impl Default for DiagnoseOptions {
@@ -54,6 +60,8 @@ impl Default for DiagnoseOptions {
             ringdown_fits: true,
             latency_span: 0.03,
             min_chi2_gain_per_row: 0.005,
+            simulation_refit: true,
+            shooting: ShootingOptions::default(),
         }
     }
 }
@@ -739,26 +747,33 @@ pub fn diagnose(
         Some((d, f))
     };
     let design0 = build(&runs, &geo, &terms, &opts.weak, 0.0);
-    let pred_stage = |d: &Design, f: &LinFit, lat: f64| -> (Vec<Prediction>, Vec<Option<f64>>) {
-        let preds: Vec<Prediction> = (0..nr)
-            .map(|r| {
-                let c = coefficients_for_run(d, f, &f.coef, &runs, r);
-                predict(&runs[r], &c, &geo, lat)
-            })
-            .collect();
-        let held: Vec<Option<f64>> = if opts.heldout_predictions {
-            (0..nr)
+    // predictions with the coefficients `coef` of the columns of `f` (the weak-form fit or its
+    // refit by simulation); held out: shifted by the change of the weak-form fit when run r is
+    // left out (a first-order leave-one-run-out of the refit)
+    let pred_stage =
+        |d: &Design, f: &LinFit, coef: &[f64], lat: f64| -> (Vec<Prediction>, Vec<Option<f64>>) {
+            let preds: Vec<Prediction> = (0..nr)
                 .map(|r| {
-                    let cw = coef_without(d, f, r)?;
-                    let c = coefficients_for_run(d, f, &cw, &runs, r);
-                    Some(predict(&runs[r], &c, &geo, lat).rms)
+                    let c = coefficients_for_run(d, f, coef, &runs, r);
+                    predict(&runs[r], &c, &geo, lat)
                 })
-                .collect()
-        } else {
-            vec![None; nr]
+                .collect();
+            let held: Vec<Option<f64>> = if opts.heldout_predictions {
+                (0..nr)
+                    .map(|r| {
+                        let cw = coef_without(d, f, r)?;
+                        let shifted: Vec<f64> = (0..coef.len())
+                            .map(|k| coef[k] + cw[k] - f.coef[k])
+                            .collect();
+                        let c = coefficients_for_run(d, f, &shifted, &runs, r);
+                        Some(predict(&runs[r], &c, &geo, lat).rms)
+                    })
+                    .collect()
+            } else {
+                vec![None; nr]
+            };
+            (preds, held)
         };
-        (preds, held)
-    };
     let pooled = |p: &[Prediction]| -> f64 {
         let (mut ss, mut n) = (0.0, 0usize);
         for q in p {
@@ -786,7 +801,75 @@ pub fn diagnose(
             None
         }
     };
-    let (base_pred, base_held) = pred_stage(&design0, &base_fit, 0.0);
+    // ---- refits by simulation (base, final augmented model)
+    let latency_accepted = accepted.iter().any(|a| a.effect.id == "sensor_latency");
+    let sim_base: Option<SimRefit> = if opts.simulation_refit {
+        progress("refit of the base model by simulation (multiple shooting)");
+        refit_by_simulation(&design0, &base_fit, &runs, &geo, 0.0, false, &opts.shooting)
+    } else {
+        None
+    };
+    let final_stage = accepted.iter().rposition(|a| a.effect.id != "unexplained");
+    let sim_final: Option<SimRefit> = if opts.simulation_refit && final_stage.is_some() {
+        progress("refit of the augmented model by simulation (multiple shooting)");
+        refit_by_simulation(
+            &design,
+            &current,
+            &runs,
+            &geo,
+            latency,
+            latency_accepted,
+            &opts.shooting,
+        )
+    } else {
+        None
+    };
+    if let Some(sb) = &sim_base {
+        // base parameters from the refit by simulation; the weak-form values stay beside them
+        for k in ["g", "delta", "zeta", "eta"] {
+            for suffix in ["", "_err"] {
+                if let Some(v) = params.get(&format!("{k}{suffix}")).copied() {
+                    params.insert(format!("{k}_weak_form{suffix}"), v);
+                }
+            }
+        }
+        let at = |t: Term| {
+            base_cols
+                .iter()
+                .position(|&c| design0.terms[c] == t)
+                .map(|k| (sb.coef[k], sb.err[k]))
+        };
+        if let (Some(z), Some(e), Some(sc), Some(cs)) = (
+            at(Term::Zeta),
+            at(Term::Eta),
+            at(Term::SinACosB),
+            at(Term::CosASinB),
+        ) {
+            let (gs, gse) = (-sc.0, sc.1);
+            params.insert("g".into(), gs);
+            params.insert("g_err".into(), gse);
+            params.insert("delta".into(), cs.0 / gs);
+            params.insert(
+                "delta_err".into(),
+                ((cs.1 / gs).powi(2) + (cs.0 * gse / (gs * gs)).powi(2)).sqrt(),
+            );
+            params.insert("zeta".into(), z.0);
+            params.insert("zeta_err".into(), z.1);
+            params.insert("eta".into(), e.0);
+            params.insert("eta_err".into(), e.1);
+            params.insert("inertia".into(), c / gs);
+            params.insert(
+                "inertia_err".into(),
+                c / gs * ((gse / gs).powi(2) + setup.coupling_rel_tol().powi(2)).sqrt(),
+            );
+            params.insert("simulation_refit_windows".into(), sb.windows as f64);
+        }
+    }
+    let base_sim_coef = sim_base
+        .as_ref()
+        .map(|s| s.coef.clone())
+        .unwrap_or_else(|| base_fit.coef.clone());
+    let (base_pred, base_held) = pred_stage(&design0, &base_fit, &base_sim_coef, 0.0);
     let mut stage_rms = vec![(
         Some(pooled(&base_pred)),
         pooled_held(&base_held, &base_pred),
@@ -799,12 +882,22 @@ pub fn diagnose(
             stage_rms.push((None, None));
             continue;
         }
+        let refit = if Some(k) == final_stage {
+            sim_final.as_ref()
+        } else {
+            None
+        };
+        let lat_k = refit
+            .and_then(|s| s.latency)
+            .map(|l| l.0)
+            .unwrap_or(a.latency_after);
         if let Some((d, f)) = stage_fit(&a.terms_after, a.latency_after) {
-            let (p, h) = pred_stage(&d, &f, a.latency_after);
+            let coef = refit.map(|s| s.coef.clone()).unwrap_or(f.coef.clone());
+            let (p, h) = pred_stage(&d, &f, &coef, lat_k);
             stage_rms.push((Some(pooled(&p)), pooled_held(&h, &p)));
             if k + 1 == accepted.len() || accepted[k + 1].effect.id == "unexplained" {
                 aug_pred = p;
-                aug_coef = to_coefficients(&d, &f, &f.coef);
+                aug_coef = to_coefficients(&d, &f, &coef);
             }
         } else {
             stage_rms.push((None, None));
@@ -824,7 +917,17 @@ pub fn diagnose(
             })
             .collect()
     };
-    let final_map = coef_map(&current, &design);
+    let weak_map = coef_map(&current, &design);
+    // the final model's parameters: from the refit by simulation when there is one
+    let final_map: BTreeMap<String, (f64, f64)> = match &sim_final {
+        Some(sf) => current
+            .cols
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| (design.terms[c].name(), (sf.coef[k], sf.err[k])))
+            .collect(),
+        None => weak_map.clone(),
+    };
     let dict_map = coef_map(&dict_fit, &design);
     let mut findings = Vec::new();
     let final_eta = final_map.get(&Term::Eta.name()).map(|v| v.0).unwrap_or(eta);
@@ -834,9 +937,13 @@ pub fn diagnose(
         .unwrap_or(g);
     for (k, a) in accepted.iter().enumerate() {
         let mut p = if a.effect.id == "sensor_latency" {
+            let (tau, tau_err) = sim_final
+                .as_ref()
+                .and_then(|s| s.latency)
+                .unwrap_or((a.latency, a.latency_err));
             [
-                ("tau_s".to_string(), a.latency),
-                ("tau_err_s".to_string(), a.latency_err),
+                ("tau_s".to_string(), tau),
+                ("tau_err_s".to_string(), tau_err),
             ]
             .into_iter()
             .collect()
@@ -866,6 +973,8 @@ pub fn diagnose(
                 let geo_c = refine_geometry(&geo_nominal, delta_final);
                 let cols: Vec<usize> = (0..model_terms.len()).collect();
                 let dc = build(&runs, &geo_c, &model_terms, &opts.weak, latency);
+                // the systematic is measured on weak-form fits, against the one at geo_c
+                let mut k_ref = p.get("k").copied();
                 if let Some(fc) = fit(&dc, &cols) {
                     let mc = coef_map(&fc, &dc);
                     let ec = mc.get(&Term::Eta.name()).map(|v| v.0).unwrap_or(final_eta);
@@ -873,7 +982,11 @@ pub fn diagnose(
                         .get(&Term::SinACosB.name())
                         .map(|v| -v.0)
                         .unwrap_or(final_g);
-                    p = effect_params(&a.effect, &mc, (final_zeta, ec, gc));
+                    let pc = effect_params(&a.effect, &mc, (final_zeta, ec, gc));
+                    k_ref = pc.get("k").copied().or(k_ref);
+                    if sim_final.is_none() {
+                        p = pc;
+                    }
                 }
                 let mut sys: f64 = 0.0;
                 for sgn in [-1.0, 1.0] {
@@ -886,7 +999,7 @@ pub fn diagnose(
                             let e2 = m2.get(&Term::Eta.name()).map(|v| v.0).unwrap_or(final_eta);
                             if let Some(l2) = m2.get(&Term::LoadFric.name()) {
                                 let k2 = l2.0 / e2;
-                                if let Some(k) = p.get("k") {
+                                if let Some(k) = k_ref {
                                     sys = sys.max((k2 - k).abs());
                                 }
                             }
@@ -917,6 +1030,34 @@ pub fn diagnose(
         ev.insert("heldout_cv_chi2_after".to_string(), json!(a.cv_after));
         ev.insert("eq_rms_before_rad_s2".to_string(), json!(a.eq_rms_before));
         ev.insert("eq_rms_after_rad_s2".to_string(), json!(a.eq_rms_after));
+        if a.effect.id != "unexplained" && a.effect.id != "sensor_latency" {
+            ev.insert(
+                "weak_form_params".to_string(),
+                json!(effect_params(
+                    &a.effect,
+                    &weak_map,
+                    (
+                        weak_map
+                            .get(&Term::Zeta.name())
+                            .map(|v| v.0)
+                            .unwrap_or(zeta),
+                        weak_map.get(&Term::Eta.name()).map(|v| v.0).unwrap_or(eta),
+                        weak_map
+                            .get(&Term::SinACosB.name())
+                            .map(|v| -v.0)
+                            .unwrap_or(g),
+                    )
+                )),
+            );
+        }
+        if let (Some(sf), true) = (&sim_final, a.effect.id != "unexplained") {
+            ev.insert(
+                "simulation_refit".to_string(),
+                json!({"windows": sf.windows, "samples": sf.samples,
+                       "rms_start_rad": sf.rms_start_rad, "rms_rad": sf.rms_rad,
+                       "converged": sf.converged, "inflation": sf.inflation}),
+            );
+        }
         if a.effect.id == "unexplained" {
             ev.insert(
                 "terms".to_string(),

@@ -89,6 +89,18 @@ pub fn least_squares<F: Fn(&[f64]) -> Option<Vec<f64>>>(
     steps: &[f64],
     patience: usize,
 ) -> Option<LsqFit> {
+    least_squares_tol(f, p0, steps, patience, None)
+}
+
+/// [`least_squares`] with the optimiser's relative tolerances (ftol, xtol) set: looser ones stop
+/// earlier when every residual evaluation is expensive and the start is already close.
+pub fn least_squares_tol<F: Fn(&[f64]) -> Option<Vec<f64>>>(
+    f: &F,
+    p0: &[f64],
+    steps: &[f64],
+    patience: usize,
+    tol: Option<(f64, f64)>,
+) -> Option<LsqFit> {
     let r0 = f(p0)?;
     let m = r0.len();
     let n = p0.len();
@@ -101,9 +113,11 @@ pub fn least_squares<F: Fn(&[f64]) -> Option<Vec<f64>>>(
         steps: steps.to_vec(),
         m,
     };
-    let (prob, report) = LevenbergMarquardt::new()
-        .with_patience(patience)
-        .minimize(prob);
+    let mut lm = LevenbergMarquardt::new().with_patience(patience);
+    if let Some((ftol, xtol)) = tol {
+        lm = lm.with_ftol(ftol).with_xtol(xtol);
+    }
+    let (prob, report) = lm.minimize(prob);
     let p: Vec<f64> = prob.p.as_slice().to_vec();
     let resid = f(&p)?;
     let rss: f64 = resid.iter().map(|r| r * r).sum();

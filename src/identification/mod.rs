@@ -9,6 +9,7 @@
 //! - [`diagnose`]: mismatch fingerprints, selection by held-out runs and BIC, verdict, report.
 //! - [`synth`]: synthetic recording sets from a truth model with a chosen effect.
 //! - [`model`]: the augmented gear used by the simulations.
+//! - [`shooting`]: refit of a selected model by simulation over short windows (multiple shooting).
 
 pub mod catalog;
 pub mod diagnose;
@@ -19,4 +20,5 @@ pub mod preprocess;
 pub mod regression;
 pub mod report;
 pub mod ringdown;
+pub mod shooting;
 pub mod synth;

@@ -126,39 +126,39 @@ impl AugmentedGear {
     pub fn alpha(&self, t: f64) -> f64 {
         self.alpha0 + self.alpha_rate * t
     }
-    /// The input magnet's angle: α + ε + χ τ_in(α_in, β) by fixed-point iteration (χg ≪ 1).
-    pub fn input_angle(&self, alpha: f64, beta: f64) -> f64 {
+    /// The input magnet's angle α_in = α + ε + χ τ_in(α_in, β) (Newton iteration) and its
+    /// derivative dα_in/dβ = χ τ_β / (1 − χ τ_α).
+    pub fn input_angle(&self, alpha: f64, beta: f64) -> (f64, f64) {
         let c = &self.c;
         let a0 = alpha + c.alpha_offset;
         if c.compliance == 0.0 {
-            return a0;
+            return (a0, 0.0);
         }
         let (sb, cb) = beta.sin_cos();
-        let mut a = a0;
-        for _ in 0..6 {
+        // τ_in and its partial derivatives at input angle a
+        let tau = |a: f64| {
             let (sa, ca) = a.sin_cos();
-            let tau = c.c_sc * ca * sb + c.c_cs * sa * cb - c.c_cc * sa * sb - c.c_ss * ca * cb;
-            a = a0 + c.compliance * tau;
+            (
+                c.c_sc * ca * sb + c.c_cs * sa * cb - c.c_cc * sa * sb - c.c_ss * ca * cb,
+                -c.c_sc * sa * sb + c.c_cs * ca * cb - c.c_cc * ca * sb + c.c_ss * sa * cb,
+                c.c_sc * ca * cb - c.c_cs * sa * sb - c.c_cc * sa * cb + c.c_ss * ca * sb,
+            )
+        };
+        let mut a = a0 + c.compliance * tau(a0).0;
+        for _ in 0..3 {
+            let (t, ta, _) = tau(a);
+            a -= (a - a0 - c.compliance * t) / (1.0 - c.compliance * ta);
         }
-        a
+        let (_, ta, tb) = tau(a);
+        (a, c.compliance * tb / (1.0 - c.compliance * ta))
     }
     fn smooth(&self, alpha: f64, beta: f64, omega: f64) -> (f64, f64, f64) {
-        let c = &self.c;
-        if c.compliance != 0.0 {
-            // the input angle depends on β: ∂a/∂β by central difference
-            let a = self.smooth_at(self.input_angle(alpha, beta), beta, omega);
-            let h = 1e-6;
-            let ap = self
-                .smooth_at(self.input_angle(alpha, beta + h), beta + h, omega)
-                .0;
-            let am = self
-                .smooth_at(self.input_angle(alpha, beta - h), beta - h, omega)
-                .0;
-            return (a.0, (ap - am) / (2.0 * h), a.2);
-        }
-        self.smooth_at(alpha + c.alpha_offset, beta, omega)
+        let (a_in, da_dbeta) = self.input_angle(alpha, beta);
+        let (a, a_beta, a_omega, a_alpha) = self.smooth_at(a_in, beta, omega);
+        (a, a_beta + a_alpha * da_dbeta, a_omega)
     }
-    fn smooth_at(&self, alpha: f64, beta: f64, omega: f64) -> (f64, f64, f64) {
+    /// a, ∂a/∂β, ∂a/∂ω, ∂a/∂α at the input angle `alpha`.
+    fn smooth_at(&self, alpha: f64, beta: f64, omega: f64) -> (f64, f64, f64, f64) {
         let c = &self.c;
         let (sa, ca) = alpha.sin_cos();
         let (sb, cb) = beta.sin_cos();
@@ -176,7 +176,8 @@ impl AugmentedGear {
             + c.st_a * cb
             - c.st_b * sb;
         let a_omega = -c.zeta - 2.0 * c.quad * omega.abs() - c.corot;
-        (a, a_beta, a_omega)
+        let a_alpha = c.c_sc * ca * cb - c.c_cs * sa * sb - c.c_cc * sa * cb + c.c_ss * ca * sb;
+        (a, a_beta, a_omega, a_alpha)
     }
     fn friction(&self, alpha: f64, beta: f64) -> f64 {
         if self.c.eta_load == 0.0 {
@@ -261,6 +262,40 @@ mod tests {
             // (α, β) → (α + π, β + π) flips both moments: F unchanged
             let h2 = force_shape(&geo, a + std::f64::consts::PI, b + std::f64::consts::PI);
             assert!((h - h2).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn compliant_input_solves_its_equilibrium_and_the_jacobian_matches() {
+        let mut c = Coefficients::base(300.0, 0.2, 1.0, 20.0);
+        c.compliance = 2f64.to_radians() / 300.0;
+        c.c_cc = 7.0;
+        let sys = AugmentedGear {
+            c,
+            geo: Geometry {
+                theta: 0.5,
+                phi: 0.5,
+            },
+            alpha0: 0.3,
+            alpha_rate: 4.0,
+        };
+        for k in 0..12 {
+            let (t, b) = (0.13 * k as f64, 0.7 * k as f64 - 2.0);
+            let al = sys.alpha(t);
+            let (a_in, _) = sys.input_angle(al, b);
+            let (sa, ca) = a_in.sin_cos();
+            let (sb, cb) = b.sin_cos();
+            let tau = c.c_sc * ca * sb + c.c_cs * sa * cb - c.c_cc * sa * sb - c.c_ss * ca * cb;
+            assert!((a_in - al - c.compliance * tau).abs() < 1e-14);
+            let j = sys.forces_jet(t, b, 0.4, false);
+            let h = 1e-6;
+            let fd = (sys.forces(t, b + h, 0.4).a - sys.forces(t, b - h, 0.4).a) / (2.0 * h);
+            assert!(
+                (j.a_beta - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+                "{} {}",
+                j.a_beta,
+                fd
+            );
         }
     }
 }

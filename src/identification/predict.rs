@@ -29,6 +29,59 @@ pub struct Prediction {
     pub rejected: usize,
 }
 
+/// The prediction windows of a run as index ranges [i, j): at most [`WINDOW`] samples and
+/// [`HORIZON`] seconds (but at least 8 samples), cut at gaps, windows shorter than 8 dropped.
+pub fn prediction_windows(r: &CleanRun) -> Vec<(usize, usize)> {
+    let n = r.t.len();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i + 8 <= n {
+        let mut j = (i + WINDOW).min(n);
+        // a short horizon in time as well (chaos), but at least 8 samples
+        while j > i + 8 && r.t[j - 1] - r.t[i] > HORIZON {
+            j -= 1;
+        }
+        // no large gap inside a window
+        if let Some(k) = (i..j - 1).find(|&k| r.t[k + 1] - r.t[k] > 2.5 * r.dt) {
+            j = k + 1;
+        }
+        if j - i >= 8 {
+            out.push((i, j));
+        }
+        i = j;
+    }
+    out
+}
+
+/// The model of window [i, j) of run `r`: α(t) through the window's first recorded angle (a β
+/// recorded `latency` late), and a lost-step input offset taken at the window's middle.
+pub fn window_system(
+    r: &CleanRun,
+    c: &Coefficients,
+    geo: &Geometry,
+    latency: f64,
+    i: usize,
+    j: usize,
+) -> AugmentedGear {
+    let mut cw = *c;
+    if c.alpha_offset_per_turn != 0.0 {
+        let tm = 0.5 * (r.t[i] + r.t[j - 1]);
+        cw.alpha_offset +=
+            c.alpha_offset_per_turn * r.alpha_rate.abs() * (tm - r.t[0]) / std::f64::consts::TAU;
+    }
+    AugmentedGear {
+        c: cw,
+        geo: *geo,
+        alpha0: r.alpha[i] - r.alpha_rate * (r.t[i] + latency),
+        alpha_rate: r.alpha_rate,
+    }
+}
+
+/// β of `sys` from the state `x0` at `t0`, at `times` (exact Filippov flow, tolerance 1e-8).
+pub fn simulate_at(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<f64>> {
+    sim(sys, t0, x0, times)
+}
+
 fn sim(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<f64>> {
     let t1 = *times.last()?;
     let opts = FlowOptions::with_tol(1e-8).samples(times.to_vec());
@@ -41,40 +94,13 @@ fn sim(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<
 
 /// Predicts a cleaned run with the model `c` (and a sensor latency `latency`, s).
 pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> Prediction {
-    let n = r.t.len();
     let mut out = Prediction::default();
     let mut ss = 0.0;
     let mut dof = 0usize;
-    let mut i = 0;
-    while i + 8 <= n {
-        let mut j = (i + WINDOW).min(n);
-        // a short horizon in time as well (chaos), but at least 8 samples
-        while j > i + 8 && r.t[j - 1] - r.t[i] > HORIZON {
-            j -= 1;
-        }
-        // no large gap inside a window
-        if let Some(k) = (i..j - 1).find(|&k| r.t[k + 1] - r.t[k] > 2.5 * r.dt) {
-            j = k + 1;
-        }
-        if j - i < 8 {
-            i = j;
-            continue;
-        }
+    for (i, j) in prediction_windows(r) {
         let t = &r.t[i..j];
         let b = &r.beta[i..j];
-        // lost steps: the input offset grows with the turns, taken at the window's middle
-        let mut cw = *c;
-        if c.alpha_offset_per_turn != 0.0 {
-            let tm = 0.5 * (t[0] + t[t.len() - 1]);
-            cw.alpha_offset += c.alpha_offset_per_turn * r.alpha_rate.abs() * (tm - r.t[0])
-                / std::f64::consts::TAU;
-        }
-        let sys = AugmentedGear {
-            c: cw,
-            geo: *geo,
-            alpha0: r.alpha[i] - r.alpha_rate * (t[0] + latency),
-            alpha_rate: r.alpha_rate,
-        };
+        let sys = window_system(r, c, geo, latency, i, j);
         let f = |p: &[f64]| -> Option<Vec<f64>> {
             let s = sim(&sys, t[0], [p[0], p[1]], t)?;
             Some(s.iter().zip(b).map(|(s, m)| s - m).collect())
@@ -136,7 +162,6 @@ pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> 
             }
             dof += kept.saturating_sub(2);
         }
-        i = j;
     }
     out.rms = if dof > 0 {
         (ss / dof as f64).sqrt()
