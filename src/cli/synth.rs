@@ -94,7 +94,7 @@ pub fn run(a: Args) -> Result<()> {
             "g": c.g(), "delta": c.delta(), "zeta": c.zeta, "eta": c.eta,
             "static_torque": [c.st_a, c.st_b], "quad": c.quad, "corot": c.corot,
             "eta_load": c.eta_load, "alpha_offset_deg": truth.alpha_offset.to_degrees(),
-            "latency_s": truth.latency,
+            "latency_s": truth.latency, "eta_static_excess": c.eta_static_excess,
         });
         crate::io::write_json_atomic(a.out.join("truth.json"), &v)?;
     }

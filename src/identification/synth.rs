@@ -34,6 +34,10 @@ pub const SYNTH_EFFECTS: &[(&str, &str)] = &[
         "sensor_latency",
         "β recorded `size` seconds late relative to α (e.g. 0.006)",
     ),
+    (
+        "static_friction",
+        "breakaway friction η(1 + size) at rest, sliding friction η (e.g. 0.5)",
+    ),
 ];
 
 /// Options of the generator.
@@ -156,6 +160,7 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
         "coupling_geometry" => alpha_offset = opts.size.to_radians(),
         "load_dependent_friction" => extra.eta_load = opts.size * eta,
         "sensor_latency" => latency += opts.size,
+        "static_friction" => extra.eta_static_excess = opts.size * eta,
         _ => {}
     }
     // coupling with the input angle offset: −g sin(α+ε) cos β + gΔ cos(α+ε) sin β
