@@ -3,8 +3,9 @@
 //!
 //! Implemented (they enter the weak-form regression linearly, or through one profiled parameter):
 //! `coupling_geometry`, `static_torque`, `quadratic_drag`, `corotating_drag`,
-//! `load_dependent_friction`, `sensor_latency` (profiled time shift). Not implemented:
-//! `static_friction`, `input_compliance`, `drive_steps`, `parameter_drift`.
+//! `load_dependent_friction`, `sensor_latency` (profiled time shift), `static_friction` (no
+//! regression term: profiled over the stick phases by simulation, [`super::release`]). Not
+//! implemented: `input_compliance`, `drive_steps`, `parameter_drift`.
 
 use super::regression::Term;
 use std::collections::BTreeMap;
@@ -109,6 +110,24 @@ pub fn catalog() -> Vec<Effect> {
             candidates: vec!["camera exposure/trigger delay", "clock offset between drive and camera"],
             discriminating_experiment: "film a marker on the input shaft with the same camera: its \
                 recorded angle lags the commanded α by α̇·τ",
+        },
+        Effect {
+            id: "static_friction",
+            class: "friction",
+            explanation: "breakaway (static) friction above the sliding friction: an output at rest \
+                          stays stuck until the torque exceeds η(1 + s), then slides with η; the \
+                          stick phases last longer and the output leaves them with a jump of the \
+                          acceleration (Stribeck-like)",
+            terms: vec![],
+            candidates: vec![
+                "breakaway/Stribeck friction of the bearings",
+                "stiction of a seal or cable",
+            ],
+            discriminating_experiment: "slow-ramp release experiment: from a stuck state turn the \
+                input very slowly and record the input angle at which the output breaks away; the \
+                torque there, compared with the sliding friction from ring-downs, is the breakaway \
+                excess (a Stribeck curve also shows as a friction falling with speed in ring-downs \
+                from small amplitudes)",
         },
     ]
 }

@@ -17,6 +17,7 @@ pub mod model;
 pub mod predict;
 pub mod preprocess;
 pub mod regression;
+pub mod release;
 pub mod report;
 pub mod ringdown;
 pub mod synth;
