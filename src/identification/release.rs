@@ -472,7 +472,7 @@ pub fn fit_static_friction(
     opts: &ReleaseOptions,
 ) -> Option<StaticFrictionFit> {
     let eta = c.eta;
-    if !(eta > 0.0) || opts.grid.len() < 3 {
+    if eta.is_nan() || eta <= 0.0 || opts.grid.len() < 3 {
         return None;
     }
     let c = &Coefficients {
@@ -516,7 +516,8 @@ pub fn fit_static_friction(
     // c_sc, c_cs or η change by the relative systematic (states warm-started from the profile)
     let mut sys2 = 0.0;
     let eps = opts.coef_rel_sys;
-    let h = (0.5 * s_stat).max(0.01);
+    // steps wide enough to average over the kinks of single windows' profiles
+    let h = s_stat.max(0.03);
     if eps > 0.0 && pr.s > h && pr.s + h < s_top {
         let states = |s: f64| -> &Vec<Vec<f64>> {
             &pr.evaluated
@@ -553,7 +554,7 @@ pub fn fit_static_friction(
                     _ => cp.eta *= 1.0 + eps,
                 }
                 let grad = (chi2(&cp, pr.s + h) - chi2(&cp, pr.s - h)) / (2.0 * h);
-                sys2 += (grad / curv).powi(2);
+                sys2 += (grad / curv).clamp(-2.0 * h, 2.0 * h).powi(2);
             }
         }
     }
