@@ -109,7 +109,7 @@ pub fn run(a: Args) -> Result<()> {
             "g": c.g(), "delta": c.delta(), "zeta": c.zeta, "eta": c.eta,
             "static_torque": [c.st_a, c.st_b], "quad": c.quad, "corot": c.corot,
             "eta_load": c.eta_load, "alpha_offset_deg": truth.alpha_offset.to_degrees(),
-            "latency_s": truth.latency,
+            "latency_s": truth.latency, "eta_static_excess": c.eta_static_excess,
             "compliance_s2": c.compliance,
             "eta_per_run": truth.eta_per_run, "lost_steps_per_driven_run": truth.lost_steps,
         });

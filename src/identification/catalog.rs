@@ -4,8 +4,9 @@
 //! Implemented (they enter the weak-form regression linearly, or through one profiled parameter):
 //! `coupling_geometry`, `static_torque`, `quadratic_drag`, `corotating_drag`,
 //! `load_dependent_friction`, `sensor_latency` (profiled time shift), `input_compliance`,
-//! `drive_steps`, `parameter_drift` (one entry per drifting parameter and session clock). Not
-//! implemented: `static_friction`.
+//! `drive_steps`, `parameter_drift` (one entry per drifting parameter and session clock),
+//! `static_friction` (no regression term: profiled over the stick phases by simulation,
+//! [`super::release`]).
 
 use super::regression::{Clock, DriftParam, Term};
 use std::collections::BTreeMap;
@@ -143,6 +144,24 @@ pub fn catalog() -> Vec<Effect> {
             discriminating_experiment: "film a marker on the input magnet at a frame rate well \
                 above the step rate (or read an encoder on the input shaft): steps, their phase \
                 to the commanded angle and lost steps show directly",
+        },
+        Effect {
+            id: "static_friction",
+            class: "friction",
+            explanation: "breakaway (static) friction above the sliding friction: an output at rest \
+                          stays stuck until the torque exceeds η(1 + s), then slides with η; the \
+                          stick phases last longer and the output leaves them with a jump of the \
+                          acceleration (Stribeck-like)",
+            terms: vec![],
+            candidates: vec![
+                "breakaway/Stribeck friction of the bearings",
+                "stiction of a seal or cable",
+            ],
+            discriminating_experiment: "slow-ramp release experiment: from a stuck state turn the \
+                input very slowly and record the input angle at which the output breaks away; the \
+                torque there, compared with the sliding friction from ring-downs, is the breakaway \
+                excess (a Stribeck curve also shows as a friction falling with speed in ring-downs \
+                from small amplitudes)",
         },
     ];
     for p in [DriftParam::Eta, DriftParam::Zeta, DriftParam::Coupling] {

@@ -875,7 +875,9 @@ pub fn diagnose(
         pooled_held(&base_held, &base_pred),
     )];
     let mut aug_pred = base_pred.clone();
-    let mut aug_coef = base_coef;
+    let mut aug_coef = to_coefficients(&design0, &base_fit, &base_sim_coef);
+    let mut aug_per_run: Vec<Coefficients> = vec![aug_coef; nr];
+    let mut aug_latency = 0.0;
     for (k, a) in accepted.iter().enumerate() {
         progress(&format!("predictions with {}", a.effect.id));
         if a.effect.id == "unexplained" {
@@ -898,6 +900,10 @@ pub fn diagnose(
             if k + 1 == accepted.len() || accepted[k + 1].effect.id == "unexplained" {
                 aug_pred = p;
                 aug_coef = to_coefficients(&d, &f, &coef);
+                aug_per_run = (0..nr)
+                    .map(|r| coefficients_for_run(&d, &f, &coef, &runs, r))
+                    .collect();
+                aug_latency = lat_k;
             }
         } else {
             stage_rms.push((None, None));
@@ -1081,6 +1087,104 @@ pub fn diagnose(
             heldout_rms_after_rad: stage_rms[k + 1].1,
             evidence: ev,
         });
+    }
+    // ---- static friction (breakaway above the sliding friction): no regression term (the weak
+    // form skips stick phases); profiled over the stick phases by simulation with the final model,
+    // and ordered with the other findings by its ΔBIC-like evidence
+    {
+        use super::release::{fit_static_friction, ReleaseOptions};
+        progress("static friction (stick phases)");
+        let sf = fit_static_friction(
+            &runs,
+            &aug_coef,
+            Some(&aug_per_run),
+            &geo,
+            aug_latency,
+            &ReleaseOptions::default(),
+        );
+        if let Some(sf) = sf.filter(|f| f.s_err.is_finite() && f.s_err > 0.0) {
+            // evidence in χ² units with the systematic included: z² against one parameter
+            let z = sf.s / sf.s_err;
+            let dbic = -(z * z).min(sf.delta_chi2) + (sf.samples as f64).ln();
+            let fired = z >= 3.0 && dbic < -opts.bic_threshold;
+            let mut ev = BTreeMap::new();
+            ev.insert("delta_bic".to_string(), json!(dbic));
+            ev.insert("z".to_string(), json!(z));
+            ev.insert("delta_chi2_profile".to_string(), json!(sf.delta_chi2));
+            ev.insert("windows".to_string(), json!(sf.windows));
+            ev.insert("windows_examined".to_string(), json!(sf.windows_examined));
+            ev.insert("samples".to_string(), json!(sf.samples));
+            ev.insert("chi2_per_dof".to_string(), json!(sf.chi2_per_dof));
+            ev.insert(
+                "s_interval_stat".to_string(),
+                json!([sf.s_interval.0, sf.s_interval.1]),
+            );
+            ev.insert("profile".to_string(), json!(sf.profile));
+            if fired {
+                mismatch.push(Mismatch {
+                    where_: "stick phases: the output stays at rest beyond the sliding friction \
+                             (release later, with an acceleration jump)"
+                        .into(),
+                    evidence: ev.clone(),
+                });
+                let mut p = BTreeMap::new();
+                let eta_s = sf.eta * (1.0 + sf.s);
+                p.insert("eta_sliding".to_string(), sf.eta);
+                p.insert("eta_static".to_string(), eta_s);
+                p.insert("eta_static_err".to_string(), sf.eta * sf.s_err);
+                p.insert("excess_relative".to_string(), sf.s);
+                p.insert("excess_relative_err".to_string(), sf.s_err);
+                p.insert("excess_relative_err_stat".to_string(), sf.s_stat);
+                p.insert("excess_relative_err_sys".to_string(), sf.s_sys);
+                p.insert("events".to_string(), sf.sticks as f64);
+                progress("predictions with static_friction");
+                let before = pooled(&aug_pred);
+                let c_sf = Coefficients {
+                    eta_static_excess: sf.s * sf.eta,
+                    ..aug_coef
+                };
+                let p_sf: Vec<Prediction> = (0..nr)
+                    .map(|r| {
+                        let c_r = Coefficients {
+                            eta_static_excess: sf.s * sf.eta,
+                            ..aug_per_run[r]
+                        };
+                        predict(&runs[r], &c_r, &geo, aug_latency)
+                    })
+                    .collect();
+                let after = pooled(&p_sf);
+                aug_coef = c_sf;
+                aug_pred = p_sf;
+                let e = catalog()
+                    .into_iter()
+                    .find(|e| e.id == "static_friction")
+                    .expect("catalogued");
+                let f = Finding {
+                    effect: e.id.to_string(),
+                    class: e.class.to_string(),
+                    explanation: e.explanation.to_string(),
+                    params: p,
+                    candidates: e.candidates.iter().map(|s| s.to_string()).collect(),
+                    discriminating_experiment: e.discriminating_experiment.to_string(),
+                    rms_before_rad: Some(before),
+                    rms_after_rad: Some(after),
+                    heldout_rms_before_rad: None,
+                    heldout_rms_after_rad: None,
+                    evidence: ev,
+                };
+                let support = |f: &Finding| {
+                    f.evidence
+                        .get("delta_bic")
+                        .and_then(|v| v.as_f64())
+                        .unwrap_or(0.0)
+                };
+                let at = findings
+                    .iter()
+                    .position(|g| support(g) > dbic)
+                    .unwrap_or(findings.len());
+                findings.insert(at, f);
+            }
+        }
     }
     let verdict = findings
         .first()

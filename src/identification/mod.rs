@@ -18,6 +18,7 @@ pub mod model;
 pub mod predict;
 pub mod preprocess;
 pub mod regression;
+pub mod release;
 pub mod report;
 pub mod ringdown;
 pub mod shooting;

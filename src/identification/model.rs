@@ -12,9 +12,11 @@
 //! with α(t) = α₀ + α̇ t (α̇ = 0 for a ring-down) in the coupling replaced by the input magnet's
 //! true angle α + ε + χ τ_in (a drive offset ε and the quasi-static input compliance χ, with
 //! τ_in = c_sc cos α sin β + c_cs sin α cos β − c_cc sin α sin β − c_ss cos α cos β the coupling
-//! torque on the input per output inertia, −∂V/∂α of the coupling potential V) and h the magnitude of the dipole–dipole force
-//! in units of 3 μ0 m1 m2 / (4π r⁴) ([`force_shape`]). The base model is c_sc = −g, c_cs = gΔ,
-//! everything else 0.
+//! torque on the input per output inertia, −∂V/∂α of the coupling potential V), and h the
+//! magnitude of the dipole–dipole force in units of 3 μ0 m1 m2 / (4π r⁴) ([`force_shape`]). At
+//! rest (β̇ = 0) the output stays stuck while |a| ≤ η + η_L h + η_Δs, the static friction bound
+//! (`static_friction`: breakaway above the sliding friction by η_Δs ≥ 0); once released it slides
+//! with the friction above. The base model is c_sc = −g, c_cs = gΔ, everything else 0.
 
 use crate::model::{DrivenOscillator, Forces, ForcesJet};
 use std::f64::consts::TAU;
@@ -53,6 +55,9 @@ pub struct Coefficients {
     /// Growth of that offset per input turn since the start of the run, rad (lost steps). The
     /// integrator does not use it: the predictions evaluate it per window into `alpha_offset`.
     pub alpha_offset_per_turn: f64,
+    /// Breakaway (static) friction above the sliding friction, s⁻²: an output at rest stays stuck
+    /// until |a| exceeds the sliding friction plus this excess (0: static = sliding friction).
+    pub eta_static_excess: f64,
 }
 
 impl Coefficients {
@@ -215,6 +220,9 @@ impl DrivenOscillator for AugmentedGear {
         }
         j
     }
+    fn static_friction(&self, t: f64, beta: f64) -> f64 {
+        self.friction(self.alpha(t), beta) + self.c.eta_static_excess.max(0.0)
+    }
 }
 
 /// A small deterministic random generator (SplitMix64) with normal deviates, for synthetic data.
@@ -297,5 +305,48 @@ mod tests {
                 fd
             );
         }
+    }
+
+    /// With a breakaway excess the event-driven integrator keeps a stuck output at rest until
+    /// |a| reaches η + η_Δs (not η), and the output leaves with the acceleration jump η_Δs.
+    #[test]
+    fn static_friction_delays_the_release_to_the_breakaway_bound() {
+        use crate::integrator::{EventDriven, EventKind, FlowMethod, FlowOptions};
+        use crate::model::release_function;
+        let base = Coefficients::base(310.0, 0.18, 1.1, 23.0);
+        let geo = Geometry {
+            theta: 0.5,
+            phi: 0.5,
+        };
+        let release = |excess: f64| -> (f64, AugmentedGear) {
+            let sys = AugmentedGear {
+                c: Coefficients {
+                    eta_static_excess: excess,
+                    ..base
+                },
+                geo,
+                alpha0: 0.0,
+                alpha_rate: TAU * 0.5,
+            };
+            // at rest at β = 0.3 with α = 0: a = gΔ·cos 0·sin 0.3 ≈ 16.5 < η, stuck
+            let opts = FlowOptions::with_tol(1e-10).record_events(true);
+            let f = EventDriven.flow(&sys, 0.0, [0.3, 0.0], 0.5, &opts).unwrap();
+            let ev = f
+                .events
+                .iter()
+                .find(|e| matches!(e.kind, EventKind::Release { .. }))
+                .expect("a release");
+            assert_eq!(ev.beta, 0.3);
+            (ev.t, sys)
+        };
+        let (t0, s0) = release(0.0);
+        let (t1, s1) = release(11.5);
+        // the static bound of the model and the release function
+        assert!((s1.static_friction(t1, 0.3) - (23.0 + 11.5)).abs() < 1e-12);
+        assert!(release_function(&s0, t0, 0.3).abs() < 1e-9);
+        assert!(release_function(&s1, t1, 0.3).abs() < 1e-9);
+        let a1 = s1.forces(t1, 0.3, 0.0).a.abs();
+        assert!((a1 - 34.5).abs() < 1e-9, "|a| at release {a1}");
+        assert!(t1 > t0 + 1e-3, "release {t1} not later than {t0}");
     }
 }

@@ -168,6 +168,9 @@ pub struct WeakOptions {
     pub rest_sigmas: f64,
     /// Windows with this many consecutive samples at rest are skipped (stick phases).
     pub rest_run: usize,
+    /// Samples on either side of a stick phase that are skipped too: the velocity estimate
+    /// smears the stick's edges, where the friction is the static one and not ±η.
+    pub stick_margin: usize,
 }
 
 impl Default for WeakOptions {
@@ -177,6 +180,7 @@ impl Default for WeakOptions {
             stride: 3,
             rest_sigmas: 3.0,
             rest_run: 2,
+            stick_margin: 2,
         }
     }
 }
@@ -382,6 +386,25 @@ pub fn build(
         let h = opts.half_width * r.dt;
         let v_thr = opts.rest_sigmas * r.v_gain * r.sigma_beta;
         let rest: Vec<bool> = r.v.iter().map(|v| v.abs() < v_thr).collect();
+        // stick phases: runs of ≥ rest_run samples at rest, widened by stick_margin
+        let mut stuck = vec![false; n];
+        let mut i0 = 0;
+        while i0 < n {
+            if !rest[i0] {
+                i0 += 1;
+                continue;
+            }
+            let mut i1 = i0;
+            while i1 < n && rest[i1] {
+                i1 += 1;
+            }
+            if i1 - i0 >= opts.rest_run.max(1) {
+                let lo = i0.saturating_sub(opts.stick_margin);
+                let hi = (i1 + opts.stick_margin).min(n);
+                stuck[lo..hi].iter_mut().for_each(|s| *s = true);
+            }
+            i0 = i1;
+        }
         let alpha: Vec<f64> = r.alpha.iter().map(|a| a - r.alpha_rate * latency).collect();
         let mut lo = 0usize;
         let mut c = 0usize;
@@ -405,15 +428,7 @@ pub fn build(
             }
             // no large gap inside, no stick phase
             let ok_gap = (first..last).all(|i| r.t[i + 1] - r.t[i] <= 2.5 * r.dt);
-            let mut runlen = 0;
-            let mut ok_rest = true;
-            for &rs in &rest[first..=last] {
-                runlen = if rs { runlen + 1 } else { 0 };
-                if runlen >= opts.rest_run {
-                    ok_rest = false;
-                    break;
-                }
-            }
+            let ok_rest = !stuck[first..=last].iter().any(|&s| s);
             if !(ok_gap && ok_rest) {
                 c += opts.stride;
                 continue;

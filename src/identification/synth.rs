@@ -50,6 +50,10 @@ pub const SYNTH_EFFECTS: &[(&str, &str)] = &[
         "η drifts linearly over the session (runs in file order): relative change `size` from \
          the first run to the last (e.g. 0.3)",
     ),
+    (
+        "static_friction",
+        "breakaway friction η(1 + size) at rest, sliding friction η (e.g. 0.5)",
+    ),
 ];
 
 /// Options of the generator.
@@ -182,6 +186,7 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
                 "drive_steps: the size is a probability per step, in [0, 1)".into(),
             ))
         }
+        "static_friction" => extra.eta_static_excess = opts.size * eta,
         _ => {}
     }
     // coupling with the input angle offset: −g sin(α+ε) cos β + gΔ cos(α+ε) sin β
