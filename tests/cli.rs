@@ -308,3 +308,74 @@ fn bench_integrators_writes_csv_figure_and_json() {
     );
     std::fs::remove_dir_all(d).ok();
 }
+
+#[test]
+fn synth_fit_diagnose_round_trip() {
+    let dir = tmpdir("ident");
+    let set = dir.join("set");
+    let out = dir.join("out");
+    let s = set.to_str().unwrap();
+    let o = out.to_str().unwrap();
+    // a small set: 3 ring-downs, 2 driven runs of 12 turns, a static torque
+    let r = gearbif(&[
+        "synth",
+        "--effect",
+        "static_torque",
+        "--size",
+        "6",
+        "--out",
+        s,
+        "--ringdowns",
+        "3",
+        "--driven",
+        "2",
+        "--turns",
+        "12",
+        "--seed",
+        "5",
+        "--truth",
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(set.join("experiment.toml").is_file() && set.join("truth.json").is_file());
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(set.join("truth.json")).unwrap()).unwrap();
+    // fit: base parameters as JSON, g near the concealed truth (within 2%: a small set)
+    let v = json(&gearbif(&["fit", s, "--json"]));
+    let g = v["baseline"]["params"]["g"].as_f64().unwrap();
+    let g_true = truth["g"].as_f64().unwrap();
+    assert!((g - g_true).abs() < 0.02 * g_true, "g {g} vs {g_true}");
+    // diagnose: report.json with the schema, report.md, and a verdict
+    let r = gearbif(&["diagnose", s, "--out", o, "--no-heldout", "--no-figures"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let rep: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(rep["schema"], "gearbif.diagnosis/1");
+    assert!(rep["verdict"].is_string());
+    assert!(out.join("report.md").is_file());
+    // --list names every catalogued effect the generator knows
+    let l = gearbif(&["synth", "--list"]);
+    let text = String::from_utf8_lossy(&l.stdout);
+    for e in [
+        "static_friction",
+        "drive_steps",
+        "parameter_drift",
+        "input_compliance",
+    ] {
+        assert!(text.contains(e), "{e} missing from synth --list");
+    }
+    // bad input: exit 2, a message, no report
+    fails_with(&["synth", "--effect", "nope", "--out", o], "unknown effect");
+    let missing = dir.join("missing");
+    let bad_out = dir.join("bad_out");
+    fails_with(
+        &[
+            "diagnose",
+            missing.to_str().unwrap(),
+            "--out",
+            bad_out.to_str().unwrap(),
+        ],
+        "experiment.toml",
+    );
+    assert!(!bad_out.join("report.json").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,5 +1,6 @@
 //! `gearbif fit`: parameters of a recording set (ring-downs by simulation, κ(α0) → g, |Δ|, I;
-//! base model over all runs by weak-form equation-error regression).
+//! base model over all runs by weak-form equation-error regression, then refitted by simulation
+//! over short windows).
 
 use crate::identification::diagnose::{diagnose, DiagnoseOptions};
 use crate::io::recordings::read_set;
@@ -20,7 +21,7 @@ pub struct Args {
 pub fn run(a: Args) -> Result<()> {
     let set = read_set(&a.set)?;
     let opts = DiagnoseOptions {
-        max_effects: 0,
+        base_only: true,
         heldout_predictions: false,
         ..DiagnoseOptions::default()
     };
@@ -57,13 +58,27 @@ pub fn run(a: Args) -> Result<()> {
     let p = &d.report.baseline.params;
     let g = |k: &str| p.get(k).copied().unwrap_or(f64::NAN);
     println!(
-        "base model, all runs (weak-form regression, n = {:.0} rows, n_eff = {:.0}):",
+        "base model, all runs: weak-form regression (n = {:.0} rows, n_eff = {:.0}), refitted by \
+         simulation over {:.0} short windows:",
         g("n_rows"),
-        g("n_eff")
+        g("n_eff"),
+        g("simulation_refit_windows")
     );
-    for k in ["g", "delta", "zeta", "eta", "inertia"] {
-        println!("  {k:>8} = {:.6} ± {:.6}", g(k), g(&format!("{k}_err")));
+    for k in ["g", "delta", "zeta", "eta"] {
+        println!(
+            "  {k:>8} = {:.6} ± {:.6}   (weak form {:.6} ± {:.6})",
+            g(k),
+            g(&format!("{k}_err")),
+            g(&format!("{k}_weak_form")),
+            g(&format!("{k}_weak_form_err"))
+        );
     }
+    println!(
+        "  {:>8} = {:.4e} ± {:.2e}",
+        "inertia",
+        g("inertia"),
+        g("inertia_err")
+    );
     println!(
         "  eq.-error chi2/dof = {:.3}; short-horizon rms = {:.4} rad",
         g("eq_chi2_per_dof"),

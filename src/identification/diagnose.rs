@@ -48,6 +48,9 @@ pub struct DiagnoseOptions {
     pub simulation_refit: bool,
     /// Options of that refit.
     pub shooting: ShootingOptions,
+    /// Fit the base model only (`gearbif fit`): no effect selection, no dictionary search, no
+    /// static-friction profile.
+    pub base_only: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -62,6 +65,7 @@ impl Default for DiagnoseOptions {
             min_chi2_gain_per_row: 0.005,
             simulation_refit: true,
             shooting: ShootingOptions::default(),
+            base_only: false,
         }
     }
 }
@@ -597,7 +601,8 @@ pub fn diagnose(
     }
     let mut accepted: Vec<Accepted> = Vec::new();
     let mut tried_latency = false;
-    for round in 0..opts.max_effects {
+    let rounds = if opts.base_only { 0 } else { opts.max_effects };
+    for round in 0..rounds {
         progress(&format!("selecting effects, round {}", round + 1));
         let mut best: Option<Candidate> = None;
         for (ei, e) in effects.iter().enumerate() {
@@ -681,7 +686,7 @@ pub fn diagnose(
     let dict_cv0 = current_cv;
     let dict_rms0 = current.rms;
     let mut dict_dbic = 0.0;
-    for _ in 0..3 {
+    for _ in 0..if opts.base_only { 0 } else { 3 } {
         let mut best: Option<(f64, Term, LinFit, f64)> = None;
         for &t in &dict {
             if dict_terms.contains(&t) {
@@ -1091,7 +1096,7 @@ pub fn diagnose(
     // ---- static friction (breakaway above the sliding friction): no regression term (the weak
     // form skips stick phases); profiled over the stick phases by simulation with the final model,
     // and ordered with the other findings by its ΔBIC-like evidence
-    {
+    if !opts.base_only {
         use super::release::{fit_static_friction, ReleaseOptions};
         progress("static friction (stick phases)");
         let sf = fit_static_friction(
