@@ -946,7 +946,38 @@ pub fn diagnose(
         .get(&Term::SinACosB.name())
         .map(|v| -v.0)
         .unwrap_or(g);
+    // confirmation by the refit by simulation: an effect the weak form accepted stays a finding
+    // only when the refit finds one of its coefficients ≥ 3σ from zero, with the physical sign
+    // where the physics fixes it (drag, load-dependent friction, compliance are ≥ 0)
+    let mut rejected = Vec::new();
+    let confirm = |a_terms: &[Term], id: &str| -> Option<String> {
+        sim_final.as_ref()?;
+        if id == "sensor_latency" {
+            let (tau, err) = sim_final.as_ref()?.latency?;
+            return (tau.abs() < 3.0 * err).then(|| format!("τ = {tau:.2e} ± {err:.1e} s"));
+        }
+        let mut best_z: f64 = 0.0;
+        for t in a_terms {
+            let (v, e) = *final_map.get(&t.name())?;
+            let z = v / e.max(1e-300);
+            let physical = match t {
+                Term::Quad | Term::Corot | Term::LoadFric | Term::Compliance => z,
+                _ => z.abs(),
+            };
+            best_z = best_z.max(physical);
+        }
+        (best_z < 3.0).then(|| {
+            format!("largest coefficient {best_z:.1} σ (with its physical sign) in the refit by simulation")
+        })
+    };
     for (k, a) in accepted.iter().enumerate() {
+        if a.effect.id != "unexplained" {
+            if let Some(why) = confirm(&a.effect.terms, a.effect.id) {
+                rejected.push(json!({"effect": a.effect.id, "reason": why,
+                                     "delta_bic_weak_form": a.dbic}));
+                continue;
+            }
+        }
         let mut p = if a.effect.id == "sensor_latency" {
             let (tau, tau_err) = sim_final
                 .as_ref()
@@ -1217,6 +1248,7 @@ pub fn diagnose(
         "outliers_rejected": runs.iter().map(|r| r.outliers).collect::<Vec<_>>(),
         "augmented_coefficients": final_map.iter().map(|(k, v)| (k.clone(), json!([v.0, v.1]))).collect::<BTreeMap<_, _>>(),
         "latency_s": [latency, latency_err],
+        "findings_not_confirmed": rejected,
         "outlier_handling": "rejection: leave-one-out local cubic prediction, 6 robust σ; Huber weights (2.5 σ) in the regression",
     });
     // fingerprints for figures

@@ -36,7 +36,7 @@ pub struct ShootingOptions {
 impl Default for ShootingOptions {
     fn default() -> Self {
         Self {
-            max_windows: 160,
+            max_windows: 240,
             patience: 3,
         }
     }
