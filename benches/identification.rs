@@ -1,12 +1,14 @@
 //! Fitting kernels of the identification: the weak-form regression rows of one synthetic driven
 //! run, one ring-down fit by simulation and Levenberg–Marquardt, and the whole diagnosis of a small
-//! synthetic set (4 ring-downs, 2 driven runs of 15 turns, no held-out refits).
+//! synthetic set (4 ring-downs, 2 driven runs of 15 turns, no held-out refits), and the refit of
+//! the base model by simulation (multiple shooting) over all windows of that set.
 use criterion::{criterion_group, criterion_main, Criterion};
 use gearbif::identification::diagnose::{diagnose, DiagnoseOptions};
 use gearbif::identification::model::Geometry;
 use gearbif::identification::preprocess::clean;
 use gearbif::identification::regression::{build, fit, WeakOptions, BASE_TERMS};
 use gearbif::identification::ringdown::fit_ringdown;
+use gearbif::identification::shooting::{refit_by_simulation, ShootingOptions};
 use gearbif::identification::synth::{synthesize, SynthOptions};
 use gearbif::io::recordings::RunKind;
 
@@ -53,6 +55,20 @@ fn bench(c: &mut Criterion) {
     grp.bench_function(format!("ring-down fit ({} samples)", cr.t.len()), |b| {
         b.iter(|| fit_ringdown(&cr, &rd.file, alpha0, 1.1, 23.1).unwrap())
     });
+    // refit by simulation of the base model over the windows of all runs of the set
+    let mut all: Vec<_> = set.runs.iter().map(|r| clean(r, None)).collect();
+    let sig = all.iter().map(|r| r.sigma_beta).fold(f64::NAN, f64::min);
+    all.iter_mut().for_each(|r| r.sigma_camera = sig);
+    let d = build(&all, &geo, &BASE_TERMS, &WeakOptions::default(), 0.0);
+    let f = fit(&d, &(0..BASE_TERMS.len()).collect::<Vec<_>>()).unwrap();
+    let so = ShootingOptions::default();
+    let w = refit_by_simulation(&d, &f, &all, &geo, 0.0, false, &so)
+        .unwrap()
+        .windows;
+    grp.bench_function(
+        format!("refit by simulation, base model ({w} windows)"),
+        |b| b.iter(|| refit_by_simulation(&d, &f, &all, &geo, 0.0, false, &so).unwrap()),
+    );
     let dopts = DiagnoseOptions {
         heldout_predictions: false,
         ..DiagnoseOptions::default()
