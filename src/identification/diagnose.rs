@@ -8,7 +8,7 @@
 //! level and the verdict is `none`.
 
 use super::catalog::{catalog, dictionary, effect_params, same_slot, Effect};
-use super::model::{Coefficients, Geometry};
+use super::model::{Coefficients, ExtraTerm, Geometry};
 use super::predict::{predict, Prediction};
 use super::preprocess::{clean, CleanRun};
 use super::regression::{
@@ -97,8 +97,9 @@ pub struct Diagnosis {
     pub fingerprint: Vec<(f64, f64, f64, f64, f64)>,
 }
 
-/// Converts fitted columns to model coefficients (dictionary terms have no simulation form and
-/// are ignored here; drift terms need the run: see [`coefficients_for_run`]).
+/// Converts fitted columns to model coefficients (dictionary terms go to the
+/// [`Coefficients::extra`] slots, at most [`super::model::MAX_EXTRA`]; drift terms need the run:
+/// see [`coefficients_for_run`]).
 pub fn to_coefficients(d: &Design, fitr: &LinFit, coef: &[f64]) -> Coefficients {
     let mut c = Coefficients::default();
     let (mut compliance, mut offset, mut offset_rate) = (0.0, 0.0, 0.0);
@@ -119,7 +120,22 @@ pub fn to_coefficients(d: &Design, fitr: &LinFit, coef: &[f64]) -> Coefficients 
             Term::Compliance => compliance = v,
             Term::DrivenOffset => offset = v,
             Term::DrivenOffsetRate => offset_rate = v,
-            _ => {}
+            _ => {
+                let extra = match d.terms[col] {
+                    Term::Cos(k, l) => Some(ExtraTerm::Trig { k, l, sin: false }),
+                    Term::Sin(k, l) => Some(ExtraTerm::Trig { k, l, sin: true }),
+                    Term::VCosB => Some(ExtraTerm::VelCos),
+                    Term::VSinB => Some(ExtraTerm::VelSin),
+                    Term::SCosB => Some(ExtraTerm::FricCos),
+                    Term::SSinB => Some(ExtraTerm::FricSin),
+                    _ => None,
+                };
+                if let (Some(e), Some(slot)) =
+                    (extra, c.extra.iter_mut().find(|s| s.0 == ExtraTerm::Unused))
+                {
+                    *slot = (e, v);
+                }
+            }
         }
     }
     // coefficients χg², −gε, −g·(ε per turn) (regression.rs)
@@ -870,6 +886,22 @@ pub fn diagnose(
             params.insert("simulation_refit_windows".into(), sb.windows as f64);
         }
     }
+    // the model with the dictionary terms (an `unexplained` finding), refitted the same way
+    let sim_dict: Option<SimRefit> =
+        if opts.simulation_refit && accepted.iter().any(|a| a.effect.id == "unexplained") {
+            progress("refit of the model with the dictionary terms by simulation");
+            refit_by_simulation(
+                &design,
+                &dict_fit,
+                &runs,
+                &geo,
+                latency,
+                latency_accepted,
+                &opts.shooting,
+            )
+        } else {
+            None
+        };
     let base_sim_coef = sim_base
         .as_ref()
         .map(|s| s.coef.clone())
@@ -886,7 +918,14 @@ pub fn diagnose(
     for (k, a) in accepted.iter().enumerate() {
         progress(&format!("predictions with {}", a.effect.id));
         if a.effect.id == "unexplained" {
-            stage_rms.push((None, None));
+            match &sim_dict {
+                Some(sd) => {
+                    let lat = sd.latency.map(|l| l.0).unwrap_or(latency);
+                    let (p, h) = pred_stage(&design, &dict_fit, &sd.coef, lat);
+                    stage_rms.push((Some(pooled(&p)), pooled_held(&h, &p)));
+                }
+                None => stage_rms.push((None, None)),
+            }
             continue;
         }
         let refit = if Some(k) == final_stage {
@@ -939,7 +978,15 @@ pub fn diagnose(
             .collect(),
         None => weak_map.clone(),
     };
-    let dict_map = coef_map(&dict_fit, &design);
+    let dict_map: BTreeMap<String, (f64, f64)> = match &sim_dict {
+        Some(sd) => dict_fit
+            .cols
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| (design.terms[c].name(), (sd.coef[k], sd.err[k])))
+            .collect(),
+        None => coef_map(&dict_fit, &design),
+    };
     let mut findings = Vec::new();
     let final_eta = final_map.get(&Term::Eta.name()).map(|v| v.0).unwrap_or(eta);
     let final_g = final_map
@@ -975,6 +1022,21 @@ pub fn diagnose(
             if let Some(why) = confirm(&a.effect.terms, a.effect.id) {
                 rejected.push(json!({"effect": a.effect.id, "reason": why,
                                      "delta_bic_weak_form": a.dbic}));
+                continue;
+            }
+        } else if sim_dict.is_some() {
+            // dictionary terms: confirmed when one is ≥ 3σ from zero in the refit
+            let z = a
+                .dictionary_terms
+                .iter()
+                .filter_map(|t| dict_map.get(&t.name()))
+                .map(|&(v, e)| (v / e.max(1e-300)).abs())
+                .fold(0.0, f64::max);
+            if z < 3.0 {
+                rejected.push(json!({"effect": a.effect.id,
+                    "terms": a.dictionary_terms.iter().map(|t| t.name()).collect::<Vec<_>>(),
+                    "reason": format!("largest coefficient {z:.1} σ in the refit by simulation"),
+                    "delta_bic_weak_form": a.dbic}));
                 continue;
             }
         }

@@ -21,6 +21,35 @@
 use crate::model::{DrivenOscillator, Forces, ForcesJet};
 use std::f64::consts::TAU;
 
+/// A term of the sparse search beyond the catalog (an `unexplained` finding), so that it can be
+/// simulated and refitted like the catalogued ones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ExtraTerm {
+    /// Unused slot.
+    #[default]
+    Unused,
+    /// cos(kα + lβ), or sin(kα + lβ) when `sin`.
+    Trig {
+        /// Harmonic of α.
+        k: i8,
+        /// Harmonic of β.
+        l: i8,
+        /// Sine instead of cosine.
+        sin: bool,
+    },
+    /// −β̇ cos β.
+    VelCos,
+    /// −β̇ sin β.
+    VelSin,
+    /// Dry friction modulated by cos β (the term −sgn β̇ cos β).
+    FricCos,
+    /// Dry friction modulated by sin β.
+    FricSin,
+}
+
+/// Slots for [`ExtraTerm`]s in [`Coefficients::extra`] (the field is written with the literal 4).
+pub const MAX_EXTRA: usize = 4;
+
 /// Coefficients of the augmented model (per unit inertia, SI units, angles in rad).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Coefficients {
@@ -58,6 +87,8 @@ pub struct Coefficients {
     /// Breakaway (static) friction above the sliding friction, s⁻²: an output at rest stays stuck
     /// until |a| exceeds the sliding friction plus this excess (0: static = sliding friction).
     pub eta_static_excess: f64,
+    /// Terms of the sparse search (`unexplained`) with their coefficients.
+    pub extra: [(ExtraTerm, f64); 4],
 }
 
 impl Coefficients {
@@ -182,13 +213,55 @@ impl AugmentedGear {
             - c.st_b * sb;
         let a_omega = -c.zeta - 2.0 * c.quad * omega.abs() - c.corot;
         let a_alpha = c.c_sc * ca * cb - c.c_cs * sa * sb - c.c_cc * sa * cb + c.c_ss * ca * sb;
+        let (mut a, mut a_beta, mut a_omega, mut a_alpha) = (a, a_beta, a_omega, a_alpha);
+        for &(term, th) in &c.extra {
+            if th == 0.0 {
+                continue;
+            }
+            match term {
+                ExtraTerm::Trig { k, l, sin } => {
+                    let (sx, cx) = (k as f64 * alpha + l as f64 * beta).sin_cos();
+                    let (v, d) = if sin { (sx, cx) } else { (cx, -sx) };
+                    a += th * v;
+                    a_beta += th * l as f64 * d;
+                    a_alpha += th * k as f64 * d;
+                }
+                ExtraTerm::VelCos => {
+                    a -= th * omega * cb;
+                    a_beta += th * omega * sb;
+                    a_omega -= th * cb;
+                }
+                ExtraTerm::VelSin => {
+                    a -= th * omega * sb;
+                    a_beta -= th * omega * cb;
+                    a_omega -= th * sb;
+                }
+                ExtraTerm::FricCos | ExtraTerm::FricSin | ExtraTerm::Unused => {}
+            }
+        }
         (a, a_beta, a_omega, a_alpha)
     }
     fn friction(&self, alpha: f64, beta: f64) -> f64 {
-        if self.c.eta_load == 0.0 {
-            return self.c.eta.max(0.0);
+        let mut r = self.c.eta;
+        if self.c.eta_load != 0.0 {
+            r += self.c.eta_load * force_shape(&self.geo, alpha, beta);
         }
-        (self.c.eta + self.c.eta_load * force_shape(&self.geo, alpha, beta)).max(0.0)
+        for &(term, th) in &self.c.extra {
+            match term {
+                ExtraTerm::FricCos => r += th * beta.cos(),
+                ExtraTerm::FricSin => r += th * beta.sin(),
+                _ => {}
+            }
+        }
+        r.max(0.0)
+    }
+    fn friction_varies(&self) -> bool {
+        self.c.eta_load != 0.0
+            || self
+                .c
+                .extra
+                .iter()
+                .any(|&(t, th)| th != 0.0 && matches!(t, ExtraTerm::FricCos | ExtraTerm::FricSin))
     }
 }
 
@@ -214,7 +287,7 @@ impl DrivenOscillator for AugmentedGear {
         let mut j = ForcesJet::new(a, r);
         j.a_beta = a_beta;
         j.a_omega = a_omega;
-        if self.c.eta_load != 0.0 {
+        if self.friction_varies() {
             let h = 1e-6;
             j.r_beta = (self.friction(al, beta + h) - self.friction(al, beta - h)) / (2.0 * h);
         }
@@ -348,5 +421,68 @@ mod tests {
         let a1 = s1.forces(t1, 0.3, 0.0).a.abs();
         assert!((a1 - 34.5).abs() < 1e-9, "|a| at release {a1}");
         assert!(t1 > t0 + 1e-3, "release {t1} not later than {t0}");
+    }
+
+    #[test]
+    fn extra_terms_have_consistent_jacobians() {
+        let mut c = Coefficients::base(300.0, 0.2, 1.0, 20.0);
+        c.extra = [
+            (
+                ExtraTerm::Trig {
+                    k: 2,
+                    l: -1,
+                    sin: true,
+                },
+                3.0,
+            ),
+            (
+                ExtraTerm::Trig {
+                    k: 0,
+                    l: 2,
+                    sin: false,
+                },
+                -2.0,
+            ),
+            (ExtraTerm::VelCos, 0.4),
+            (ExtraTerm::VelSin, -0.3),
+        ];
+        let sys = AugmentedGear {
+            c,
+            geo: Geometry {
+                theta: 0.5,
+                phi: 0.5,
+            },
+            alpha0: 0.3,
+            alpha_rate: 4.0,
+        };
+        for k in 0..10 {
+            let (t, b, w) = (0.17 * k as f64, 0.9 * k as f64 - 3.0, 2.0 - 0.5 * k as f64);
+            let j = sys.forces_jet(t, b, w, false);
+            let h = 1e-6;
+            let fb = (sys.forces(t, b + h, w).a - sys.forces(t, b - h, w).a) / (2.0 * h);
+            let fw = (sys.forces(t, b, w + h).a - sys.forces(t, b, w - h).a) / (2.0 * h);
+            assert!(
+                (j.a_beta - fb).abs() < 1e-6 * (1.0 + fb.abs()),
+                "{} {fb}",
+                j.a_beta
+            );
+            assert!(
+                (j.a_omega - fw).abs() < 1e-6 * (1.0 + fw.abs()),
+                "{} {fw}",
+                j.a_omega
+            );
+        }
+        // friction modulated by cos β: r = η + θ cos β, with its β-derivative
+        let mut c2 = c;
+        c2.extra = [
+            (ExtraTerm::FricCos, 2.0),
+            Default::default(),
+            Default::default(),
+            Default::default(),
+        ];
+        let s2 = AugmentedGear { c: c2, ..sys };
+        let j = s2.forces_jet(0.1, 0.7, 1.0, false);
+        assert!((j.r - (20.0 + 2.0 * 0.7f64.cos())).abs() < 1e-12);
+        assert!((j.r_beta + 2.0 * 0.7f64.sin()).abs() < 1e-6);
     }
 }

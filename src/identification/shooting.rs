@@ -12,12 +12,13 @@
 //! correct marginal covariance of θ. The residuals are close to white camera noise, so the
 //! covariance needs only a small correction for their autocorrelation.
 //!
-//! θ is the coefficient vector of a weak-form fit ([`LinFit`]; every term with a simulation form,
-//! mapped per run by [`coefficients_for_run`]) and optionally the sensor latency.
+//! θ is the coefficient vector of a weak-form fit ([`LinFit`]; every term, mapped per run by
+//! [`coefficients_for_run`], dictionary terms through [`super::model::ExtraTerm`]) and optionally
+//! the sensor latency.
 
 use super::diagnose::coefficients_for_run;
 use super::lm::{least_squares, least_squares_tol, LsqFit};
-use super::model::Geometry;
+use super::model::{Geometry, MAX_EXTRA};
 use super::predict::{prediction_windows, simulate_at, window_system};
 use super::preprocess::CleanRun;
 use super::regression::{autocorr_time, Design, LinFit, Term};
@@ -72,14 +73,24 @@ struct Window {
     keep: Vec<bool>,
 }
 
-/// Whether every column of `f` has a simulation form (dictionary terms have none).
+/// Whether every column of `f` has a simulation form: dictionary terms do, up to
+/// [`MAX_EXTRA`] of them.
 pub fn simulable(d: &Design, f: &LinFit) -> bool {
-    f.cols.iter().all(|&c| {
-        !matches!(
-            d.terms[c],
-            Term::Cos(..) | Term::Sin(..) | Term::VCosB | Term::VSinB | Term::SCosB | Term::SSinB
-        )
-    })
+    f.cols
+        .iter()
+        .filter(|&&c| {
+            matches!(
+                d.terms[c],
+                Term::Cos(..)
+                    | Term::Sin(..)
+                    | Term::VCosB
+                    | Term::VSinB
+                    | Term::SCosB
+                    | Term::SSinB
+            )
+        })
+        .count()
+        <= MAX_EXTRA
 }
 
 /// Fits a window's initial state with the model fixed, from `guess` and, when that fit is poor,
