@@ -224,10 +224,13 @@ fn load_dependent_friction_is_named_and_sized() {
         "{:#?}",
         d.report.findings
     );
-    // KNOWN WEAKNESS: k comes out biased high by 10–25% (2–4 reported σ) on these sets; the
-    // cause is not found yet. Checked here: named first, and k within 30%.
-    let k = param(&d, "k");
-    assert!((k - 0.5).abs() < 0.15, "k = {k}");
+    // the weak form alone put k 10–25% high (2–4 of its σ) on these sets; the refit by
+    // simulation does not have its quadrature error
+    within(param(&d, "k"), param(&d, "k_err"), 0.5, 3.0);
+    let weak = d.report.findings[0].evidence["weak_form_params"]["k"]
+        .as_f64()
+        .unwrap();
+    assert!(weak.is_finite());
 }
 
 #[test]
