@@ -1162,6 +1162,16 @@ pub fn diagnose(
                        "converged": sf.converged, "inflation": sf.inflation}),
             );
         }
+        if a.effect.id == "parameter_drift" {
+            // the drifting parameter run by run (the others held at the fitted values, no drift
+            // term): a clock-free view of the drift
+            if let Some(Term::Drift(dp, _)) = a.effect.terms.first().copied() {
+                ev.insert(
+                    "per_run".to_string(),
+                    json!(per_run_parameter(&design, &current, dp, &files)),
+                );
+            }
+        }
         if a.effect.id == "unexplained" {
             ev.insert(
                 "terms".to_string(),
@@ -1347,6 +1357,65 @@ pub fn diagnose(
         aug_pred,
         fingerprint,
     })
+}
+
+/// The base parameter `p` fitted run by run on the weak-form rows with every other column of
+/// `f` held at its fitted value and the drift columns dropped: one weighted 1-D regression per
+/// run, its σ inflated by n/n_eff. Returns {file, value, err} per run with rows.
+fn per_run_parameter(
+    d: &Design,
+    f: &LinFit,
+    p: DriftParam,
+    files: &[String],
+) -> Vec<serde_json::Value> {
+    let target = match p {
+        DriftParam::Zeta => Term::Zeta,
+        DriftParam::Eta => Term::Eta,
+        DriftParam::Coupling => Term::SinACosB,
+    };
+    let Some(kt) = f.cols.iter().position(|&c| d.terms[c] == target) else {
+        return vec![];
+    };
+    let delta = match (
+        f.cols.iter().position(|&c| d.terms[c] == Term::CosASinB),
+        f.coef.get(kt),
+    ) {
+        (Some(kc), Some(&v)) if v != 0.0 => -f.coef[kc] / v,
+        _ => 0.0,
+    };
+    let cs_col = d.col(Term::CosASinB);
+    let infl = f.n as f64 / f.n_eff.max(1.0);
+    let mut out = Vec::new();
+    for (r, file) in files.iter().enumerate() {
+        let (mut sxx, mut sxy, mut n) = (0.0, 0.0, 0usize);
+        for i in (0..d.rows()).filter(|&i| d.run[i] == r) {
+            // column of the parameter: for g the whole base coupling −sin α cos β + Δ cos α sin β
+            let x = match p {
+                DriftParam::Coupling => {
+                    -d.at(i, f.cols[kt]) + delta * cs_col.map(|c| d.at(i, c)).unwrap_or(0.0)
+                }
+                _ => d.at(i, f.cols[kt]),
+            };
+            let mut y = d.y[i];
+            for (k, &c) in f.cols.iter().enumerate() {
+                let skip = matches!(d.terms[c], Term::Drift(..))
+                    || k == kt
+                    || (p == DriftParam::Coupling && Some(c) == cs_col);
+                if !skip {
+                    y -= f.coef[k] * d.at(i, c);
+                }
+            }
+            let w = f.w[i];
+            sxx += w * x * x;
+            sxy += w * x * y;
+            n += 1;
+        }
+        if n > 2 && sxx > 0.0 {
+            out.push(json!({"file": file, "value": sxy / sxx,
+                            "err": (infl / sxx).sqrt()}));
+        }
+    }
+    out
 }
 
 /// Profiles the BIC over a sensor latency τ (driven rows shift α by −α̇τ). Returns
