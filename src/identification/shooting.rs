@@ -93,6 +93,26 @@ pub fn simulable(d: &Design, f: &LinFit) -> bool {
         <= MAX_EXTRA
 }
 
+/// (β_sim − β)/σ of a window simulated from the state `x0` at its first sample; 0 on masked
+/// samples.
+fn window_residuals(
+    sys: &super::model::AugmentedGear,
+    t: &[f64],
+    b: &[f64],
+    keep: &[bool],
+    sigma: f64,
+    x0: [f64; 2],
+) -> Option<Vec<f64>> {
+    let s = simulate_at(sys, t[0], x0, t)?;
+    Some(
+        s.iter()
+            .zip(b)
+            .zip(keep)
+            .map(|((s, m), &k)| if k { (s - m) / sigma } else { 0.0 })
+            .collect(),
+    )
+}
+
 /// Fits a window's initial state with the model fixed, from `guess` and, when that fit is poor,
 /// from finite-difference and at-rest velocities. Residuals are (β_sim − β)/σ on kept samples.
 fn fit_state(
@@ -104,16 +124,7 @@ fn fit_state(
     guess: [f64; 2],
     multi_start: bool,
 ) -> Option<LsqFit> {
-    let f = |p: &[f64]| -> Option<Vec<f64>> {
-        let s = simulate_at(sys, t[0], [p[0], p[1]], t)?;
-        Some(
-            s.iter()
-                .zip(b)
-                .zip(keep)
-                .map(|((s, m), &k)| if k { (s - m) / sigma } else { 0.0 })
-                .collect(),
-        )
-    };
+    let f = |p: &[f64]| window_residuals(sys, t, b, keep, sigma, [p[0], p[1]]);
     let mut fit = least_squares(&f, &guess, &[1e-7, 1e-6], 20);
     let kept = keep.iter().filter(|&&k| k).count().max(1) as f64;
     let poor = |x: &Option<LsqFit>| x.as_ref().map(|f| f.rss / kept > 4.0).unwrap_or(true);
@@ -145,16 +156,7 @@ fn project_state(
     sigma: f64,
     x: [f64; 2],
 ) -> Option<(Vec<f64>, [f64; 2])> {
-    let resid = |p: [f64; 2]| -> Option<Vec<f64>> {
-        let s = simulate_at(sys, t[0], p, t)?;
-        Some(
-            s.iter()
-                .zip(b)
-                .zip(keep)
-                .map(|((s, m), &k)| if k { (s - m) / sigma } else { 0.0 })
-                .collect(),
-        )
-    };
+    let resid = |p: [f64; 2]| window_residuals(sys, t, b, keep, sigma, p);
     let rss = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
     let gn = || -> Option<(Vec<f64>, [f64; 2])> {
         let mut x = x;
