@@ -759,11 +759,7 @@ pub fn diagnose(
     // ---- predictions (base, then each accepted stage)
     progress("short-horizon predictions");
     let stage_fit = |terms_s: &[Term], lat: f64| -> Option<(Design, LinFit)> {
-        let d = if lat == 0.0 {
-            build(&runs, &geo, &terms, &opts.weak, 0.0)
-        } else {
-            build(&runs, &geo, &terms, &opts.weak, lat)
-        };
+        let d = build(&runs, &geo, &terms, &opts.weak, lat);
         let f = fit(&d, &cols_of(&d, terms_s))?;
         Some((d, f))
     };
