@@ -345,21 +345,13 @@ pub fn diagnose(
     let (zeta, zeta_e) = base_fit.get(base_cols[0]).unwrap_or((f64::NAN, f64::NAN));
     let (eta, eta_e) = base_fit.get(base_cols[1]).unwrap_or((f64::NAN, f64::NAN));
     let delta = cs / g;
-    let delta_e = ((cse / g).powi(2) + (cs * ge / (g * g)).powi(2)).sqrt();
-    let mut params = BTreeMap::new();
-    params.insert("g".to_string(), g);
-    params.insert("g_err".to_string(), ge);
-    params.insert("delta".to_string(), delta);
-    params.insert("delta_err".to_string(), delta_e);
-    params.insert("zeta".to_string(), zeta);
-    params.insert("zeta_err".to_string(), zeta_e);
-    params.insert("eta".to_string(), eta);
-    params.insert("eta_err".to_string(), eta_e);
-    let c = setup.coupling();
-    params.insert("inertia".to_string(), c / g);
-    params.insert(
-        "inertia_err".to_string(),
-        c / g * ((ge / g).powi(2) + setup.coupling_rel_tol().powi(2)).sqrt(),
+    let mut params = base_params(
+        (zeta, zeta_e),
+        (eta, eta_e),
+        (-g, ge),
+        (cs, cse),
+        setup.coupling(),
+        setup.coupling_rel_tol(),
     );
 
     // ---- geometry refined from the fitted Δ (a common shift of both shaft angles), used by the
@@ -826,18 +818,22 @@ pub fn diagnose(
     } else {
         None
     };
-    let final_stage = accepted.iter().rposition(|a| a.effect.id != "unexplained");
-    let sim_final: Option<SimRefit> = if opts.simulation_refit && final_stage.is_some() {
-        progress("refit of the augmented model by simulation (multiple shooting)");
+    // a fit on the final design (at the accepted latency, refitted with it)
+    let refit_with_latency = |f: &LinFit| {
         refit_by_simulation(
             &design,
-            &current,
+            f,
             &runs,
             &geo,
             latency,
             latency_accepted,
             &opts.shooting,
         )
+    };
+    let final_stage = accepted.iter().rposition(|a| a.effect.id != "unexplained");
+    let sim_final: Option<SimRefit> = if opts.simulation_refit && final_stage.is_some() {
+        progress("refit of the augmented model by simulation (multiple shooting)");
+        refit_with_latency(&current)
     } else {
         None
     };
@@ -862,23 +858,14 @@ pub fn diagnose(
             at(Term::SinACosB),
             at(Term::CosASinB),
         ) {
-            let (gs, gse) = (-sc.0, sc.1);
-            params.insert("g".into(), gs);
-            params.insert("g_err".into(), gse);
-            params.insert("delta".into(), cs.0 / gs);
-            params.insert(
-                "delta_err".into(),
-                ((cs.1 / gs).powi(2) + (cs.0 * gse / (gs * gs)).powi(2)).sqrt(),
-            );
-            params.insert("zeta".into(), z.0);
-            params.insert("zeta_err".into(), z.1);
-            params.insert("eta".into(), e.0);
-            params.insert("eta_err".into(), e.1);
-            params.insert("inertia".into(), c / gs);
-            params.insert(
-                "inertia_err".into(),
-                c / gs * ((gse / gs).powi(2) + setup.coupling_rel_tol().powi(2)).sqrt(),
-            );
+            params.extend(base_params(
+                z,
+                e,
+                sc,
+                cs,
+                setup.coupling(),
+                setup.coupling_rel_tol(),
+            ));
             params.insert("simulation_refit_windows".into(), sb.windows as f64);
         }
     }
@@ -886,15 +873,7 @@ pub fn diagnose(
     let sim_dict: Option<SimRefit> =
         if opts.simulation_refit && accepted.iter().any(|a| a.effect.id == "unexplained") {
             progress("refit of the model with the dictionary terms by simulation");
-            refit_by_simulation(
-                &design,
-                &dict_fit,
-                &runs,
-                &geo,
-                latency,
-                latency_accepted,
-                &opts.shooting,
-            )
+            refit_with_latency(&dict_fit)
         } else {
             None
         };
@@ -1353,6 +1332,41 @@ pub fn diagnose(
         aug_pred,
         fingerprint,
     })
+}
+
+/// The baseline table from the base coefficients (value, 1σ) of ζ, η, c_sc = −g and c_cs = gΔ:
+/// g, Δ, ζ, η and I = c/g (σ_I with the set-up's relative tolerance on c), each with `_err`.
+fn base_params(
+    zeta: (f64, f64),
+    eta: (f64, f64),
+    c_sc: (f64, f64),
+    c_cs: (f64, f64),
+    c: f64,
+    c_rel_tol: f64,
+) -> BTreeMap<String, f64> {
+    let (g, ge) = (-c_sc.0, c_sc.1);
+    let (cs, cse) = c_cs;
+    [
+        ("g", g),
+        ("g_err", ge),
+        ("delta", cs / g),
+        (
+            "delta_err",
+            ((cse / g).powi(2) + (cs * ge / (g * g)).powi(2)).sqrt(),
+        ),
+        ("zeta", zeta.0),
+        ("zeta_err", zeta.1),
+        ("eta", eta.0),
+        ("eta_err", eta.1),
+        ("inertia", c / g),
+        (
+            "inertia_err",
+            c / g * ((ge / g).powi(2) + c_rel_tol.powi(2)).sqrt(),
+        ),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
 }
 
 /// The base parameter `p` fitted run by run on the weak-form rows with every other column of

@@ -346,12 +346,9 @@ mod tests {
         }
     }
 
-    #[test]
-    fn compliant_input_solves_its_equilibrium_and_the_jacobian_matches() {
-        let mut c = Coefficients::base(300.0, 0.2, 1.0, 20.0);
-        c.compliance = 2f64.to_radians() / 300.0;
-        c.c_cc = 7.0;
-        let sys = AugmentedGear {
+    /// A driven test system: Θ = Φ = 0.5 rad, α = 0.3 + 4t.
+    fn driven_test_gear(c: Coefficients) -> AugmentedGear {
+        AugmentedGear {
             c,
             geo: Geometry {
                 theta: 0.5,
@@ -359,7 +356,15 @@ mod tests {
             },
             alpha0: 0.3,
             alpha_rate: 4.0,
-        };
+        }
+    }
+
+    #[test]
+    fn compliant_input_solves_its_equilibrium_and_the_jacobian_matches() {
+        let mut c = Coefficients::base(300.0, 0.2, 1.0, 20.0);
+        c.compliance = 2f64.to_radians() / 300.0;
+        c.c_cc = 7.0;
+        let sys = driven_test_gear(c);
         for k in 0..12 {
             let (t, b) = (0.13 * k as f64, 0.7 * k as f64 - 2.0);
             let al = sys.alpha(t);
@@ -446,15 +451,7 @@ mod tests {
             (ExtraTerm::VelCos, 0.4),
             (ExtraTerm::VelSin, -0.3),
         ];
-        let sys = AugmentedGear {
-            c,
-            geo: Geometry {
-                theta: 0.5,
-                phi: 0.5,
-            },
-            alpha0: 0.3,
-            alpha_rate: 4.0,
-        };
+        let sys = driven_test_gear(c);
         for k in 0..10 {
             let (t, b, w) = (0.17 * k as f64, 0.9 * k as f64 - 3.0, 2.0 - 0.5 * k as f64);
             let j = sys.forces_jet(t, b, w, false);

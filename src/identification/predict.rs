@@ -4,7 +4,7 @@
 //! rms of β_measured − β_simulated (rad) measures how well the model predicts the motion over a
 //! horizon short enough for chaos not to matter; with a perfect model it is the camera noise.
 
-use super::lm::least_squares;
+use super::lm::{least_squares, LsqFit};
 use super::model::{AugmentedGear, Coefficients, Geometry};
 use super::preprocess::CleanRun;
 use crate::integrator::{EventDriven, FlowMethod, FlowOptions};
@@ -78,11 +78,7 @@ pub fn window_system(
 }
 
 /// β of `sys` from the state `x0` at `t0`, at `times` (exact Filippov flow, tolerance 1e-8).
-pub fn simulate_at(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<f64>> {
-    sim(sys, t0, x0, times)
-}
-
-fn sim(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<f64>> {
+pub fn simulate(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<f64>> {
     let t1 = *times.last()?;
     let opts = FlowOptions::with_tol(1e-8).samples(times.to_vec());
     let f = EventDriven.flow(sys, t0, x0, t1, &opts).ok()?;
@@ -90,6 +86,57 @@ fn sim(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<
         return None;
     }
     Some(f.samples.iter().map(|s| s.beta).collect())
+}
+
+/// (β_sim − β)/σ of a window simulated from the state `x0` at its first sample; 0 on masked
+/// samples.
+pub fn window_residuals(
+    sys: &AugmentedGear,
+    t: &[f64],
+    b: &[f64],
+    keep: &[bool],
+    sigma: f64,
+    x0: [f64; 2],
+) -> Option<Vec<f64>> {
+    let s = simulate(sys, t[0], x0, t)?;
+    Some(
+        s.iter()
+            .zip(b)
+            .zip(keep)
+            .map(|((s, m), &k)| if k { (s - m) / sigma } else { 0.0 })
+            .collect(),
+    )
+}
+
+/// Fits a window's initial state with the model fixed, from `guess` and, when that fit is poor,
+/// from finite-difference and at-rest velocities. Residuals are (β_sim − β)/σ on kept samples.
+pub fn fit_window_state(
+    sys: &AugmentedGear,
+    t: &[f64],
+    b: &[f64],
+    keep: &[bool],
+    sigma: f64,
+    guess: [f64; 2],
+    multi_start: bool,
+) -> Option<LsqFit> {
+    let f = |p: &[f64]| window_residuals(sys, t, b, keep, sigma, [p[0], p[1]]);
+    let mut fit = least_squares(&f, &guess, &[1e-7, 1e-6], 20);
+    let kept = keep.iter().filter(|&&k| k).count().max(1) as f64;
+    let poor = |x: &Option<LsqFit>| x.as_ref().map(|f| f.rss / kept > 4.0).unwrap_or(true);
+    if multi_start && poor(&fit) {
+        let fd = (b[1] - b[0]) / (t[1] - t[0]);
+        for v0 in [fd, 0.0, 0.5 * fd, 2.0 * fd] {
+            if let Some(f2) = least_squares(&f, &[b[0], v0], &[1e-7, 1e-6], 20) {
+                if fit.as_ref().map(|f1| f2.rss < f1.rss).unwrap_or(true) {
+                    fit = Some(f2);
+                }
+            }
+            if !poor(&fit) {
+                break;
+            }
+        }
+    }
+    fit
 }
 
 /// Predicts a cleaned run with the model `c` (and a sensor latency `latency`, s).
@@ -101,53 +148,23 @@ pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> 
         let t = &r.t[i..j];
         let b = &r.beta[i..j];
         let sys = window_system(r, c, geo, latency, i, j);
-        let f = |p: &[f64]| -> Option<Vec<f64>> {
-            let s = sim(&sys, t[0], [p[0], p[1]], t)?;
-            Some(s.iter().zip(b).map(|(s, m)| s - m).collect())
-        };
-        let mut fit = least_squares(&f, &[b[0], r.v[i]], &[1e-7, 1e-6], 20);
-        // coarse sampling can put the velocity estimate on the wrong branch (slip vs stick):
-        // further starts when the first fit is poor
-        let poor = |x: &Option<super::lm::LsqFit>| {
-            x.as_ref()
-                .map(|f| (f.rss / t.len() as f64).sqrt() > 2.0 * r.sigma_camera)
-                .unwrap_or(true)
-        };
-        if poor(&fit) {
-            let fd = (b[1] - b[0]) / (t[1] - t[0]);
-            for v0 in [fd, 0.0, 0.5 * fd, 2.0 * fd] {
-                let f2 = least_squares(&f, &[b[0], v0], &[1e-7, 1e-6], 20);
-                if let Some(f2) = f2 {
-                    if fit.as_ref().map(|f1| f2.rss < f1.rss).unwrap_or(true) {
-                        fit = Some(f2);
-                    }
-                }
-                if !poor(&fit) {
-                    break;
-                }
-            }
-        }
-        if let Some(mut fit) = fit {
+        let sigma = r.sigma_camera.max(1e-12);
+        let all = vec![true; t.len()];
+        if let Some(mut fit) = fit_window_state(&sys, t, b, &all, sigma, [b[0], r.v[i]], true) {
             // outlier frames the cleaning missed (coarse sampling): beyond 5σ of the camera noise,
             // dropped and the window refitted once without them
-            let thr = 5.0 * r.sigma_camera;
-            let bad: Vec<bool> = fit.resid.iter().map(|x| x.abs() > thr).collect();
+            let bad: Vec<bool> = fit.resid.iter().map(|x| x.abs() > 5.0).collect();
             let nbad = bad.iter().filter(|&&x| x).count();
             if nbad > 0 && nbad <= t.len() / 5 {
-                let fw = |p: &[f64]| -> Option<Vec<f64>> {
-                    let s = sim(&sys, t[0], [p[0], p[1]], t)?;
-                    Some(
-                        s.iter()
-                            .zip(b)
-                            .zip(&bad)
-                            .map(|((s, m), &o)| if o { 0.0 } else { s - m })
-                            .collect(),
-                    )
-                };
-                if let Some(f2) = least_squares(&fw, &fit.p, &[1e-7, 1e-6], 20) {
+                let keep: Vec<bool> = bad.iter().map(|&o| !o).collect();
+                if let Some(f2) =
+                    fit_window_state(&sys, t, b, &keep, sigma, [fit.p[0], fit.p[1]], false)
+                {
                     fit = f2;
                 }
             }
+            // back to radians
+            fit.resid.iter_mut().for_each(|x| *x *= sigma);
             let mut kept = 0usize;
             for k in 0..t.len() {
                 if nbad <= t.len() / 5 && bad[k] {

@@ -299,30 +299,30 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
     }
 }
 
+/// Duration of a run (last minus first sample time; 0 without samples).
+fn duration(r: &CleanRun) -> f64 {
+    match (r.t.first(), r.t.last()) {
+        (Some(a), Some(b)) => (b - a).max(0.0),
+        _ => 0.0,
+    }
+}
+
 /// Per run: (session position by index in [−½, ½], session time at its start, total session
 /// time). The session is the runs in file order, back to back.
 fn session_clocks(runs: &[CleanRun]) -> Vec<(f64, f64, f64)> {
     let n = runs.len();
-    let durations: Vec<f64> = runs
-        .iter()
-        .map(|r| match (r.t.first(), r.t.last()) {
-            (Some(a), Some(b)) => (b - a).max(0.0),
-            _ => 0.0,
-        })
-        .collect();
-    let total: f64 = durations.iter().sum::<f64>().max(1e-300);
+    let total: f64 = runs.iter().map(duration).sum::<f64>().max(1e-300);
     let mut start = 0.0;
-    durations
-        .iter()
+    runs.iter()
         .enumerate()
-        .map(|(i, d)| {
+        .map(|(i, r)| {
             let s_index = if n > 1 {
                 i as f64 / (n - 1) as f64 - 0.5
             } else {
                 0.0
             };
             let out = (s_index, start, total);
-            start += d;
+            start += duration(r);
             out
         })
         .collect()
@@ -334,13 +334,7 @@ pub fn session_positions(runs: &[CleanRun]) -> Vec<(f64, f64)> {
     session_clocks(runs)
         .iter()
         .zip(runs)
-        .map(|(&(si, start, total), r)| {
-            let d = match (r.t.first(), r.t.last()) {
-                (Some(a), Some(b)) => (b - a).max(0.0),
-                _ => 0.0,
-            };
-            (si, (start + 0.5 * d) / total - 0.5)
-        })
+        .map(|(&(si, start, total), r)| (si, (start + 0.5 * duration(r)) / total - 0.5))
         .collect()
 }
 

@@ -17,9 +17,9 @@
 //! the sensor latency.
 
 use super::diagnose::coefficients_for_run;
-use super::lm::{least_squares, least_squares_tol, LsqFit};
+use super::lm::least_squares_tol;
 use super::model::{Geometry, MAX_EXTRA};
-use super::predict::{prediction_windows, simulate_at, window_system};
+use super::predict::{fit_window_state, prediction_windows, window_residuals, window_system};
 use super::preprocess::CleanRun;
 use super::regression::{autocorr_time, Design, LinFit, Term};
 use nalgebra::DMatrix;
@@ -93,57 +93,6 @@ pub fn simulable(d: &Design, f: &LinFit) -> bool {
         <= MAX_EXTRA
 }
 
-/// (β_sim − β)/σ of a window simulated from the state `x0` at its first sample; 0 on masked
-/// samples.
-fn window_residuals(
-    sys: &super::model::AugmentedGear,
-    t: &[f64],
-    b: &[f64],
-    keep: &[bool],
-    sigma: f64,
-    x0: [f64; 2],
-) -> Option<Vec<f64>> {
-    let s = simulate_at(sys, t[0], x0, t)?;
-    Some(
-        s.iter()
-            .zip(b)
-            .zip(keep)
-            .map(|((s, m), &k)| if k { (s - m) / sigma } else { 0.0 })
-            .collect(),
-    )
-}
-
-/// Fits a window's initial state with the model fixed, from `guess` and, when that fit is poor,
-/// from finite-difference and at-rest velocities. Residuals are (β_sim − β)/σ on kept samples.
-fn fit_state(
-    sys: &super::model::AugmentedGear,
-    t: &[f64],
-    b: &[f64],
-    keep: &[bool],
-    sigma: f64,
-    guess: [f64; 2],
-    multi_start: bool,
-) -> Option<LsqFit> {
-    let f = |p: &[f64]| window_residuals(sys, t, b, keep, sigma, [p[0], p[1]]);
-    let mut fit = least_squares(&f, &guess, &[1e-7, 1e-6], 20);
-    let kept = keep.iter().filter(|&&k| k).count().max(1) as f64;
-    let poor = |x: &Option<LsqFit>| x.as_ref().map(|f| f.rss / kept > 4.0).unwrap_or(true);
-    if multi_start && poor(&fit) {
-        let fd = (b[1] - b[0]) / (t[1] - t[0]);
-        for v0 in [fd, 0.0, 0.5 * fd, 2.0 * fd] {
-            if let Some(f2) = least_squares(&f, &[b[0], v0], &[1e-7, 1e-6], 20) {
-                if fit.as_ref().map(|f1| f2.rss < f1.rss).unwrap_or(true) {
-                    fit = Some(f2);
-                }
-            }
-            if !poor(&fit) {
-                break;
-            }
-        }
-    }
-    fit
-}
-
 /// Refits a window's state from the warm start `x` by Gauss–Newton steps (forward-difference
 /// Jacobian, 2×2 normal equations): the projection step of variable projection, a few sims
 /// instead of a full optimiser run. Falls back to [`fit_state`] when the result is poor (a stick
@@ -200,7 +149,7 @@ fn project_state(
         Some((r, x))
     };
     gn().or_else(|| {
-        let f = fit_state(sys, t, b, keep, sigma, x, true)?;
+        let f = fit_window_state(sys, t, b, keep, sigma, x, true)?;
         Some((f.resid, [f.p[0], f.p[1]]))
     })
 }
@@ -268,7 +217,7 @@ pub fn refit_by_simulation(
         let (t, b) = (&r.t[i..j], &r.beta[i..j]);
         let sigma = r.sigma_camera.max(1e-12);
         let mut keep = vec![true; j - i];
-        let mut f = fit_state(&sys, t, b, &keep, sigma, [b[0], r.v[i]], true)?;
+        let mut f = fit_window_state(&sys, t, b, &keep, sigma, [b[0], r.v[i]], true)?;
         let bad: Vec<bool> = f.resid.iter().map(|x| x.abs() > 5.0).collect();
         let nbad = bad.iter().filter(|&&x| x).count();
         if nbad > 0 {
@@ -276,7 +225,7 @@ pub fn refit_by_simulation(
                 return None;
             }
             keep = bad.iter().map(|&x| !x).collect();
-            f = fit_state(&sys, t, b, &keep, sigma, [f.p[0], f.p[1]], false)?;
+            f = fit_window_state(&sys, t, b, &keep, sigma, [f.p[0], f.p[1]], false)?;
         }
         let kept = keep.iter().filter(|&&x| x).count();
         if f.rss / kept as f64 > 4.0 {
