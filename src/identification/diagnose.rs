@@ -1169,6 +1169,7 @@ pub fn diagnose(
             heldout_rms_before_rad: stage_rms[k].1.or(stage_rms[0].1),
             heldout_rms_after_rad: stage_rms[k + 1].1,
             evidence: ev,
+            size: None,
         });
     }
     // ---- static friction (breakaway above the sliding friction): no regression term (the weak
@@ -1254,6 +1255,7 @@ pub fn diagnose(
                     heldout_rms_before_rad: None,
                     heldout_rms_after_rad: None,
                     evidence: ev,
+                    size: None,
                 };
                 let support = |f: &Finding| {
                     f.evidence

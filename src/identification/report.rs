@@ -86,6 +86,23 @@ pub struct Finding {
     pub heldout_rms_after_rad: Option<f64>,
     /// ΔBIC (effective n), cross-validation scores, equation-error rms.
     pub evidence: BTreeMap<String, serde_json::Value>,
+    /// Optional (added key): the effect's headline size with its 1σ, the one number a campaign
+    /// compares with the truth (e.g. the static torque's first-harmonic amplitude).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<EffectSize>,
+}
+
+/// The headline size of a finding: one physical number with its standard error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EffectSize {
+    /// What is measured (e.g. `amplitude`, `latency_s`, `delta`).
+    pub name: String,
+    /// Value, in `unit`.
+    pub value: f64,
+    /// 1σ, in `unit`.
+    pub sigma: f64,
+    /// Unit (e.g. `s^-2`, `s`, `deg`, `1`).
+    pub unit: String,
 }
 
 fn f(x: Option<f64>) -> String {
