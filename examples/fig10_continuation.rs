@@ -1,16 +1,14 @@
 //! Fig. 10 of Hartung & Rehberg (2020) by continuation: Θ = 0, the lock branch and its fold at
-//! f_c = (g − η)/(2πζ), compared with the analytic `LockBranch`; then the slip-through state and the
-//! frequency where a downward quasi-static sweep re-locks.
+//! f_c = (g − η)/(2πζ), compared with the analytic `LockBranch`. (The slip-through state and the
+//! frequency where a downward run re-locks: `gearbif figure fig10`.)
 //!
 //! Run: `cargo run --release --example fig10_continuation [OUTDIR]` (figures and JSON go to OUTDIR,
 //! default `target/fig10`).
 
 use gearbif::continuation::{Continuation, ContinuationOptions, Param, SpecialKind};
-use gearbif::integrator::{EventDriven, FlowOptions};
-use gearbif::maps::{poincare_map, Section};
 use gearbif::model::Gear;
 use gearbif::orbits::OrbitSpec;
-use std::f64::consts::{FRAC_PI_2, TAU};
+use std::f64::consts::FRAC_PI_2;
 
 fn main() -> gearbif::Result<()> {
     let dir = std::path::PathBuf::from(
@@ -59,42 +57,18 @@ fn main() -> gearbif::Result<()> {
             s.floquet.multipliers
         );
     }
-    // slip-through state and re-locking: downward quasi-static sweep from above f_c
-    let o = FlowOptions::with_tol(1e-9);
-    let mut x = [FRAC_PI_2, TAU * 42.0];
-    let mut relock = None;
-    println!("downward sweep (net output rotation per drive period after relaxation):");
-    let mut f = 42.0;
-    while f > 1.0 {
-        let g = Gear::paper(0.0, f)?;
-        x = poincare_map(&EventDriven, &g, Section::Stroboscopic, x, 200, &o)?.x;
-        let y = poincare_map(&EventDriven, &g, Section::Stroboscopic, x, 100, &o)?.x;
-        let rate = (y[0] - x[0]) / (TAU * 100.0);
-        x = y;
-        if (f - f.round()).abs() < 1e-9 && (f as i64) % 4 == 2 {
-            println!("  f = {f:5.1} Hz: {rate:.4}");
-        }
-        if relock.is_none() && (rate - 1.0).abs() < 1e-6 {
-            relock = Some(f);
-            break;
-        }
-        f -= 0.5;
-    }
-    match relock {
-        Some(f) => println!(
-            "  re-locked at f = {f:.1} Hz (between {f:.1} and {:.1} Hz)",
-            f + 0.5
-        ),
-        None => println!("  no re-locking above 1 Hz"),
-    }
+    // the slip-through state and where a downward run re-locks are simulated, not continued:
+    // `gearbif figure fig10` (docs/atlas.md, Fig. 10)
     std::fs::create_dir_all(&dir).map_err(|e| gearbif::Error::Io(e.to_string()))?;
     gearbif::io::write_json_atomic(dir.join("lock_branch.json"), &b)?;
     #[cfg(feature = "plot")]
     {
-        use gearbif::plotting::branch::{BranchDiagram, MultiplierPlot};
+        use gearbif::plotting::branch::{BranchDiagram, MultiplierPlot, Quantity};
         let fig = BranchDiagram {
-            title: "Θ = 0: lock branch (β − α at α = 0), fold at f_c".into(),
+            title: "Θ = 0: the lock branch and its fold at f_c (compare Fig. 10a)".into(),
             branches: vec![b.clone()],
+            labels: vec!["lock (G, p = 1)".into()],
+            quantity: Quantity::PaperFigureDelta,
             ..Default::default()
         };
         gearbif::plotting::save(&fig, dir.join("fig10_lock_branch.svg"))?;
@@ -104,6 +78,7 @@ fn main() -> gearbif::Result<()> {
             branch: Some(b),
         };
         gearbif::plotting::save(&m, dir.join("fig10_multipliers.svg"))?;
+        gearbif::plotting::save(&m, dir.join("fig10_multipliers.png"))?;
     }
     Ok(())
 }

@@ -108,6 +108,11 @@ fn main() -> gearbif::Result<()> {
         "asymmetric branch (P_T, from the SB point at 2.08 Hz)",
         &asym2,
     );
+    let mut labels = vec![
+        "symmetric, T/2 (G, p = 1)".to_string(),
+        format!("asymmetric, T, from SB at {:.4} Hz", sb_hi.param),
+        format!("asymmetric, T, from SB at {:.4} Hz", sb_lo.param),
+    ];
     let mut branches = vec![sym.clone(), asym.clone(), asym2];
     // period doubling cascade: switch at the flip onto P_T², then again
     let mut last = asym;
@@ -132,6 +137,10 @@ fn main() -> gearbif::Result<()> {
                 )?
                 .run(None)?;
                 report(&format!("period-{} branch", 2 * last.spec.iterations), &b);
+                labels.push(format!(
+                    "period {}T, from the flip at {:.4} Hz",
+                    b.spec.iterations, fl.param
+                ));
                 branches.push(b.clone());
                 last = b;
             }
@@ -196,7 +205,15 @@ fn main() -> gearbif::Result<()> {
             if let Some(r) = &c.stopped {
                 println!("  stopped {r}");
             }
-            curves.push((format!("SB from {:.3} Hz", sp.param), c));
+            let which = if sp.param < sb_hi.param {
+                "lower (subcritical)"
+            } else {
+                "upper (supercritical)"
+            };
+            curves.push((
+                format!("{which} SB curve, from {:.4} Hz at 25°", sp.param),
+                c,
+            ));
         }
     }
     println!("total: {:?}", t0.elapsed());
@@ -204,16 +221,23 @@ fn main() -> gearbif::Result<()> {
     gearbif::io::write_json_atomic(dir.join("theta25_branches.json"), &branches)?;
     #[cfg(feature = "plot")]
     {
-        use gearbif::plotting::branch::{BoundaryPlot, BranchDiagram};
+        use gearbif::plotting::branch::{BoundaryPlot, BranchDiagram, MultiplierPlot};
+        let m = MultiplierPlot {
+            title: "Θ = 25°: multipliers μ_G of the symmetric branch, 1.5–3 Hz".into(),
+            branch: Some(sym),
+        };
+        gearbif::plotting::save(&m, dir.join("theta25_multipliers.svg"))?;
+        gearbif::plotting::save(&m, dir.join("theta25_multipliers.png"))?;
         let fig = BranchDiagram {
             title: "Θ = 25°: symmetric, asymmetric and period-doubled orbits".into(),
             branches,
+            labels,
             ..Default::default()
         };
         gearbif::plotting::save(&fig, dir.join("fig9_branches.svg"))?;
         gearbif::plotting::save(&fig, dir.join("fig9_branches.png"))?;
         let bp = BoundaryPlot {
-            title: "symmetry-breaking curves: T/2 and T regimes".into(),
+            title: "symmetry-breaking curves in (Θ, f): T/2 outside, T between".into(),
             curves,
             marks: vec![],
         };

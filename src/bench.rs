@@ -278,8 +278,7 @@ pub fn figure(points: &[WorkPrecisionPoint], title: &str) -> crate::plotting::Li
         title: title.to_string(),
         x_label: "log10 of wall time per call [s]".into(),
         y_label: "log10 of max error of (β, ω) vs reference".into(),
-        log_x: false,
-        log_y: false,
         series,
+        ..Default::default()
     }
 }

@@ -665,3 +665,29 @@ pub fn hysteresis(
         down,
     })
 }
+
+/// The lock-loss hysteresis at Θ = 0 (paper Fig. 10): [`hysteresis`] of the parallel-shaft gear at
+/// Θ = 0 from α₀ = 0°, β₀ = 180° (paper convention), `settle_turns` settling and 10 analysis turns
+/// per frequency. `gearbif figure fig10` (1–45 Hz in 1 Hz, 1000 turns) and `gearbif report` run
+/// this one function, so their lock-loss and re-lock frequencies and slip rates are the same numbers.
+pub fn lock_loss_hysteresis(
+    gear: GearParams,
+    f_values: &[f64],
+    settle_turns: usize,
+    observer: &dyn SweepObserver,
+) -> Result<Hysteresis> {
+    let o = ClassifyOptions {
+        settle_turns,
+        analysis_turns: 10,
+        ..ClassifyOptions::default()
+    };
+    hysteresis(
+        gear.with_parallel_shafts_deg(0.0),
+        f_values,
+        0.0,
+        180.0,
+        Convention::Paper,
+        &o,
+        observer,
+    )
+}

@@ -223,6 +223,22 @@ pub fn period_label(k: usize) -> String {
     }
 }
 
+/// The paper's start for its Θ = 31° simulations (Figs. 5–6): α₀ = 90°, β₀ = 270° in the paper's
+/// convention, i.e. 90° in the physical one, at rest. Returns the driven gear (physical convention,
+/// parallel shafts at `theta_deg`, drive frequency `f` Hz) and the state (β₀, ω₀). Every figure
+/// and table of these points starts here, so their numbers come from the same trajectory.
+pub fn paper_fig6_start(
+    params: &crate::model::GearParams,
+    theta_deg: f64,
+    f: f64,
+) -> Result<(Gear, [f64; 2])> {
+    let g = params
+        .with_parallel_shafts_deg(theta_deg)
+        .driven(f)?
+        .with_alpha0(90f64.to_radians())?;
+    Ok((g, [90f64.to_radians(), 0.0]))
+}
+
 /// Classifies the attractor of `gear` reached from `x0` (β, ω at t = 0, α = α₀), simulating the
 /// paper's window with `method` and (if `opts.rigorous`) the rigorous analysis with the exact
 /// event-driven integrator.

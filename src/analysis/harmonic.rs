@@ -288,9 +288,43 @@ pub fn paper_metrics(
     })
 }
 
+/// The angle the paper's Figs. 9–10 plot, from δ = β − α in the paper convention (β + 180°):
+/// α − β with the physical β, mod 360°, i.e. 180° − δ (model.md, "Erratum"). With it the Θ = 0 lock
+/// branch is the paper's eq. `delta_lock`, 180° + arcsin((2πfζ + η)/g): 184.4° at f → 0, rising
+/// to 270° at the fold.
+pub fn paper_figure_delta_deg(delta_paper_convention_deg: f64) -> f64 {
+    (180.0 - delta_paper_convention_deg).rem_euclid(360.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn paper_figure_delta_is_the_papers_delta_lock() {
+        // eq. `delta_lock`: 180° + arcsin((2πfζ + η)/g); at f → 0 arcsin(η/g) (184.4° for the paper)
+        for f in [1e-3, 10.0, 35.0] {
+            let g = crate::model::Gear::paper(0.0, f)
+                .unwrap()
+                .with_convention(crate::model::Convention::Paper);
+            let b = g.lock_branch().unwrap();
+            let s = (TAU * f * g.zeta + g.eta) / g.g;
+            let want = 180.0 + s.asin().to_degrees();
+            let got = paper_figure_delta_deg(b.stable.phase.to_degrees());
+            assert!((got - want).abs() < 1e-9, "{f}: {got} vs {want}");
+        }
+        let at0 = paper_figure_delta_deg(
+            crate::model::Gear::paper(0.0, 1e-9)
+                .unwrap()
+                .with_convention(crate::model::Convention::Paper)
+                .lock_branch()
+                .unwrap()
+                .stable
+                .phase
+                .to_degrees(),
+        );
+        assert!((at0 - 184.4).abs() < 0.05, "{at0}");
+    }
 
     fn grid(turns: usize, per: usize) -> Vec<f64> {
         (0..turns * per)

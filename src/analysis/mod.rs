@@ -7,7 +7,8 @@ pub mod harmonic;
 pub mod lyapunov;
 
 pub use classify::{
-    classify_point, rigorous_classify, ClassifyOptions, Dynamics, PointResult, RigorousClass,
+    classify_point, paper_fig6_start, rigorous_classify, ClassifyOptions, Dynamics, PointResult,
+    RigorousClass,
 };
 pub use harmonic::{fit_harmonics, HarmonicFit, PaperClass, PaperMetrics, ThdDefinition};
 pub use lyapunov::{LyapunovAccumulator, LyapunovEstimate};

@@ -100,9 +100,9 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(p) = &a.plot {
         let mut marks = Vec::new();
         if let Some(fc) = base.lock_loss_frequency() {
-            marks.push(("analytic f_c".to_string(), 0.0, fc));
+            marks.push(("analytic f_c at Δ = ±1".to_string(), 0.0, fc));
             marks.push((
-                "analytic f_c".to_string(),
+                "analytic f_c at Δ = ±1".to_string(),
                 crate::model::gear::cogging_free_parallel_angles()
                     .2
                     .to_degrees(),
@@ -110,7 +110,10 @@ pub fn run(a: Args) -> Result<()> {
             ));
         }
         let fig = crate::plotting::branch::BoundaryPlot {
-            title: format!("{} boundary", kind.label()),
+            title: match kind {
+                SpecialKind::Fold => "lock-loss boundary f_c(Θ): fold of the locked orbit".into(),
+                k => format!("{} curve", k.label()),
+            },
             curves: curves.clone(),
             marks,
         };

@@ -264,7 +264,10 @@ pub fn run(a: Args) -> Result<()> {
     }
     if let Some(p) = &a.plot_multipliers {
         let fig = crate::plotting::branch::MultiplierPlot {
-            title: "Floquet multipliers".into(),
+            title: format!(
+                "multipliers along the {} branch",
+                crate::plotting::branch::branch_label(&branches[0])
+            ),
             branch: Some(branches[0].clone()),
         };
         crate::plotting::save(&fig, p)?;

@@ -4,17 +4,17 @@
 use super::common::GearArgs;
 use super::sweep::Progress;
 use crate::analysis::classify::WindowSample;
-use crate::analysis::{classify_point, ClassifyOptions};
+use crate::analysis::{classify_point, paper_fig6_start, ClassifyOptions};
 use crate::integrator::EventDriven;
 use crate::model::{Convention, Gear, GearParams};
 use crate::plotting::atlas::{
-    fit_plot, hysteresis_lock_plot, lyapunov_plot, orbit_diagram, Landscape, Markers, PolarDelta,
-    RmsMap,
+    fit_plot, hysteresis_lock_plot, lyapunov_plot, orbit_diagram, paper_figure_delta_deg,
+    updown_series, Landscape, Markers, PolarDelta, RmsMap, PAPER_FIGURE_DELTA_LABEL,
 };
 use crate::plotting::{save, Figure, LinePlot, Series};
 use crate::sweep::{
-    hysteresis, Axis, Hysteresis, PointRecord, SweepObserver, SweepOutcome, SweepParam,
-    SweepRunner, SweepSpec,
+    hysteresis, lock_loss_hysteresis, Axis, Hysteresis, PointRecord, SweepObserver, SweepOutcome,
+    SweepParam, SweepRunner, SweepSpec,
 };
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -69,15 +69,10 @@ fn save_both(fig: &impl Figure, dir: &Path, stem: &str, out: &mut Vec<PathBuf>) 
     Ok(())
 }
 
-/// The paper's start of Fig. 6: α = 90°, β = 270° (paper convention) = 90° physical. Simulated
-/// and shown in the physical convention, where δ = β − α stays near 180° (no wrap at 0/360°).
+/// The paper's start of Figs. 5–6 ([`paper_fig6_start`]): simulated and shown in the physical
+/// convention, where δ = β − α stays near 180° (no wrap at 0/360°).
 fn paper_gear(p: &GearParams, theta: f64, f: f64) -> Result<(Gear, [f64; 2])> {
-    let g = p
-        .with_parallel_shafts_deg(theta)
-        .driven(f)?
-        .with_convention(Convention::Physical)
-        .with_alpha0(90f64.to_radians())?;
-    Ok((g, [90f64.to_radians(), 0.0]))
+    paper_fig6_start(p, theta, f)
 }
 
 fn window(g: &Gear, x0: [f64; 2], settle: usize) -> Result<crate::analysis::PointResult> {
@@ -104,15 +99,6 @@ fn inset(p: &GearParams, r: &PointRecord, alpha0_deg: f64, title: &str) -> Resul
     })
 }
 
-fn series(label: &str, pts: Vec<(f64, f64)>, color: usize) -> Series {
-    Series {
-        label: label.into(),
-        points: pts,
-        markers: true,
-        color,
-    }
-}
-
 fn updown_plot(
     h: &Hysteresis,
     title: &str,
@@ -124,16 +110,55 @@ fn updown_plot(
             .filter_map(|r| val(r).map(|y| (r.f_hz, y)))
             .collect::<Vec<_>>()
     };
+    let (series, marker_shapes) = updown_series(pts(&h.up), pts(&h.down));
     LinePlot {
         title: title.into(),
         x_label: "f [Hz]".into(),
         y_label: y.into(),
-        series: vec![
-            series("f increasing", pts(&h.up), 1),
-            series("f decreasing", pts(&h.down), 3),
-        ],
+        series,
+        marker_shapes,
         ..Default::default()
     }
+}
+
+/// Fig. 10b: the net rotation frequency of the output on a log axis (locked points at f_out = f,
+/// slip-through points at a few percent of f and below), with the lines f_out = f and 1 % of f.
+fn net_rotation_plot(h: &Hysteresis) -> LinePlot {
+    let mut fig = updown_plot(
+        h,
+        "Θ = 0: net rotation frequency of the output (log scale)",
+        "f_out [Hz]",
+        |r| Some(r.net_rotation_hz),
+    );
+    let fs: Vec<f64> = h.up.iter().chain(&h.down).map(|r| r.f_hz).collect();
+    let (lo, hi) = fs
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &f| (a.min(f), b.max(f)));
+    let not_shown =
+        h.up.iter()
+            .chain(&h.down)
+            .filter(|r| r.net_rotation_hz <= 0.0)
+            .count();
+    if not_shown > 0 {
+        fig.title += &format!(" ({not_shown} points with f_out ≤ 0 not shown)");
+    }
+    fig.log_y = true;
+    for (label, k, color) in [
+        ("f_out = f (locked)", 1.0, 0),
+        ("f_out = 1 % of f", 0.01, 7),
+    ] {
+        fig.series.push(Series {
+            label: label.into(),
+            // sampled densely: a straight line in f is curved on the log axis
+            points: (0..=200)
+                .map(|i| lo + (hi - lo) * i as f64 / 200.0)
+                .map(|f| (f, k * f))
+                .collect(),
+            markers: false,
+            color,
+        });
+    }
+    fig
 }
 
 /// Builds figure `name` into `dir`; returns the files written.
@@ -147,23 +172,19 @@ pub fn make(
     let mut out = Vec::new();
     match name {
         Name::Fig5 => {
-            for (f, tag) in [(1.65, "a"), (1.48, "b"), (1.33, "c")] {
+            for (f, stem) in [(1.65, "fig5a"), (1.48, "fig5b"), (1.33, "fig5c")] {
                 let (g, x0) = paper_gear(p, 31.0, f)?;
                 let r = window(&g, x0, 90)?;
                 let s = r.samples.clone().unwrap_or_default();
                 let title = format!(
-                    "Θ = 31°, f = {f} Hz: paper class {} (RMS {:.2}°, THD {:.3}), rigorous {}",
+                    "Θ = 31°, {f} Hz: flowchart {} (RMS_fit {:.2}°, THD {:.3}), rigorous {}",
                     r.paper.class.label(),
                     r.paper.rms_fit_deg,
                     r.paper.thd,
                     r.rigorous.as_ref().map(|c| c.label.as_str()).unwrap_or("")
                 );
-                save_both(
-                    &fit_plot(&title, &s, &r.paper.fit),
-                    dir,
-                    &format!("fig5{tag}"),
-                    &mut out,
-                )?;
+                let y = "δ = β − α [deg] (physical convention)";
+                save_both(&fit_plot(&title, y, &s, &r.paper.fit), dir, stem, &mut out)?;
             }
         }
         Name::Fig6 => {
@@ -207,7 +228,11 @@ pub fn make(
                 }
                 s
             };
-            let stem = if name == Name::Fig7 { "fig7" } else { "fig8" };
+            let (stem, rigorous_stem) = match (name, full) {
+                (Name::Fig7, _) => ("fig7", "fig7-rigorous"),
+                (_, true) => ("fig8-full", "fig8-full-rigorous"),
+                _ => ("fig8", "fig8-rigorous"),
+            };
             let res = match SweepRunner::new(spec)
                 .checkpoint(dir.join(format!("{stem}-checkpoint")))
                 .observer(progress)
@@ -225,7 +250,7 @@ pub fn make(
             fig.markers = Markers::Rigorous;
             fig.title =
                 format!("{stem}: RMS_δ, rigorous classes (○ chaos/QP, × sym., — asym., □ ?)");
-            save_both(&fig, dir, &format!("{stem}-rigorous"), &mut out)?;
+            save_both(&fig, dir, rigorous_stem, &mut out)?;
         }
         Name::Fig9 => {
             let fs: Vec<f64> = (0..=30).map(|i| 1.5 + 0.05 * i as f64).collect();
@@ -237,22 +262,33 @@ pub fn make(
             let pp = p.with_parallel_shafts_deg(25.0);
             let h = hysteresis(pp, &fs, 0.0, 180.0, Convention::Paper, &o, progress)?;
             crate::io::write_json_atomic(dir.join("fig9-data.json"), &h)?;
-            let inv = updown_plot(&h, "Θ = 25°: THD_F⁻¹", "1/THD_F", |r| {
-                Some(
-                    r.thd
-                        .map(|t| if t > 0.0 { 1.0 / t } else { f64::INFINITY })
-                        .unwrap_or(0.0),
-                )
-                .filter(|v| v.is_finite())
-            });
+            let inv = updown_plot(
+                &h,
+                "Θ = 25°: inverse total harmonic distortion of δ",
+                "1/THD_F (dimensionless)",
+                |r| {
+                    Some(
+                        r.thd
+                            .map(|t| if t > 0.0 { 1.0 / t } else { f64::INFINITY })
+                            .unwrap_or(0.0),
+                    )
+                    .filter(|v| v.is_finite())
+                },
+            );
             save_both(&inv, dir, "fig9-thd-inv", &mut out)?;
-            let fund = updown_plot(&h, "Θ = 25°: δ_fund", "δ_fund [deg]", |r| {
-                Some(r.delta_fund_deg)
-            });
+            let fund = updown_plot(
+                &h,
+                "Θ = 25°: δ_fund, amplitude of δ at the drive frequency",
+                "δ_fund [deg]",
+                |r| Some(r.delta_fund_deg),
+            );
             save_both(&fund, dir, "fig9-fund", &mut out)?;
-            let avg = updown_plot(&h, "Θ = 25°: δ_avg", "δ_avg [deg]", |r| {
-                Some(r.delta_avg_deg)
-            });
+            let avg = updown_plot(
+                &h,
+                "Θ = 25°: δ_avg, mean angle difference over a drive period",
+                &format!("δ_avg: {PAPER_FIGURE_DELTA_LABEL}"),
+                |r| Some(paper_figure_delta_deg(r.delta_avg_deg)),
+            );
             save_both(&avg, dir, "fig9-avg", &mut out)?;
             for (f, stem) in [(2.1, "fig9-inset-2.1-down"), (2.7, "fig9-inset-2.7-down")] {
                 if let Some(r) = h.down.iter().find(|r| (r.f_hz - f).abs() < 1e-9) {
@@ -263,25 +299,17 @@ pub fn make(
         }
         Name::Fig10 => {
             let fs: Vec<f64> = (1..=45).map(|i| i as f64).collect();
-            let o = ClassifyOptions {
-                settle_turns: 1000,
-                analysis_turns: 10,
-                ..ClassifyOptions::default()
-            };
             let pp = p.with_parallel_shafts_deg(0.0);
-            let h = hysteresis(pp, &fs, 0.0, 180.0, Convention::Paper, &o, progress)?;
+            let h = lock_loss_hysteresis(pp, &fs, 1000, progress)?;
             crate::io::write_json_atomic(dir.join("fig10-data.json"), &h)?;
             save_both(&hysteresis_lock_plot(&h, &pp)?, dir, "fig10a", &mut out)?;
-            let rot = updown_plot(
-                &h,
-                "Θ = 0: net rotation frequency of the output",
-                "f_out [Hz]",
-                |r| Some(r.net_rotation_hz),
-            );
-            save_both(&rot, dir, "fig10b", &mut out)?;
-            for (branch, stem) in [(&h.up, "fig10-inset-6-up"), (&h.down, "fig10-inset-6-down")] {
+            save_both(&net_rotation_plot(&h), dir, "fig10b", &mut out)?;
+            for (branch, stem, what) in [
+                (&h.up, "fig10-inset-6-up", "f increasing (locked)"),
+                (&h.down, "fig10-inset-6-down", "f decreasing (slip-through)"),
+            ] {
                 if let Some(r) = branch.iter().find(|r| (r.f_hz - 6.0).abs() < 1e-9) {
-                    let l = inset(&pp, r, 0.0, &format!("Θ = 0, 6 Hz ({stem})"))?;
+                    let l = inset(&pp, r, 0.0, &format!("Θ = 0, 6 Hz, {what}"))?;
                     save_both(&l, dir, stem, &mut out)?;
                 }
             }

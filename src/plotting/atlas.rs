@@ -266,51 +266,77 @@ impl Figure for RmsMap {
 }
 
 /// Polar diagrams of δ over α (paper Fig. 6): one panel per frequency, radius δ mod 360° (in
-/// degrees), azimuth α.
+/// degrees, rings every 90° labelled), azimuth α (0° to the right, counter-clockwise).
 #[derive(Debug, Clone)]
 pub struct PolarDelta {
     /// Panels: (title, samples).
     pub panels: Vec<(String, Vec<WindowSample>)>,
 }
 
+impl PolarDelta {
+    const COLS: usize = 4;
+    const PANEL: (u32, u32) = (320, 350);
+}
+
 impl Figure for PolarDelta {
     fn size(&self) -> (u32, u32) {
-        let n = self.panels.len().max(1) as u32;
-        let cols = n.min(4);
+        let n = self.panels.len().max(1);
+        let cols = n.min(Self::COLS);
         let rows = n.div_ceil(cols);
-        (300 * cols, 320 * rows)
+        (
+            Self::PANEL.0 * cols as u32,
+            Self::PANEL.1 * rows as u32 + 30,
+        )
     }
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         let n = self.panels.len().max(1);
-        let cols = n.min(4);
+        let cols = n.min(Self::COLS);
         let rows = n.div_ceil(cols);
-        let areas = root.split_evenly((rows, cols));
+        let (head, body) = root.split_vertically(30);
+        head.draw(&Text::new(
+            "radius: δ mod 360° (rings at 90°, 180°, 270°, 360°); azimuth: α (0° right, 90° up)",
+            (10, 8),
+            ("sans-serif", 15).into_font(),
+        ))
+        .map_err(plot_err)?;
+        let areas = body.split_evenly((rows, cols));
+        let grey = RGBColor(170, 170, 170);
         for ((title, s), area) in self.panels.iter().zip(areas.iter()) {
-            let mut ch = ChartBuilder::on(area)
-                .caption(title, ("sans-serif", 16))
-                .margin(8)
-                .build_cartesian_2d(-380.0..380.0, -380.0..380.0)
+            let inner = area.titled(title, ("sans-serif", 16)).map_err(plot_err)?;
+            let (w, h) = inner.dim_in_pixel();
+            // equal scales in x and y: the panel's aspect sets the x range
+            let r = 400.0;
+            let rx = r * w as f64 / h.max(1) as f64;
+            let mut ch = ChartBuilder::on(&inner)
+                .margin(4)
+                .build_cartesian_2d(-rx..rx, -r..r)
                 .map_err(plot_err)?;
-            for r in [90.0, 180.0, 270.0, 360.0] {
+            for ring in [90.0, 180.0, 270.0, 360.0] {
                 ch.draw_series(std::iter::once(PathElement::new(
                     (0..=120)
                         .map(|k| {
                             let a = TAU * k as f64 / 120.0;
-                            (r * a.cos(), r * a.sin())
+                            (ring * a.cos(), ring * a.sin())
                         })
                         .collect::<Vec<_>>(),
-                    RGBColor(190, 190, 190),
+                    grey,
+                )))
+                .map_err(plot_err)?;
+                ch.draw_series(std::iter::once(Text::new(
+                    format!("{ring:.0}°"),
+                    (ring * 0.70, -ring * 0.70),
+                    ("sans-serif", 11).into_font().color(&RGBColor(90, 90, 90)),
                 )))
                 .map_err(plot_err)?;
             }
-            ch.draw_series(std::iter::once(PathElement::new(
-                vec![(-370.0, 0.0), (370.0, 0.0)],
-                RGBColor(210, 210, 210),
-            )))
-            .map_err(plot_err)?;
-            ch.draw_series(std::iter::once(PathElement::new(
-                vec![(0.0, -370.0), (0.0, 370.0)],
-                RGBColor(210, 210, 210),
+            for (a, b) in [((-370.0, 0.0), (370.0, 0.0)), ((0.0, -370.0), (0.0, 370.0))] {
+                ch.draw_series(std::iter::once(PathElement::new(vec![a, b], grey)))
+                    .map_err(plot_err)?;
+            }
+            ch.draw_series(std::iter::once(Text::new(
+                "α = 0°",
+                (300.0, 12.0),
+                ("sans-serif", 11).into_font().color(&RGBColor(90, 90, 90)),
             )))
             .map_err(plot_err)?;
             let pts: Vec<(f64, f64)> = s
@@ -322,7 +348,7 @@ impl Figure for PolarDelta {
                 .collect();
             ch.draw_series(
                 pts.iter()
-                    .map(|&p| Circle::new(p, 1, RGBColor(200, 30, 30).filled())),
+                    .map(|&p| Circle::new(p, 2, RGBColor(200, 30, 30).filled())),
             )
             .map_err(plot_err)?;
         }
@@ -358,7 +384,10 @@ impl Figure for Landscape {
         ch.configure_mesh()
             .disable_mesh()
             .x_desc("α [deg]")
-            .y_desc("β [deg]")
+            .y_desc(match self.convention {
+                crate::model::Convention::Physical => "β [deg] (physical convention)",
+                crate::model::Convention::Paper => "β [deg] (paper convention: physical + 180°)",
+            })
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(plot_err)?;
@@ -398,8 +427,13 @@ impl Figure for Landscape {
     }
 }
 
-/// δ over α (mod 360°) with the harmonic fit (paper Fig. 5).
-pub fn fit_plot(title: &str, samples: &[WindowSample], fit: &HarmonicFit) -> LinePlot {
+/// δ over α (mod 360°) with the harmonic fit (paper Fig. 5); `y_label` names δ's convention.
+pub fn fit_plot(
+    title: &str,
+    y_label: &str,
+    samples: &[WindowSample],
+    fit: &HarmonicFit,
+) -> LinePlot {
     let data = samples
         .iter()
         .map(|w| (w.alpha.to_degrees().rem_euclid(360.0), w.delta_deg))
@@ -410,7 +444,7 @@ pub fn fit_plot(title: &str, samples: &[WindowSample], fit: &HarmonicFit) -> Lin
     LinePlot {
         title: title.into(),
         x_label: "α mod 360 [deg]".into(),
-        y_label: "δ [deg]".into(),
+        y_label: y_label.into(),
         series: vec![
             Series {
                 label: "simulation (last 10 turns)".into(),
@@ -434,7 +468,7 @@ pub fn orbit_diagram(title: &str, points: &[(f64, f64)], log_x: bool) -> LinePlo
     LinePlot {
         title: title.into(),
         x_label: "f [Hz]".into(),
-        y_label: "β at t = kT/2, reduced by the symmetry [deg]".into(),
+        y_label: "β at t = kT/2, reduced by the symmetry (physical) [deg]".into(),
         log_x,
         series: vec![Series {
             label: String::new(),
@@ -451,7 +485,7 @@ pub fn lyapunov_plot(title: &str, points: &[(f64, f64)], log_x: bool) -> LinePlo
     LinePlot {
         title: title.into(),
         x_label: "f [Hz]".into(),
-        y_label: "λ_max per drive period".into(),
+        y_label: "λ_max [1/drive period]".into(),
         log_x,
         series: vec![
             Series {
@@ -461,7 +495,7 @@ pub fn lyapunov_plot(title: &str, points: &[(f64, f64)], log_x: bool) -> LinePlo
                 color: 0,
             },
             Series {
-                label: "0".into(),
+                label: "λ = 0".into(),
                 points: points
                     .first()
                     .zip(points.last())
@@ -475,8 +509,42 @@ pub fn lyapunov_plot(title: &str, points: &[(f64, f64)], log_x: bool) -> LinePlo
     }
 }
 
-/// Fig. 10-style plot: δ_avg up and down against f at Θ = 0, with the analytic stable and
-/// unstable lock branches (paper convention).
+pub use crate::analysis::harmonic::paper_figure_delta_deg;
+
+/// y label of angles shown as [`paper_figure_delta_deg`].
+pub const PAPER_FIGURE_DELTA_LABEL: &str = "α − β [deg] (as plotted in the paper)";
+
+/// Points of an up-and-down run as two marker series in the paper's style: open squares for
+/// increasing f, filled circles for decreasing f (drawn first, so the squares stay visible
+/// around them).
+pub fn updown_series(
+    up: Vec<(f64, f64)>,
+    down: Vec<(f64, f64)>,
+) -> (Vec<Series>, Vec<super::MarkerShape>) {
+    (
+        vec![
+            Series {
+                label: "f decreasing".into(),
+                points: down,
+                markers: true,
+                color: 3,
+            },
+            Series {
+                label: "f increasing".into(),
+                points: up,
+                markers: true,
+                color: 1,
+            },
+        ],
+        vec![
+            super::MarkerShape::FilledCircle,
+            super::MarkerShape::OpenSquare,
+        ],
+    )
+}
+
+/// Fig. 10a: δ_avg of the locked points up and down against f at Θ = 0, with the analytic stable
+/// and unstable lock branches, as the paper plots them ([`paper_figure_delta_deg`]).
 pub fn hysteresis_lock_plot(
     h: &crate::sweep::Hysteresis,
     gear: &crate::model::GearParams,
@@ -489,47 +557,46 @@ pub fn hysteresis_lock_plot(
             let g = crate::model::Gear::new(gear.g(), 1.0, gear.zeta, gear.eta, f)?
                 .with_convention(crate::model::Convention::Paper);
             if let Ok(b) = g.lock_branch() {
-                stable.push((f, b.stable.phase.to_degrees().rem_euclid(360.0)));
-                unstable.push((f, b.unstable.phase.to_degrees().rem_euclid(360.0)));
+                stable.push((f, paper_figure_delta_deg(b.stable.phase.to_degrees())));
+                unstable.push((f, paper_figure_delta_deg(b.unstable.phase.to_degrees())));
             }
+        }
+        // close the two branches at the fold
+        if let Some(&last) = stable.last() {
+            unstable.push(last);
         }
     }
     let pts = |v: &[PointRecord]| -> Vec<(f64, f64)> {
         v.iter()
             .filter(|r| r.locked == Some(true))
-            .map(|r| (r.f_hz, r.delta_avg_deg))
+            .map(|r| (r.f_hz, paper_figure_delta_deg(r.delta_avg_deg)))
             .collect()
     };
+    let (mut series, marker_shapes) = updown_series(pts(&h.up), pts(&h.down));
+    series.insert(
+        0,
+        Series {
+            label: "analytic unstable".into(),
+            points: unstable,
+            markers: false,
+            color: 7,
+        },
+    );
+    series.insert(
+        0,
+        Series {
+            label: "analytic stable".into(),
+            points: stable,
+            markers: false,
+            color: 0,
+        },
+    );
     Ok(LinePlot {
-        title: "Θ = 0: lock angle δ_avg (locked points), analytic branches".into(),
+        title: "Θ = 0: lock angle δ_avg of the locked points, analytic lock branches".into(),
         x_label: "f [Hz]".into(),
-        y_label: "δ [deg], paper convention".into(),
-        series: vec![
-            Series {
-                label: "analytic stable".into(),
-                points: stable,
-                markers: false,
-                color: 0,
-            },
-            Series {
-                label: "analytic unstable".into(),
-                points: unstable,
-                markers: false,
-                color: 7,
-            },
-            Series {
-                label: "f up".into(),
-                points: pts(&h.up),
-                markers: true,
-                color: 1,
-            },
-            Series {
-                label: "f down".into(),
-                points: pts(&h.down),
-                markers: true,
-                color: 3,
-            },
-        ],
+        y_label: PAPER_FIGURE_DELTA_LABEL.into(),
+        series,
+        marker_shapes,
         ..Default::default()
     })
 }

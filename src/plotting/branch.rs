@@ -18,15 +18,22 @@ pub enum Quantity {
     BetaDeg,
     /// ω on the section, rad/s.
     Omega,
+    /// α − β at t = 0 with the physical β, degrees in [0, 360): the angle the paper's Figs. 9–10
+    /// plot (see [`super::atlas::paper_figure_delta_deg`]); the Θ = 0 lock branch is then the
+    /// paper's eq. `delta_lock`.
+    PaperFigureDelta,
 }
 
-/// A branch diagram of one or more branches.
+/// A branch diagram of one or more branches: stable parts solid, unstable dashed, special points
+/// marked by a shape per type and listed with their parameter values beside the plot.
 #[derive(Debug, Clone, Default)]
 pub struct BranchDiagram {
     /// Title.
     pub title: String,
     /// The branches (same continuation parameter).
     pub branches: Vec<Branch>,
+    /// Legend label of each branch (missing ones: [`branch_label`]).
+    pub labels: Vec<String>,
     /// The y quantity.
     pub quantity: Quantity,
     /// Show angles in the paper's convention (β + 180°).
@@ -43,6 +50,50 @@ fn kind_color(k: SpecialKind) -> RGBColor {
     }
 }
 
+/// The marker of a special point of kind `k` at pixel offset (0, 0).
+fn kind_marker<DB: DrawingBackend>(
+    k: SpecialKind,
+    at: (i32, i32),
+) -> DynElement<'static, DB, (i32, i32)> {
+    let c = kind_color(k);
+    let st = ShapeStyle::from(c).stroke_width(2);
+    match k {
+        SpecialKind::Fold => TriangleMarker::new(at, 7, c.filled()).into_dyn(),
+        SpecialKind::Flip => Cross::new(at, 6, st).into_dyn(),
+        SpecialKind::SymmetryBreaking => {
+            Rectangle::new([(at.0 - 5, at.1 - 5), (at.0 + 5, at.1 + 5)], st).into_dyn()
+        }
+        SpecialKind::NeimarkSacker => Circle::new(at, 6, st).into_dyn(),
+        SpecialKind::Nonsmooth => Circle::new(at, 4, c.filled()).into_dyn(),
+    }
+}
+
+/// Axis label with unit of a continuation parameter by its name.
+pub fn param_axis_label(name: &str) -> String {
+    match name {
+        "f" => "f [Hz]".into(),
+        "theta" => "Θ [deg]".into(),
+        "g" => "g [1/s²]".into(),
+        "zeta" => "ζ [1/s]".into(),
+        "eta" => "η [1/s²]".into(),
+        "delta" => "Δ (dimensionless)".into(),
+        other => other.into(),
+    }
+}
+
+/// A legend label of a branch from its orbit specification: "symmetric (G, p = 1)",
+/// "period 2 (P_T², p = 2)".
+pub fn branch_label(b: &Branch) -> String {
+    let k = b.spec.iterations;
+    let p = b.spec.winding;
+    match b.spec.section {
+        crate::maps::Section::HalfPeriod if k == 1 => format!("symmetric (G, p = {p})"),
+        crate::maps::Section::HalfPeriod => format!("symmetric, {k}T/2 (G^{k}, p = {p})"),
+        crate::maps::Section::Stroboscopic if k == 1 => format!("period T (P_T, p = {p})"),
+        crate::maps::Section::Stroboscopic => format!("period {k}T (P_T^{k}, p = {p})"),
+    }
+}
+
 impl BranchDiagram {
     fn y(&self, x: [f64; 2]) -> f64 {
         match self.quantity {
@@ -51,6 +102,16 @@ impl BranchDiagram {
                 (x[0].to_degrees() + off).rem_euclid(360.0)
             }
             Quantity::Omega => x[1],
+            Quantity::PaperFigureDelta => (-x[0].to_degrees()).rem_euclid(360.0),
+        }
+    }
+
+    fn y_label(&self) -> &'static str {
+        match (self.quantity, self.paper_convention) {
+            (Quantity::BetaDeg, false) => "β at t = 0 (α = 0), physical convention [deg]",
+            (Quantity::BetaDeg, true) => "β at t = 0 (α = 0), paper convention [deg]",
+            (Quantity::Omega, _) => "ω at t = 0 [rad/s]",
+            (Quantity::PaperFigureDelta, _) => "α − β at t = 0 [deg] (as plotted in the paper)",
         }
     }
 }
@@ -68,9 +129,40 @@ fn range(v: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - d, hi + d)
 }
 
+/// Draws a run of points of one stability, solid (stable) or dashed (unstable).
+fn draw_run<DB: DrawingBackend, CT: CoordTranslate<From = (f64, f64)>>(
+    chart: &mut ChartContext<'_, DB, CT>,
+    run: &[(f64, f64)],
+    stable: bool,
+    col: RGBAColor,
+) -> Result<()> {
+    if run.len() < 2 {
+        return Ok(());
+    }
+    if stable {
+        chart
+            .draw_series(LineSeries::new(run.to_vec(), col.stroke_width(2)))
+            .map_err(plot_err)?;
+    } else {
+        chart
+            .draw_series(DashedLineSeries::new(
+                run.to_vec(),
+                6,
+                4,
+                col.stroke_width(2),
+            ))
+            .map_err(plot_err)?;
+    }
+    Ok(())
+}
+
 impl Figure for BranchDiagram {
+    fn size(&self) -> (u32, u32) {
+        (1150, 640)
+    }
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         root.fill(&WHITE).map_err(plot_err)?;
+        let (main, side) = root.split_horizontally(850);
         let pts = || self.branches.iter().flat_map(|b| b.points.iter());
         let (x0, x1) = range(pts().map(|p| p.param));
         let (y0, y1) = range(pts().map(|p| self.y(p.x)));
@@ -79,22 +171,19 @@ impl Figure for BranchDiagram {
             .first()
             .map(|b| b.param.name())
             .unwrap_or("parameter");
-        let ylabel = match self.quantity {
-            Quantity::BetaDeg => "β at α = 0 [deg]",
-            Quantity::Omega => "ω at α = 0 [rad/s]",
-        };
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, ("sans-serif", 22))
+        let mut chart = ChartBuilder::on(&main)
+            .caption(&self.title, ("sans-serif", 20))
             .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(70)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(plot_err)?;
         chart
             .configure_mesh()
-            .x_desc(pname)
-            .y_desc(ylabel)
+            .x_desc(param_axis_label(pname))
+            .y_desc(self.y_label())
             .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
             .draw()
             .map_err(plot_err)?;
         for (bi, b) in self.branches.iter().enumerate() {
@@ -102,71 +191,79 @@ impl Figure for BranchDiagram {
             // runs of equal stability; break runs where β wraps around
             let mut run: Vec<(f64, f64)> = Vec::new();
             let mut stable = b.points.first().map(|p| p.stable).unwrap_or(true);
-            let flush = |run: &mut Vec<(f64, f64)>,
-                         stable: bool,
-                         chart: &mut ChartContext<'_, DB, _>|
-             -> Result<()> {
-                if run.len() > 1 {
-                    if stable {
-                        chart
-                            .draw_series(LineSeries::new(run.clone(), col.stroke_width(2)))
-                            .map_err(plot_err)?;
-                    } else {
-                        chart
-                            .draw_series(DashedLineSeries::new(
-                                run.clone(),
-                                6,
-                                4,
-                                col.stroke_width(2),
-                            ))
-                            .map_err(plot_err)?;
-                    }
-                }
-                let last = run.last().copied();
-                run.clear();
-                if let Some(l) = last {
-                    run.push(l);
-                }
-                Ok(())
-            };
             for p in &b.points {
                 let q = (p.param, self.y(p.x));
                 let wrap = run
                     .last()
-                    .map(|l| (l.1 - q.1).abs() > 180.0 && self.quantity == Quantity::BetaDeg)
+                    .map(|l| (l.1 - q.1).abs() > 180.0 && self.quantity != Quantity::Omega)
                     .unwrap_or(false);
                 if wrap {
-                    flush(&mut run, stable, &mut chart)?;
+                    draw_run(&mut chart, &run, stable, col)?;
                     run.clear();
                 }
                 if p.stable != stable {
                     run.push(q);
-                    flush(&mut run, stable, &mut chart)?;
+                    draw_run(&mut chart, &run, stable, col)?;
+                    run = vec![q];
                     stable = p.stable;
                 }
                 run.push(q);
             }
-            flush(&mut run, stable, &mut chart)?;
-            for s in &b.specials {
-                let c = kind_color(s.kind);
-                let q = (s.param, self.y(s.x));
-                chart
-                    .draw_series(std::iter::once(TriangleMarker::new(q, 7, c.filled())))
+            draw_run(&mut chart, &run, stable, col)?;
+        }
+        for b in &self.branches {
+            chart
+                .draw_series(b.specials.iter().map(|s| {
+                    EmptyElement::at((s.param, self.y(s.x))) + kind_marker::<DB>(s.kind, (0, 0))
+                }))
+                .map_err(plot_err)?;
+        }
+        // the legend sits in the side panel, not over the data: each branch with its special
+        // points in order of the parameter
+        let mut y = 40;
+        let font = ("sans-serif", 14).into_font();
+        side.draw(&Text::new(
+            "solid: stable, dashed: unstable",
+            (5, y - 25),
+            font.clone(),
+        ))
+        .map_err(plot_err)?;
+        for (bi, b) in self.branches.iter().enumerate() {
+            let col = Palette99::pick(bi).to_rgba();
+            side.draw(&PathElement::new(
+                vec![(8, y + 7), (30, y + 7)],
+                col.stroke_width(3),
+            ))
+            .map_err(plot_err)?;
+            let label = self
+                .labels
+                .get(bi)
+                .cloned()
+                .unwrap_or_else(|| branch_label(b));
+            side.draw(&Text::new(label, (36, y), font.clone()))
+                .map_err(plot_err)?;
+            y += 20;
+            let mut sp: Vec<_> = b.specials.iter().collect();
+            sp.sort_by(|a, b| a.param.total_cmp(&b.param));
+            for s in sp {
+                side.draw(&(EmptyElement::at((46, y + 7)) + kind_marker::<DB>(s.kind, (0, 0))))
                     .map_err(plot_err)?;
-                chart
-                    .draw_series(std::iter::once(Text::new(
-                        format!("{} {:.4}", s.kind.label(), s.param),
-                        (q.0, q.1),
-                        ("sans-serif", 12).into_font().color(&c),
-                    )))
-                    .map_err(plot_err)?;
+                side.draw(&Text::new(
+                    format!("{} {pname} = {:.4}", s.kind.label(), s.param),
+                    (60, y),
+                    ("sans-serif", 13).into_font(),
+                ))
+                .map_err(plot_err)?;
+                y += 18;
             }
+            y += 8;
         }
         Ok(())
     }
 }
 
-/// Multipliers of every point of a branch in the complex plane, with the unit circle.
+/// Multipliers of every point of a branch in the complex plane, with the unit circle; stable
+/// points blue, unstable orange.
 #[derive(Debug, Clone, Default)]
 pub struct MultiplierPlot {
     /// Title.
@@ -177,7 +274,7 @@ pub struct MultiplierPlot {
 
 impl Figure for MultiplierPlot {
     fn size(&self) -> (u32, u32) {
-        (700, 700)
+        (720, 720)
     }
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         root.fill(&WHITE).map_err(plot_err)?;
@@ -188,16 +285,18 @@ impl Figure for MultiplierPlot {
             }
         }
         let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, ("sans-serif", 22))
+            .caption(&self.title, ("sans-serif", 18))
             .margin(15)
-            .x_label_area_size(40)
-            .y_label_area_size(50)
+            .x_label_area_size(45)
+            .y_label_area_size(60)
             .build_cartesian_2d(-r..r, -r..r)
             .map_err(plot_err)?;
         chart
             .configure_mesh()
             .x_desc("Re μ")
             .y_desc("Im μ")
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
             .draw()
             .map_err(plot_err)?;
         chart
@@ -208,35 +307,61 @@ impl Figure for MultiplierPlot {
                 }),
                 BLACK.stroke_width(1),
             ))
-            .map_err(plot_err)?;
+            .map_err(plot_err)?
+            .label("unit circle |μ| = 1")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK));
+        let mut frac = Vec::new();
         if let Some(b) = &self.branch {
-            for p in &b.points {
-                let c = if p.stable {
-                    RGBColor(0, 90, 200)
-                } else {
-                    RGBColor(220, 60, 0)
-                };
-                for z in p.floquet.multipliers {
-                    if z[0].abs() <= r && z[1].abs() <= r {
-                        chart
-                            .draw_series(std::iter::once(Circle::new((z[0], z[1]), 3, c.filled())))
-                            .map_err(plot_err)?;
-                    }
+            for (stable, c, label) in [
+                (true, RGBColor(0, 90, 200), "stable orbit"),
+                (false, RGBColor(220, 60, 0), "unstable orbit"),
+            ] {
+                let pts: Vec<(f64, f64)> = b
+                    .points
+                    .iter()
+                    .filter(|p| p.stable == stable)
+                    .flat_map(|p| p.floquet.multipliers)
+                    .filter(|z| z[0].abs() <= r && z[1].abs() <= r)
+                    .map(|z| (z[0], z[1]))
+                    .collect();
+                frac.extend(
+                    pts.iter()
+                        .map(|p| ((p.0 + r) / (2.0 * r), (p.1 + r) / (2.0 * r))),
+                );
+                if pts.is_empty() {
+                    continue;
                 }
+                chart
+                    .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))
+                    .map_err(plot_err)?
+                    .label(label)
+                    .legend(move |(x, y)| Circle::new((x + 9, y), 3, c.filled()));
             }
         }
+        let (pos, _) = super::legend_corner(&frac, 3, 20, (600, 600));
+        chart
+            .configure_series_labels()
+            .position(pos)
+            .margin(8)
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()
+            .map_err(plot_err)?;
         Ok(())
     }
 }
 
-/// Two-parameter curves (e.g. the lock-loss boundary f_c(Θ)).
+/// Two-parameter curves (e.g. the lock-loss boundary f_c(Θ)): one colour and one legend entry per
+/// distinct label (curves continued from one start in both directions share a label).
 #[derive(Debug, Clone, Default)]
 pub struct BoundaryPlot {
     /// Title.
     pub title: String,
     /// The curves.
     pub curves: Vec<(String, Curve)>,
-    /// Extra reference points (label, x, y), e.g. analytic values.
+    /// Extra reference points (label, x, y), e.g. analytic values, drawn as black dots and listed
+    /// in the legend.
     pub marks: Vec<(String, f64, f64)>,
 }
 
@@ -251,47 +376,86 @@ impl Figure for BoundaryPlot {
             .first()
             .map(|c| (c.1.along.name(), c.1.free.name()))
             .unwrap_or(("", ""));
+        let mut labels: Vec<&str> = Vec::new();
+        for (l, _) in &self.curves {
+            if !labels.contains(&l.as_str()) {
+                labels.push(l);
+            }
+        }
+        let mut mark_labels: Vec<&str> = Vec::new();
+        for (l, _, _) in &self.marks {
+            if !mark_labels.contains(&l.as_str()) {
+                mark_labels.push(l);
+            }
+        }
+        let frac: Vec<(f64, f64)> = all()
+            .map(|p| (p.along, p.free))
+            .chain(self.marks.iter().map(|m| (m.1, m.2)))
+            .map(|(x, y)| ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0)))
+            .collect();
+        let chars = labels
+            .iter()
+            .chain(&mark_labels)
+            .map(|l| l.chars().count())
+            .max()
+            .unwrap_or(0);
+        let (pos, headroom) =
+            super::legend_corner(&frac, labels.len() + mark_labels.len(), chars, (780, 480));
+        let y1 = y1 + headroom * (y1 - y0);
         let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, ("sans-serif", 22))
+            .caption(&self.title, ("sans-serif", 20))
             .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(70)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(plot_err)?;
         chart
             .configure_mesh()
-            .x_desc(if xl == "theta" { "Θ [deg]" } else { xl })
-            .y_desc(if yl == "f" { "f [Hz]" } else { yl })
+            .x_desc(param_axis_label(xl))
+            .y_desc(param_axis_label(yl))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
             .draw()
             .map_err(plot_err)?;
-        for (i, (label, c)) in self.curves.iter().enumerate() {
+        for (label, c) in &self.curves {
+            let i = labels.iter().position(|l| l == label).unwrap_or(0);
             let col = Palette99::pick(i).to_rgba();
-            chart
+            let anno = chart
                 .draw_series(LineSeries::new(
                     c.points.iter().map(|p| (p.along, p.free)),
                     col.stroke_width(2),
                 ))
+                .map_err(plot_err)?;
+            // one legend entry per label: on its first curve
+            if self.curves.iter().position(|(l, _)| l == label)
+                == self.curves.iter().position(|x| std::ptr::eq(&x.1, c))
+            {
+                anno.label(label.as_str()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(3))
+                });
+            }
+        }
+        for ml in &mark_labels {
+            let pts: Vec<(f64, f64)> = self
+                .marks
+                .iter()
+                .filter(|m| m.0 == *ml)
+                .map(|m| (m.1, m.2))
+                .collect();
+            chart
+                .draw_series(pts.into_iter().map(|p| Circle::new(p, 5, BLACK.filled())))
                 .map_err(plot_err)?
-                .label(label.as_str())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], col));
+                .label(*ml)
+                .legend(|(x, y)| Circle::new((x + 9, y), 5, BLACK.filled()));
         }
-        for (label, x, y) in &self.marks {
-            chart
-                .draw_series(std::iter::once(Circle::new((*x, *y), 5, BLACK.filled())))
-                .map_err(plot_err)?;
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    label.clone(),
-                    (*x, *y),
-                    ("sans-serif", 12).into_font(),
-                )))
-                .map_err(plot_err)?;
-        }
-        if !self.curves.is_empty() {
+        if !self.curves.is_empty() || !self.marks.is_empty() {
             chart
                 .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
+                .position(pos)
+                .margin(8)
+                .background_style(WHITE.mix(0.9))
                 .border_style(BLACK)
+                .label_font(("sans-serif", 14))
                 .draw()
                 .map_err(plot_err)?;
         }

@@ -100,8 +100,34 @@ fn unique() -> u64 {
     N.fetch_add(1, Ordering::Relaxed)
 }
 
+/// Shape of the markers of a marker [`Series`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MarkerShape {
+    /// Filled circle (radius 3 px).
+    FilledCircle,
+    /// Open square (7 px wide, drawn on top): stays visible around a filled circle at the same point.
+    OpenSquare,
+    /// Filled triangle.
+    Triangle,
+    /// Cross.
+    Cross,
+}
+
+impl MarkerShape {
+    /// The default shape of the `k`-th marker series of a plot.
+    pub fn nth(k: usize) -> Self {
+        [
+            Self::FilledCircle,
+            Self::OpenSquare,
+            Self::Triangle,
+            Self::Cross,
+        ][k % 4]
+    }
+}
+
 /// A simple line/scatter figure of several series, used by the CLI and as the building block of
-/// the paper's figures.
+/// the paper's figures. The legend is put into the corner of the plot with the fewest data points;
+/// if every corner holds data, the y range is extended so that the legend sits above the data.
 #[derive(Debug, Clone, Default)]
 pub struct LinePlot {
     /// Title.
@@ -112,10 +138,13 @@ pub struct LinePlot {
     pub y_label: String,
     /// Logarithmic x axis.
     pub log_x: bool,
-    /// Logarithmic y axis.
+    /// Logarithmic y axis (points with y ≤ 0 are left out).
     pub log_y: bool,
     /// The series.
     pub series: Vec<Series>,
+    /// Marker shape of the k-th marker series (by order among the series with `markers`);
+    /// [`MarkerShape::nth`] where missing.
+    pub marker_shapes: Vec<MarkerShape>,
 }
 
 /// One series of a [`LinePlot`].
@@ -155,16 +184,158 @@ fn finite_range(v: impl Iterator<Item = f64>, log: bool) -> Option<(f64, f64)> {
     }
 }
 
+/// Where a legend of `rows` entries, the longest `chars` characters, fits in a plot area of
+/// `area` pixels without covering any of the `frac` points (positions as fractions of the axes,
+/// x to the right, y upwards): the corner with the fewest points, and the fraction of the height
+/// to add above the data when every corner holds some (0 otherwise).
+pub fn legend_corner(
+    frac: &[(f64, f64)],
+    rows: usize,
+    chars: usize,
+    area: (u32, u32),
+) -> (SeriesLabelPosition, f64) {
+    let w = ((chars as f64 * 8.0 + 50.0) / area.0 as f64).min(0.9);
+    let h = ((rows as f64 * 22.0 + 16.0) / area.1 as f64).min(0.9);
+    let count = |x0: f64, y0: f64| {
+        frac.iter()
+            .filter(|p| p.0 >= x0 && p.0 <= x0 + w && p.1 >= y0 && p.1 <= y0 + h)
+            .count()
+    };
+    let corners = [
+        (SeriesLabelPosition::UpperRight, 1.0 - w, 1.0 - h),
+        (SeriesLabelPosition::UpperLeft, 0.0, 1.0 - h),
+        (SeriesLabelPosition::LowerRight, 1.0 - w, 0.0),
+        (SeriesLabelPosition::LowerLeft, 0.0, 0.0),
+    ];
+    let best = corners
+        .into_iter()
+        .map(|(pos, x0, y0)| (count(x0, y0), pos))
+        .min_by_key(|c| c.0);
+    match best {
+        Some((0, pos)) => (pos, 0.0),
+        _ => (SeriesLabelPosition::UpperRight, h / (1.0 - h)),
+    }
+}
+
+/// Draws the points of one marker series (and its legend entry if `label` is not empty).
+fn draw_markers<'a, DB: DrawingBackend + 'a, CT: CoordTranslate<From = (f64, f64)>>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    shape: MarkerShape,
+    points: Vec<(f64, f64)>,
+    c: RGBAColor,
+    label: &str,
+) -> Result<()> {
+    macro_rules! series {
+        ($elems:expr, $glyph:expr) => {{
+            let anno = chart.draw_series($elems).map_err(plot_err)?;
+            if !label.is_empty() {
+                anno.label(label).legend($glyph);
+            }
+        }};
+    }
+    let it = points.into_iter();
+    match shape {
+        MarkerShape::FilledCircle => {
+            series!(it.map(|p| Circle::new(p, 3, c.filled())), move |(x, y)| {
+                Circle::new((x + 9, y), 3, c.filled())
+            })
+        }
+        MarkerShape::OpenSquare => series!(
+            it.map(|p| EmptyElement::at(p) + Rectangle::new([(-4, -4), (4, 4)], c.stroke_width(2))),
+            move |(x, y)| Rectangle::new([(x + 5, y - 4), (x + 13, y + 4)], c.stroke_width(2))
+        ),
+        MarkerShape::Triangle => series!(
+            it.map(|p| TriangleMarker::new(p, 5, c.filled())),
+            move |(x, y)| TriangleMarker::new((x + 9, y), 5, c.filled())
+        ),
+        MarkerShape::Cross => {
+            series!(
+                it.map(|p| Cross::new(p, 4, c.stroke_width(2))),
+                move |(x, y)| Cross::new((x + 9, y), 4, c.stroke_width(2))
+            )
+        }
+    }
+    Ok(())
+}
+
+/// Draws a legend at `pos` if any series is labelled.
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    pos: SeriesLabelPosition,
+) -> Result<()> {
+    chart
+        .configure_series_labels()
+        .position(pos)
+        .margin(8)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(plot_err)
+}
+
+/// Position of a point as fractions of the axes ranges (log or linear).
+fn axis_fraction(v: f64, lo: f64, hi: f64, log: bool) -> f64 {
+    if log {
+        (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
+    } else {
+        (v - lo) / (hi - lo)
+    }
+}
+
+impl LinePlot {
+    fn visible(&self, p: &(f64, f64)) -> bool {
+        p.0.is_finite()
+            && p.1.is_finite()
+            && (!self.log_x || p.0 > 0.0)
+            && (!self.log_y || p.1 > 0.0)
+    }
+}
+
 impl Figure for LinePlot {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
-        let pts = || self.series.iter().flat_map(|s| s.points.iter().copied());
+        let pts = || {
+            self.series
+                .iter()
+                .flat_map(|s| s.points.iter().copied())
+                .filter(|p| self.visible(p))
+        };
         let (x0, x1) = finite_range(pts().map(|p| p.0), self.log_x).unwrap_or((0.0, 1.0));
-        let (y0, y1) = finite_range(pts().map(|p| p.1), self.log_y).unwrap_or((0.0, 1.0));
+        let (y0, mut y1) = finite_range(pts().map(|p| p.1), self.log_y).unwrap_or((0.0, 1.0));
+        // the legend: the emptiest corner, or room made above the data
+        let labelled: Vec<&Series> = self.series.iter().filter(|s| !s.label.is_empty()).collect();
+        let chars = labelled
+            .iter()
+            .map(|s| s.label.chars().count())
+            .max()
+            .unwrap_or(0);
+        let (w, h) = root.dim_in_pixel();
+        let frac: Vec<(f64, f64)> = pts()
+            .map(|p| {
+                (
+                    axis_fraction(p.0, x0, x1, self.log_x),
+                    axis_fraction(p.1, y0, y1, self.log_y),
+                )
+            })
+            .collect();
+        let (pos, headroom) = legend_corner(
+            &frac,
+            labelled.len(),
+            chars,
+            (w.saturating_sub(100).max(1), h.saturating_sub(110).max(1)),
+        );
+        if !labelled.is_empty() && headroom > 0.0 {
+            y1 = if self.log_y {
+                (y1.ln() + headroom * (y1.ln() - y0.ln())).exp()
+            } else {
+                y1 + headroom * (y1 - y0)
+            };
+        }
         let mut b = ChartBuilder::on(root);
-        b.caption(&self.title, ("sans-serif", 22))
+        b.caption(&self.title, ("sans-serif", 20))
             .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(70);
+            .x_label_area_size(50)
+            .y_label_area_size(80);
         macro_rules! body {
             ($chart:expr) => {{
                 let mut chart = $chart;
@@ -173,38 +344,39 @@ impl Figure for LinePlot {
                     .x_desc(self.x_label.as_str())
                     .y_desc(self.y_label.as_str())
                     .label_style(("sans-serif", 14))
+                    .axis_desc_style(("sans-serif", 15))
                     .draw()
                     .map_err(plot_err)?;
+                let mut k = 0;
                 for s in &self.series {
                     let c = Palette99::pick(s.color).to_rgba();
-                    let data = s
+                    let data: Vec<(f64, f64)> = s
                         .points
                         .iter()
                         .copied()
-                        .filter(|p| p.0.is_finite() && p.1.is_finite());
-                    let anno = if s.markers {
-                        chart
-                            .draw_series(data.map(|p| Circle::new(p, 3, c.filled())))
-                            .map_err(plot_err)?
+                        .filter(|p| self.visible(p))
+                        .collect();
+                    if s.markers {
+                        let shape = self
+                            .marker_shapes
+                            .get(k)
+                            .copied()
+                            .unwrap_or_else(|| MarkerShape::nth(k));
+                        k += 1;
+                        draw_markers(&mut chart, shape, data, c, &s.label)?;
                     } else {
-                        chart
+                        let anno = chart
                             .draw_series(LineSeries::new(data, c.stroke_width(2)))
-                            .map_err(plot_err)?
-                    };
-                    if !s.label.is_empty() {
-                        anno.label(s.label.as_str()).legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(3))
-                        });
+                            .map_err(plot_err)?;
+                        if !s.label.is_empty() {
+                            anno.label(s.label.as_str()).legend(move |(x, y)| {
+                                PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(3))
+                            });
+                        }
                     }
                 }
-                if self.series.iter().any(|s| !s.label.is_empty()) {
-                    chart
-                        .configure_series_labels()
-                        .background_style(WHITE.mix(0.8))
-                        .border_style(BLACK)
-                        .label_font(("sans-serif", 14))
-                        .draw()
-                        .map_err(plot_err)?;
+                if !labelled.is_empty() {
+                    draw_legend(&mut chart, pos)?;
                 }
             }};
         }
@@ -227,6 +399,22 @@ impl Figure for LinePlot {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn legend_goes_to_an_empty_corner_or_above_the_data() {
+        // points along the upper edge and in the lower right: the lower left is free
+        let mut pts: Vec<(f64, f64)> = (0..=10).map(|i| (i as f64 / 10.0, 0.98)).collect();
+        pts.push((0.95, 0.05));
+        let (pos, head) = legend_corner(&pts, 2, 10, (800, 500));
+        assert!(matches!(pos, SeriesLabelPosition::LowerLeft), "{pos:?}");
+        assert_eq!(head, 0.0);
+        // every corner taken: room above the data, as large as the legend's share of the height
+        pts.push((0.05, 0.05));
+        let (pos, head) = legend_corner(&pts, 2, 10, (800, 500));
+        assert!(matches!(pos, SeriesLabelPosition::UpperRight), "{pos:?}");
+        let h = (2.0 * 22.0 + 16.0) / 500.0;
+        assert!((head - h / (1.0 - h)).abs() < 1e-12);
+    }
 
     #[test]
     fn saves_svg_and_png() {
