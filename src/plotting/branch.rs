@@ -6,6 +6,7 @@ use super::{plot_err, Figure};
 use crate::continuation::two_param::Curve;
 use crate::continuation::{Branch, SpecialKind};
 use crate::error::Result;
+use crate::model::{Gear, Parameter, Parametrised};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -26,12 +27,12 @@ pub enum Quantity {
 
 /// A branch diagram of one or more branches: stable parts solid, unstable dashed, special points
 /// marked by a shape per type and listed with their parameter values beside the plot.
-#[derive(Debug, Clone, Default)]
-pub struct BranchDiagram {
+#[derive(Debug, Clone)]
+pub struct BranchDiagram<S: Parametrised = Gear> {
     /// Title.
     pub title: String,
     /// The branches (same continuation parameter).
-    pub branches: Vec<Branch>,
+    pub branches: Vec<Branch<S>>,
     /// Legend label of each branch (missing ones: [`branch_label`]).
     pub labels: Vec<String>,
     /// The y quantity.
@@ -68,22 +69,33 @@ fn kind_marker<DB: DrawingBackend>(
     }
 }
 
-/// Axis label with unit of a continuation parameter by its name.
-pub fn param_axis_label(name: &str) -> String {
-    match name {
-        "f" => "f [Hz]".into(),
+/// Axis label with unit of a parameter: the gear's with their symbols (Θ [deg], ζ [1/s], …), any
+/// other as [`Parameter::label`].
+pub fn param_axis_label<P: Parameter>(p: P) -> String {
+    match p.name() {
         "theta" => "Θ [deg]".into(),
-        "g" => "g [1/s²]".into(),
         "zeta" => "ζ [1/s]".into(),
         "eta" => "η [1/s²]".into(),
         "delta" => "Δ (dimensionless)".into(),
-        other => other.into(),
+        _ => p.label(),
+    }
+}
+
+impl<S: Parametrised> Default for BranchDiagram<S> {
+    fn default() -> Self {
+        Self {
+            title: String::new(),
+            branches: Vec::new(),
+            labels: Vec::new(),
+            quantity: Quantity::default(),
+            paper_convention: false,
+        }
     }
 }
 
 /// A legend label of a branch from its orbit specification: "symmetric (G, p = 1)",
 /// "period 2 (P_T², p = 2)".
-pub fn branch_label(b: &Branch) -> String {
+pub fn branch_label<S: Parametrised>(b: &Branch<S>) -> String {
     let k = b.spec.iterations;
     let p = b.spec.winding;
     match b.spec.section {
@@ -94,7 +106,7 @@ pub fn branch_label(b: &Branch) -> String {
     }
 }
 
-impl BranchDiagram {
+impl<S: Parametrised> BranchDiagram<S> {
     fn y(&self, x: [f64; 2]) -> f64 {
         match self.quantity {
             Quantity::BetaDeg => {
@@ -156,7 +168,7 @@ fn draw_run<DB: DrawingBackend, CT: CoordTranslate<From = (f64, f64)>>(
     Ok(())
 }
 
-impl Figure for BranchDiagram {
+impl<S: Parametrised> Figure for BranchDiagram<S> {
     fn size(&self) -> (u32, u32) {
         (1150, 640)
     }
@@ -166,11 +178,11 @@ impl Figure for BranchDiagram {
         let pts = || self.branches.iter().flat_map(|b| b.points.iter());
         let (x0, x1) = range(pts().map(|p| p.param));
         let (y0, y1) = range(pts().map(|p| self.y(p.x)));
-        let pname = self
+        let (pname, xlabel) = self
             .branches
             .first()
-            .map(|b| b.param.name())
-            .unwrap_or("parameter");
+            .map(|b| (b.param.name(), param_axis_label(b.param)))
+            .unwrap_or(("parameter", "parameter".into()));
         let mut chart = ChartBuilder::on(&main)
             .caption(&self.title, ("sans-serif", 20))
             .margin(15)
@@ -180,7 +192,7 @@ impl Figure for BranchDiagram {
             .map_err(plot_err)?;
         chart
             .configure_mesh()
-            .x_desc(param_axis_label(pname))
+            .x_desc(xlabel)
             .y_desc(self.y_label())
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 15))
@@ -264,15 +276,24 @@ impl Figure for BranchDiagram {
 
 /// Multipliers of every point of a branch in the complex plane, with the unit circle; stable
 /// points blue, unstable orange.
-#[derive(Debug, Clone, Default)]
-pub struct MultiplierPlot {
+#[derive(Debug, Clone)]
+pub struct MultiplierPlot<S: Parametrised = Gear> {
     /// Title.
     pub title: String,
     /// The branch.
-    pub branch: Option<Branch>,
+    pub branch: Option<Branch<S>>,
 }
 
-impl Figure for MultiplierPlot {
+impl<S: Parametrised> Default for MultiplierPlot<S> {
+    fn default() -> Self {
+        Self {
+            title: String::new(),
+            branch: None,
+        }
+    }
+}
+
+impl<S: Parametrised> Figure for MultiplierPlot<S> {
     fn size(&self) -> (u32, u32) {
         (720, 720)
     }
@@ -354,18 +375,28 @@ impl Figure for MultiplierPlot {
 
 /// Two-parameter curves (e.g. the lock-loss boundary f_c(Θ)): one colour and one legend entry per
 /// distinct label (curves continued from one start in both directions share a label).
-#[derive(Debug, Clone, Default)]
-pub struct BoundaryPlot {
+#[derive(Debug, Clone)]
+pub struct BoundaryPlot<S: Parametrised = Gear> {
     /// Title.
     pub title: String,
     /// The curves.
-    pub curves: Vec<(String, Curve)>,
+    pub curves: Vec<(String, Curve<S>)>,
     /// Extra reference points (label, x, y), e.g. analytic values, drawn as black dots and listed
     /// in the legend.
     pub marks: Vec<(String, f64, f64)>,
 }
 
-impl Figure for BoundaryPlot {
+impl<S: Parametrised> Default for BoundaryPlot<S> {
+    fn default() -> Self {
+        Self {
+            title: String::new(),
+            curves: Vec::new(),
+            marks: Vec::new(),
+        }
+    }
+}
+
+impl<S: Parametrised> Figure for BoundaryPlot<S> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         root.fill(&WHITE).map_err(plot_err)?;
         let all = || self.curves.iter().flat_map(|c| c.1.points.iter());
@@ -374,8 +405,8 @@ impl Figure for BoundaryPlot {
         let (xl, yl) = self
             .curves
             .first()
-            .map(|c| (c.1.along.name(), c.1.free.name()))
-            .unwrap_or(("", ""));
+            .map(|c| (param_axis_label(c.1.along), param_axis_label(c.1.free)))
+            .unwrap_or_default();
         let mut labels: Vec<&str> = Vec::new();
         for (l, _) in &self.curves {
             if !labels.contains(&l.as_str()) {
@@ -411,8 +442,8 @@ impl Figure for BoundaryPlot {
             .map_err(plot_err)?;
         chart
             .configure_mesh()
-            .x_desc(param_axis_label(xl))
-            .y_desc(param_axis_label(yl))
+            .x_desc(xl)
+            .y_desc(yl)
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 15))
             .draw()
