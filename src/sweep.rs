@@ -611,7 +611,10 @@ impl<'a> SweepRunner<'a> {
         self.shard = Some(shard);
         let rows = self.run_rows()?;
         let rows_total = shard.rows(rows.len()).count();
-        let rows_done = shard.rows(rows.len()).filter(|&i| rows[i].is_some()).count();
+        let rows_done = shard
+            .rows(rows.len())
+            .filter(|&i| rows[i].is_some())
+            .count();
         Ok(ShardStatus {
             shard,
             rows_done,

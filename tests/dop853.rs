@@ -29,7 +29,9 @@ fn convergence_order_from_work_error_slope() {
         let pts: Vec<(f64, f64)> = tols
             .iter()
             .map(|&tol| {
-                let fl = m.flow(&gear, 0.0, x0, t1, &FlowOptions::with_tol(tol)).unwrap();
+                let fl = m
+                    .flow(&gear, 0.0, x0, t1, &FlowOptions::with_tol(tol))
+                    .unwrap();
                 let e = (fl.x[0] - reference.x[0])
                     .abs()
                     .max((fl.x[1] - reference.x[1]).abs());
@@ -58,7 +60,10 @@ fn agrees_with_dp5_at_tight_tolerance() {
         let t1 = periods * gear.period();
         let a = EventDriven.flow(&gear, 0.0, x0, t1, &o).unwrap();
         let b = EventDriven853.flow(&gear, 0.0, x0, t1, &o).unwrap();
-        assert!((a.x[0] - b.x[0]).abs() < 1e-9, "Θ={th} f={f}: β {a:?} vs {b:?}");
+        assert!(
+            (a.x[0] - b.x[0]).abs() < 1e-9,
+            "Θ={th} f={f}: β {a:?} vs {b:?}"
+        );
         assert!((a.x[1] - b.x[1]).abs() < 1e-8, "Θ={th} f={f}: ω");
         assert_eq!(a.events.len(), b.events.len(), "Θ={th} f={f}: events");
         for (ea, eb) in a.events.iter().zip(&b.events) {
@@ -70,10 +75,16 @@ fn agrees_with_dp5_at_tight_tolerance() {
         }
         let (ja, jb) = (a.jac_x.unwrap(), b.jac_x.unwrap());
         let sc = ja.abs().max().max(1.0);
-        assert!((ja - jb).abs().max() < 1e-7 * sc, "Θ={th} f={f}: {ja} vs {jb}");
+        assert!(
+            (ja - jb).abs().max() < 1e-7 * sc,
+            "Θ={th} f={f}: {ja} vs {jb}"
+        );
         let (pa, pb) = (a.jac_p.unwrap(), b.jac_p.unwrap());
         let sp = pa.abs().max().max(1.0);
-        assert!((&pa - &pb).abs().max() < 1e-7 * sp, "Θ={th} f={f}: {pa} vs {pb}");
+        assert!(
+            (&pa - &pb).abs().max() < 1e-7 * sp,
+            "Θ={th} f={f}: {pa} vs {pb}"
+        );
     }
 }
 
@@ -107,11 +118,8 @@ fn jacobians_match_finite_differences() {
             }
         }
         let fo = FlowOptions::with_tol(1e-13);
-        let map = |g: &Gear, x: [f64; 2]| {
-            poincare_map(&EventDriven853, g, sec, x, it, &fo)
-                .unwrap()
-                .x
-        };
+        let map =
+            |g: &Gear, x: [f64; 2]| poincare_map(&EventDriven853, g, sec, x, it, &fo).unwrap().x;
         let ax = img.jac_x.unwrap();
         let sx = ax.abs().max().max(1.0);
         for j in 0..2 {
@@ -149,7 +157,10 @@ fn jacobians_match_finite_differences() {
             }
         }
     }
-    assert!(n_cross > 0 && n_stick > 0, "crossings {n_cross}, sticks {n_stick}");
+    assert!(
+        n_cross > 0 && n_stick > 0,
+        "crossings {n_cross}, sticks {n_stick}"
+    );
 }
 
 /// Θ = 0: the locked orbit is known in closed form (fixed point of P_T up to one turn, with
@@ -191,7 +202,9 @@ fn samples_follow_the_trajectory() {
     let gear = Gear::paper(31.0, 0.5).unwrap();
     let times: Vec<f64> = (0..=200).map(|i| i as f64 * 0.02).collect();
     let o = FlowOptions::with_tol(1e-11).samples(times.clone());
-    let fl = EventDriven853.flow(&gear, 0.0, [1.0, 0.0], 4.0, &o).unwrap();
+    let fl = EventDriven853
+        .flow(&gear, 0.0, [1.0, 0.0], 4.0, &o)
+        .unwrap();
     assert_eq!(fl.samples.len(), times.len());
     for s in fl.samples.iter().step_by(23) {
         let direct = EventDriven853

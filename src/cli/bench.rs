@@ -4,7 +4,7 @@ use super::common::{GearArgs, Output};
 use super::methods::{parse_x0, DriveArgs};
 use crate::bench::{rhs_only_time, to_csv, work_precision, Candidate, WorkPrecisionSetup};
 use crate::error::{positive, Error, Result};
-use crate::integrator::{EventDriven, FixedStep, FlowMethod, Sensitivity};
+use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod, Sensitivity};
 use crate::model::Gear;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -35,6 +35,13 @@ pub struct Args {
         default_value = "1e-4,1e-6,1e-8,1e-10,1e-12"
     )]
     event_tols: Vec<f64>,
+    /// Tolerances of the event-driven DOP853 [dimensionless], comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1e-4,1e-6,1e-8,1e-10,1e-12"
+    )]
+    dop853_tols: Vec<f64>,
     /// Steps per period of the fixed-step RK4 [1], comma-separated (the paper uses 50).
     #[arg(
         long,
@@ -49,7 +56,7 @@ pub struct Args {
     /// Regularisation velocities ε of the regularised method [rad/s], comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "1e-2,1e-3,1e-4,1e-5")]
     reg_eps: Vec<f64>,
-    /// Tolerance of the event-driven reference [dimensionless].
+    /// Tolerance of the event-driven reference (DOP853) [dimensionless].
     #[arg(long, default_value_t = 1e-13)]
     reference_tol: f64,
     /// Minimum wall time spent timing each point [s].
@@ -100,7 +107,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     positive("reference-tol", a.reference_tol)?;
     crate::error::non_negative("min-time", a.min_time)?;
-    for &t in a.event_tols.iter().chain(&a.reg_tols) {
+    for &t in a.event_tols.iter().chain(&a.reg_tols).chain(&a.dop853_tols) {
         positive("tol", t)?;
     }
     if a.fixed_steps.contains(&0) {
@@ -116,6 +123,9 @@ pub fn run(a: Args) -> Result<()> {
     let mut cands: Vec<Candidate<'_, Gear>> = Vec::new();
     for &t in &a.event_tols {
         cands.push(Candidate::new(&EventDriven, t, "event-driven DP5"));
+    }
+    for &t in &a.dop853_tols {
+        cands.push(Candidate::new(&EventDriven853, t, "event-driven DOP853"));
     }
     for m in &fixed {
         cands.push(Candidate::new(

@@ -293,8 +293,9 @@ pub(super) const DOP853: Tableau = Tableau {
         ]),
     ],
     dense_rows: 4,
-    expo: 1.0 / 8.0,
-    beta: 0.0,
+    expo: 1.0 / 8.0 - 0.04 * 0.2,
+    beta: 0.04,
+    node_gap: 0.6 - 1.0 / 3.0,
     fac_min: 1.0 / 6.0,
     fac_max: 1.0 / 0.333,
 };

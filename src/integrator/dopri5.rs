@@ -82,6 +82,7 @@ pub(super) const DOPRI5: Tableau = Tableau {
     dense_rows: 1,
     expo: 0.2 - 0.04 * 0.75,
     beta: 0.04,
+    node_gap: 0.5,
     fac_min: 0.1,
     fac_max: 5.0,
 };

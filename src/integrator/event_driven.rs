@@ -61,16 +61,15 @@ fn dense_coeffs(tab: &Tableau, i: usize, y: &V, yn: &V, k: &[V; SMAX], hs: f64) 
 /// The argument y₀ + h Σⱼ aᵢⱼ kⱼ of stage `i` over the first `n` components.
 #[inline(always)]
 fn stage_argument(tab: &Tableau, i: usize, y: &V, k: &[V; SMAX], hs: f64, n: usize, out: &mut V) {
-    let mut acc = [0.0; NMAX];
-    for (j, &a) in tab.a[i].iter().enumerate().take(i) {
-        if a != 0.0 {
-            for c in 0..n {
-                acc[c] += a * k[j][c];
+    let a = &tab.a[i];
+    for c in 0..n {
+        let mut acc = 0.0;
+        for j in 0..i {
+            if a[j] != 0.0 {
+                acc += a[j] * k[j][c];
             }
         }
-    }
-    for c in 0..n {
-        out[c] = y[c] + hs * acc[c];
+        out[c] = y[c] + hs * acc;
     }
 }
 
@@ -145,9 +144,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         for i in tab.fsal() + 1..tab.total() {
             let mut ys = [0.0; NMAX];
             stage_argument(tab, i, y, k, hs, n, &mut ys);
-            let mut out = [0.0; NMAX];
-            self.rhs(layout, t + tab.c[i] * hs, &ys, s, &mut out);
-            k[i] = out;
+            self.rhs(layout, t + tab.c[i] * hs, &ys, s, &mut k[i]);
         }
     }
 
@@ -164,24 +161,20 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         for i in 1..tab.stages {
             stage_argument(tab, i, y, k, hs, n, &mut ys);
             wmin = wmin.min(s * ys[1]);
-            let mut out = [0.0; NMAX];
-            self.rhs(layout, t + tab.c[i] * hs, &ys, s, &mut out);
-            dmax = dmax.max(out[1].abs());
-            k[i] = out;
+            self.rhs(layout, t + tab.c[i] * hs, &ys, s, &mut k[i]);
+            dmax = dmax.max(k[i][1].abs());
         }
         if tab.last_stage_is_solution {
             *yn = ys;
         } else {
-            let mut acc = [0.0; NMAX];
-            for (j, &b) in tab.b.iter().enumerate().take(tab.stages) {
-                if b != 0.0 {
-                    for c in 0..n {
-                        acc[c] += b * k[j][c];
+            for c in 0..n {
+                let mut acc = 0.0;
+                for j in 0..tab.stages {
+                    if tab.b[j] != 0.0 {
+                        acc += tab.b[j] * k[j][c];
                     }
                 }
-            }
-            for c in 0..n {
-                yn[c] = y[c] + hs * acc[c];
+                yn[c] = y[c] + hs * acc;
             }
         }
         wmin = wmin.min(s * yn[1]);
@@ -316,9 +309,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
 
             let s = mode.side();
             if !fsal {
-                let mut k0 = [0.0; NMAX];
-                self.rhs(self.layout, t, &y, s, &mut k0);
-                k[0] = k0;
+                self.rhs(self.layout, t, &y, s, &mut k[0]);
                 fsal = true;
             }
             let hh = h.min(hmax).min(t1 - t);
@@ -347,7 +338,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                 continue;
             }
             let Some(hnew) = self.propose(&mut ctl, err, hs) else {
-                h = hs / (err.powf(tab.expo) / 0.9).min(tab.fac_max);
+                h = hs / (tab.pow_expo(err) / 0.9).min(tab.fac_max);
                 self.stats.rejected += 1;
                 if h < 1e-15 * period.max(t.abs()) {
                     return Err(Error::Integration {
@@ -359,22 +350,21 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
             };
             self.stats.steps += 1;
             if !tab.last_stage_is_solution {
-                let mut kf = [0.0; NMAX];
-                self.rhs(self.layout, tn, &yn, s, &mut kf);
-                k[tab.fsal()] = kf;
+                self.rhs(self.layout, tn, &yn, s, &mut k[tab.fsal()]);
             }
 
             // Can ω reach 0 inside the step? With the extra dense stages of a high-order pair,
             // the continuous extension is formed only when s·ω over the stage arguments and the
-            // end points is not larger than h·max|ω̇| over the stages (a bound on how far ω can
-            // move in the step, with a margin: the stages sample ω̇ at ≥ 7 points of the step),
-            // or when a sample falls inside the step.
+            // end points is not larger than g·h·max|ω̇| over the stages, g the largest gap between
+            // the sorted nodes (between two points where s·ω ≥ w, a function with |ω̇| ≤ M stays
+            // above w − M g h/2: the bound with a factor 2 of margin on M), or when a sample
+            // falls inside the step.
             let sample_inside = self
                 .opts
                 .sample_times
                 .get(self.next_sample)
                 .is_some_and(|&ts| ts <= tn);
-            let near_sigma = info.wmin <= hs * info.dmax;
+            let near_sigma = info.wmin <= tab.node_gap * hs * info.dmax;
             if tab.dense_extra > 0 && !near_sigma && !sample_inside {
                 y = yn;
                 k[0] = k[tab.fsal()];
@@ -463,8 +453,12 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
             ctl.last_rejected = true;
             return None;
         }
-        let fac11 = err.powf(tab.expo);
-        let mut fac = fac11 / ctl.facold.powf(tab.beta);
+        let fac11 = tab.pow_expo(err);
+        let mut fac = if tab.beta == 0.0 {
+            fac11
+        } else {
+            fac11 / ctl.facold.powf(tab.beta)
+        };
         fac = (fac / 0.9).clamp(tab.fac_min, tab.fac_max);
         let mut hnew = hs / fac;
         ctl.facold = err.max(1e-4);

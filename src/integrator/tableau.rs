@@ -63,6 +63,9 @@ pub(super) struct Tableau {
     pub expo: f64,
     /// PI (Lund) stabilisation exponent β.
     pub beta: f64,
+    /// Largest gap between consecutive sorted nodes of the main stages (with 0 and 1), as a
+    /// fraction of the step.
+    pub node_gap: f64,
     /// Smallest ratio h/h_new (1/largest growth of the step).
     pub fac_min: f64,
     /// Largest ratio h/h_new (largest shrinking of the step).
@@ -76,6 +79,15 @@ impl Tableau {
             self.stages - 1
         } else {
             self.stages
+        }
+    }
+    /// err^expo (three square roots for DOP853's 1/8, cheaper than `powf`).
+    #[inline(always)]
+    pub fn pow_expo(&self, err: f64) -> f64 {
+        if self.expo == 0.125 {
+            err.sqrt().sqrt().sqrt()
+        } else {
+            err.powf(self.expo)
         }
     }
     /// Total number of stages including the dense-output ones.
@@ -123,7 +135,11 @@ mod tests {
             }
             let s: f64 = t.a[i][..i].iter().sum();
             let ci = if i == t.fsal() { 1.0 } else { t.c[i] };
-            assert!((s - ci).abs() < 1e-13, "{}: row {i} sums to {s}, c = {ci}", t.name);
+            assert!(
+                (s - ci).abs() < 1e-13,
+                "{}: row {i} sums to {s}, c = {ci}",
+                t.name
+            );
         }
         for q in 0..order.min(6) {
             let s: f64 = (0..t.stages).map(|i| t.b[i] * t.c[i].powi(q as i32)).sum();
@@ -135,6 +151,15 @@ mod tests {
         }
         let se: f64 = t.e.iter().sum();
         assert!(se.abs() < 1e-12, "{}: Σ e = {se}", t.name);
+        let mut nodes: Vec<f64> = t.c[..t.stages].to_vec();
+        nodes.push(1.0);
+        nodes.sort_by(f64::total_cmp);
+        let gap = nodes.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
+        assert!(
+            (gap - t.node_gap).abs() < 1e-12,
+            "{}: node gap {gap}",
+            t.name
+        );
     }
 
     #[test]

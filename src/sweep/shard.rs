@@ -100,8 +100,8 @@ struct Manifest {
 const MANIFEST: &str = "shard.json";
 
 fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| Error::Io(format!("{}: {e}", path.display())))?;
+    let text =
+        std::fs::read_to_string(path).map_err(|e| Error::Io(format!("{}: {e}", path.display())))?;
     serde_json::from_str(&text).map_err(|e| Error::Io(format!("{}: {e}", path.display())))
 }
 
