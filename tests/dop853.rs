@@ -7,43 +7,45 @@ use gearbif::integrator::{
     EventDriven, EventDriven853, EventKind, FlowMethod, FlowOptions, Sensitivity,
 };
 use gearbif::maps::{multipliers, poincare_map, Section};
-use gearbif::model::{DrivenOscillator, Gear};
+use gearbif::model::{DrivenOscillator, Gear, GearParam, Parameter, Parametrised};
 use std::f64::consts::TAU;
 
 fn opts(tol: f64) -> FlowOptions {
     FlowOptions::with_tol(tol).sensitivity(Sensitivity::StateAndParams)
 }
 
-/// Error × evaluations slope without friction (no events): error ∝ N^(−p) for a method of
-/// order p. DOP853 must show p ≈ 8 where DP5 shows p ≈ 5.
+/// Order from step halving without friction (no events): the steps are capped at T/n with a loose
+/// tolerance, so the error of each method falls by 2^p per halving: p ≥ 8 for DOP853, 5 for DP5.
 #[test]
-fn convergence_order_from_work_error_slope() {
+fn convergence_order_from_step_halving() {
     let mut gear = Gear::paper(25.0, 2.7).unwrap();
     gear.eta = 0.0;
     let x0 = [0.5, 2.0];
-    let t1 = 3.0 * gear.period();
+    let t1 = gear.period();
     let reference = EventDriven853
         .flow(&gear, 0.0, x0, t1, &FlowOptions::with_tol(1e-14))
         .unwrap();
-    let slope = |m: &dyn FlowMethod<Gear>, tols: [f64; 2]| -> f64 {
-        let pts: Vec<(f64, f64)> = tols
+    let orders = |m: &dyn FlowMethod<Gear>, ns: &[f64]| -> Vec<f64> {
+        let errs: Vec<f64> = ns
             .iter()
-            .map(|&tol| {
-                let fl = m
-                    .flow(&gear, 0.0, x0, t1, &FlowOptions::with_tol(tol))
-                    .unwrap();
-                let e = (fl.x[0] - reference.x[0])
+            .map(|&n| {
+                let mut o = FlowOptions::with_tol(1e-2);
+                o.max_step_fraction = 1.0 / n;
+                let fl = m.flow(&gear, 0.0, x0, t1, &o).unwrap();
+                assert_eq!(fl.stats.rejected, 0);
+                (fl.x[0] - reference.x[0])
                     .abs()
-                    .max((fl.x[1] - reference.x[1]).abs());
-                (fl.stats.rhs_evals as f64, e)
+                    .max((fl.x[1] - reference.x[1]).abs())
             })
             .collect();
-        -(pts[1].1 / pts[0].1).ln() / (pts[1].0 / pts[0].0).ln()
+        errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect()
     };
-    let p8 = slope(&EventDriven853, [1e-6, 1e-11]);
-    let p5 = slope(&EventDriven, [1e-6, 1e-11]);
-    assert!((7.0..10.0).contains(&p8), "DOP853 slope {p8}");
-    assert!((4.0..6.5).contains(&p5), "DP5 slope {p5}");
+    let p8 = orders(&EventDriven853, &[8.0, 16.0, 32.0, 64.0]);
+    let p5 = orders(&EventDriven, &[48.0, 96.0, 192.0]);
+    eprintln!("observed orders: DOP853 {p8:?}, DP5 {p5:?}");
+    // measured 8.3, 9.4, 9.4 (the 9th-order term dominates at the finer steps): at least 8
+    assert!(p8.iter().all(|p| (7.7..10.5).contains(p)), "DOP853 {p8:?}");
+    assert!(p5.iter().all(|p| (4.3..6.0).contains(p)), "DP5 {p5:?}");
 }
 
 /// At tol 1e-12 both methods give the same flow, events and Jacobians over several periods with
@@ -138,12 +140,12 @@ fn jacobians_match_finite_differences() {
             }
         }
         let ap = img.jac_p.unwrap();
-        for k in 0..5 {
-            let p = gear.param(k);
+        for (k, &q) in GearParam::COLUMNS.iter().enumerate() {
+            let p = gear.param(q);
             let h = 1e-6 * p.abs().max(1e-2);
             let (a, b) = (
-                map(&gear.with_param(k, p + h).unwrap(), x0),
-                map(&gear.with_param(k, p - h).unwrap(), x0),
+                map(&gear.with_param(q, p + h).unwrap(), x0),
+                map(&gear.with_param(q, p - h).unwrap(), x0),
             );
             let sp = ap.column(k).abs().max().max(1.0);
             for i in 0..2 {
@@ -151,7 +153,7 @@ fn jacobians_match_finite_differences() {
                 assert!(
                     (ap[(i, k)] - fd).abs() < 2e-5 * sp,
                     "Θ={th} f={f}: param {} row {i}: {} vs FD {fd}",
-                    Gear::PARAM_NAMES[k],
+                    q.name(),
                     ap[(i, k)]
                 );
             }

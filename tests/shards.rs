@@ -109,7 +109,7 @@ fn shard_partition_is_deterministic_and_checked() {
     }
     // every row in exactly one shard
     let n = 7;
-    let mut owners = vec![0; 37];
+    let mut owners = [0; 37];
     for i in 0..n {
         for r in Shard::new(i, n).unwrap().rows(37) {
             owners[r] += 1;

@@ -3,6 +3,9 @@
 //! order 7 (three extra stages, evaluated only in steps that may reach ω = 0 or hold a sample);
 //! the event location, stick phases and saltation matrices are those of `event_driven.rs`.
 
+// the coefficients are kept digit for digit as published (30 digits; rounded to f64 on parsing)
+#![allow(clippy::excessive_precision)]
+
 use super::tableau::{row, ErrorEstimate, Tableau, SMAX};
 use super::{Flow, FlowMethod, FlowOptions};
 use crate::error::Result;

@@ -232,9 +232,9 @@ pub fn merge_shards(dirs: &[PathBuf]) -> Result<SweepResult> {
                 continue;
             }
             let r: RowResult = read_json(&p)?;
-            if r.row != i || r.points.len() != ncols {
+            if !spec.row_matches(i, &r) {
                 return Err(Error::InvalidInput(format!(
-                    "{}: row file does not hold row {i} with {ncols} points",
+                    "{}: row file does not hold row {i} of this spec with {ncols} points",
                     p.display()
                 )));
             }
