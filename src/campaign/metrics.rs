@@ -354,7 +354,11 @@ fn confusion(results: &[CaseResult]) -> Confusion {
             .and_then(|r| effect(&r.effect).ok())
             .map(|e| super::cases::EFFECTS.iter().position(|x| x.id == e.id))
     });
-    let mut cols: Vec<String> = rows.iter().flat_map(|r| r.split('+')).map(String::from).collect();
+    let mut cols: Vec<String> = rows
+        .iter()
+        .flat_map(|r| r.split('+'))
+        .map(String::from)
+        .collect();
     for r in results {
         if !cols.contains(&r.verdict) {
             cols.push(r.verdict.clone());

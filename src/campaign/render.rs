@@ -38,7 +38,7 @@ pub fn markdown(doc: &CampaignDoc) -> String {
     let sp = &doc.spec;
     let mut o = format!(
         "# Campaign\n\nSchema `{}`. Sets: `{}` ({} ring-downs of {} s at {} frames/s, {} driven \
-         runs of {} turns at {} samples/turn, {}–{} Hz); seeds {}; levels {}; generator RK4 step \
+         runs of {} turns at {} samples/turn, {}–{} Hz); {} seeds per effect and size, {} per control; levels {}; generator RK4 step \
          {} s. Rates are k/n with the 95 % Clopper–Pearson interval in brackets.\n\n",
         doc.schema,
         sp.set.name,
@@ -51,6 +51,7 @@ pub fn markdown(doc: &CampaignDoc) -> String {
         sp.set.f_min,
         sp.set.f_max,
         sp.seeds.len(),
+        sp.null_seeds.len(),
         sp.levels
             .iter()
             .map(|l| num(*l))
@@ -73,14 +74,7 @@ pub fn markdown(doc: &CampaignDoc) -> String {
         let pts: Vec<String> = p
             .points
             .iter()
-            .map(|q| {
-                format!(
-                    "{}: {}/{}",
-                    num(q.size),
-                    q.named_right.k,
-                    q.named_right.n
-                )
-            })
+            .map(|q| format!("{}: {}/{}", num(q.size), q.named_right.k, q.named_right.n))
             .collect();
         let unit = if p.unit.is_empty() {
             String::new()
@@ -92,9 +86,7 @@ pub fn markdown(doc: &CampaignDoc) -> String {
             p.effect,
             p.expected,
             pts.join("; "),
-            p.size_90
-                .map(num)
-                .unwrap_or_else(|| "not reached".into())
+            p.size_90.map(num).unwrap_or_else(|| "not reached".into())
         ));
     }
     o.push_str("\n## Confusion matrix (rows: truth, columns: verdict)\n\n| truth \\ verdict |");
@@ -127,7 +119,10 @@ pub fn markdown(doc: &CampaignDoc) -> String {
         s.median_seconds
     ));
     o.push_str("\n## The generator's forms\n\n| effect | form |\n|---|---|\n");
-    for e in EFFECTS.iter().filter(|e| sp.effects.iter().any(|x| x == e.id)) {
+    for e in EFFECTS
+        .iter()
+        .filter(|e| sp.effects.iter().any(|x| x == e.id))
+    {
         o.push_str(&format!("| `{}` | {} |\n", e.id, e.form));
     }
     o

@@ -67,8 +67,16 @@ impl Sys<'_> {
     }
     fn rk4(&self, t: f64, x: [f64; 2], h: f64, s: f64) -> [f64; 2] {
         let k1 = self.field(t, x, s);
-        let k2 = self.field(t + 0.5 * h, [x[0] + 0.5 * h * k1[0], x[1] + 0.5 * h * k1[1]], s);
-        let k3 = self.field(t + 0.5 * h, [x[0] + 0.5 * h * k2[0], x[1] + 0.5 * h * k2[1]], s);
+        let k2 = self.field(
+            t + 0.5 * h,
+            [x[0] + 0.5 * h * k1[0], x[1] + 0.5 * h * k1[1]],
+            s,
+        );
+        let k3 = self.field(
+            t + 0.5 * h,
+            [x[0] + 0.5 * h * k2[0], x[1] + 0.5 * h * k2[1]],
+            s,
+        );
         let k4 = self.field(t + h, [x[0] + h * k3[0], x[1] + h * k3[1]], s);
         [
             x[0] + h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
@@ -118,7 +126,11 @@ impl Rk4Filippov {
         } else {
             sys.phase_on_sigma(t0, x0[0])
         };
-        let mut st = State { t: t0, x: x0, phase };
+        let mut st = State {
+            t: t0,
+            x: x0,
+            phase,
+        };
         let mut stats = Rk4Stats::default();
         let mut out = Vec::with_capacity(times.len());
         for &ts in times {
@@ -213,4 +225,3 @@ impl Rk4Filippov {
         stats.releases += 1;
     }
 }
-

@@ -26,8 +26,10 @@ pub struct CampaignSpec {
     pub effects: Vec<String>,
     /// Levels: multiples of each effect's reference size (controls run at level 1 only).
     pub levels: Vec<f64>,
-    /// Seeds (one lab and one noise realisation each).
+    /// Seeds of the swept effects (one lab and one noise realisation each).
     pub seeds: Vec<u64>,
+    /// Seeds of the controls (expected `none`).
+    pub null_seeds: Vec<u64>,
     /// Size of each recording set.
     pub set: SetSize,
     /// Step of the generator's RK4 integrator, s.
@@ -40,13 +42,21 @@ pub struct CampaignSpec {
 impl CampaignSpec {
     /// Checks ids, levels, seeds and the set size.
     pub fn validate(&self) -> Result<()> {
-        if self.effects.is_empty() || self.seeds.is_empty() || self.levels.is_empty() {
+        if self.effects.is_empty() || self.levels.is_empty() {
             return Err(Error::InvalidInput(
-                "a campaign needs at least one effect, one seed and one level".into(),
+                "a campaign needs at least one effect and one level".into(),
             ));
         }
         for e in &self.effects {
-            effect(e)?;
+            let spec = effect(e)?;
+            let seeds = if spec.is_null() {
+                &self.null_seeds
+            } else {
+                &self.seeds
+            };
+            if seeds.is_empty() {
+                return Err(Error::InvalidInput(format!("effect `{e}` has no seeds")));
+            }
         }
         for &l in &self.levels {
             if !(l.is_finite() && l > 0.0) {
@@ -83,19 +93,19 @@ impl Case {
     }
 }
 
-/// The cases of a campaign: controls once per seed, swept effects at every level.
+/// The cases of a campaign: controls once per null seed, swept effects at every level and seed.
 pub fn plan(spec: &CampaignSpec) -> Result<Vec<Case>> {
     spec.validate()?;
     let mut out = Vec::new();
     for id in &spec.effects {
         let e = effect(id)?;
-        let levels: Vec<f64> = if e.is_null() {
-            vec![1.0]
+        let (levels, seeds) = if e.is_null() {
+            (vec![1.0], &spec.null_seeds)
         } else {
-            spec.levels.clone()
+            (spec.levels.clone(), &spec.seeds)
         };
         for &level in &levels {
-            for &seed in &spec.seeds {
+            for &seed in seeds {
                 out.push(Case {
                     effect: e,
                     level,
@@ -109,7 +119,12 @@ pub fn plan(spec: &CampaignSpec) -> Result<Vec<Case>> {
 
 /// Generates, writes, reads back, diagnoses and scores one case. `sets_dir` receives the set (and
 /// loses it again unless `keep`).
-pub fn run_case(case: &Case, spec: &CampaignSpec, sets_dir: &Path, keep: bool) -> Result<CaseResult> {
+pub fn run_case(
+    case: &Case,
+    spec: &CampaignSpec,
+    sets_dir: &Path,
+    keep: bool,
+) -> Result<CaseResult> {
     let rk4 = Rk4Filippov {
         step: spec.rk4_step_s,
     };
@@ -184,7 +199,10 @@ pub fn run_campaign(
     let spec_path = out.join("spec.json");
     if let Ok(text) = std::fs::read_to_string(&spec_path) {
         let old: CampaignSpec = serde_json::from_str(&text).map_err(|e| {
-            Error::InvalidInput(format!("{}: not a campaign spec ({e})", spec_path.display()))
+            Error::InvalidInput(format!(
+                "{}: not a campaign spec ({e})",
+                spec_path.display()
+            ))
         })?;
         if old.set != spec.set || old.rk4_step_s != spec.rk4_step_s {
             return Err(Error::InvalidInput(format!(
@@ -234,9 +252,7 @@ pub fn run_campaign(
     }
     let results: Vec<CaseResult> = cases
         .iter()
-        .map(|c| {
-            load(c).ok_or_else(|| Error::Io(format!("result of case {} is missing", c.key())))
-        })
+        .map(|c| load(c).ok_or_else(|| Error::Io(format!("result of case {} is missing", c.key()))))
         .collect::<Result<_>>()?;
     Ok(CampaignDoc {
         schema: SCHEMA.to_string(),

@@ -227,7 +227,9 @@ mod tests {
             let rn = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
             let u = [r[0] / rn, r[1] / rn, r[2] / rn];
             let m1u = m1[0] * u[0] + m1[1] * u[1] + m1[2] * u[2];
-            let bf: Vec<f64> = (0..3).map(|i| (3.0 * m1u * u[i] - m1[i]) / rn.powi(3)).collect();
+            let bf: Vec<f64> = (0..3)
+                .map(|i| (3.0 * m1u * u[i] - m1[i]) / rn.powi(3))
+                .collect();
             -(mm2[0] * bf[0] + mm2[1] * bf[1] + mm2[2] * bf[2])
         };
         let f = m.dipole_force(a, b);
@@ -242,8 +244,8 @@ mod tests {
             assert!((fd - f[i]).abs() < 1e-8, "component {i}: {fd} vs {}", f[i]);
         }
         // torque: −∂U/∂β with U = −m2·B1 at r = x̂ equals c (−sin α cos β + Δ cos α sin β), c = 1
-        let dudb = (energy([1.0, 0.0, 0.0], m2(b + h)) - energy([1.0, 0.0, 0.0], m2(b - h)))
-            / (2.0 * h);
+        let dudb =
+            (energy([1.0, 0.0, 0.0], m2(b + h)) - energy([1.0, 0.0, 0.0], m2(b - h))) / (2.0 * h);
         let tau = -a.sin() * b.cos() + m.delta() * a.cos() * b.sin();
         assert!((-dudb - tau).abs() < 1e-8, "{} vs {tau}", -dudb);
     }

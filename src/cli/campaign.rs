@@ -13,11 +13,13 @@ use std::time::Instant;
 
 /// Arguments of `gearbif campaign`.
 #[derive(Debug, clap::Args)]
-#[command(after_help = "Sizes are levels: multiples of each effect's reference size, e.g. \
+#[command(
+    after_help = "Sizes are levels: multiples of each effect's reference size, e.g. \
     static_torque_2h 6 s^-2, latency 6 ms, compliance 1.5 deg, shaft_angles_off 6 deg \
     (`--list` prints every effect's form, unit and reference). Controls (expected verdict `none`) \
-    run once per seed. Results go to OUT/cases/ one file per case as soon as known; rerunning \
-    the same command resumes.")]
+    run once per null seed. Results go to OUT/cases/ one file per case as soon as known; rerunning \
+    the same command resumes."
+)]
 pub struct Args {
     /// Output folder: campaign.json, campaign.md, campaign.svg, campaign.png, cases/.
     #[arg(long, required_unless_present = "list")]
@@ -25,14 +27,23 @@ pub struct Args {
     /// Effects, comma-separated, or `all` (see `--list`).
     #[arg(long, value_delimiter = ',', default_value = "all")]
     effects: Vec<String>,
-    /// Number of seeds (labs and noise realisations), counted from `--first-seed`.
-    #[arg(long, default_value_t = 20)]
+    /// Number of seeds (labs and noise realisations) per effect and size, counted from
+    /// `--first-seed`.
+    #[arg(long, default_value_t = 10)]
     seeds: u64,
+    /// Number of seeds of each control (expected verdict `none`), counted from `--first-seed`.
+    #[arg(long, default_value_t = 20)]
+    null_seeds: u64,
     /// First seed.
     #[arg(long, default_value_t = 1)]
     first_seed: u64,
     /// Effect sizes as multiples of each effect's reference size (dimensionless), comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "0.25,0.5,1,2")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0.25,0.5,1,2",
+        allow_hyphen_values = true
+    )]
     sizes: Vec<f64>,
     /// Set size: `ci` (6 ring-downs, 3 driven runs × 12 turns), `medium` (8, 5 × 30), `full`
     /// (12, 8 × 80); 50 samples per turn, ring-downs 3 s at 100 frames/s, 0.5–2.5 Hz.
@@ -69,8 +80,10 @@ fn spec_of(a: &Args) -> Result<CampaignSpec> {
     set.ringdowns = a.ringdowns.unwrap_or(set.ringdowns);
     set.driven = a.driven.unwrap_or(set.driven);
     set.turns = a.turns.unwrap_or(set.turns);
-    if a.seeds == 0 {
-        return Err(Error::InvalidInput("--seeds must be ≥ 1".into()));
+    if a.seeds == 0 || a.null_seeds == 0 {
+        return Err(Error::InvalidInput(
+            "--seeds and --null-seeds must be ≥ 1".into(),
+        ));
     }
     let effects = if a.effects.iter().any(|e| e == "all") {
         EFFECTS.iter().map(|e| e.id.to_string()).collect()
@@ -81,6 +94,7 @@ fn spec_of(a: &Args) -> Result<CampaignSpec> {
         effects,
         levels: a.sizes.clone(),
         seeds: (a.first_seed..a.first_seed.saturating_add(a.seeds)).collect(),
+        null_seeds: (a.first_seed..a.first_seed.saturating_add(a.null_seeds)).collect(),
         set,
         rk4_step_s: a.step,
         keep_sets: a.keep_sets,

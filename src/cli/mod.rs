@@ -6,8 +6,8 @@
 //! stderr with exit code 2; output files are written atomically.
 
 mod bench;
-mod campaign;
 mod boundary;
+mod campaign;
 mod classify;
 mod common;
 mod continue_;

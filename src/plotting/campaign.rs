@@ -18,7 +18,7 @@ const COLS: usize = 3;
 impl Figure for CampaignFigure<'_> {
     fn size(&self) -> (u32, u32) {
         let rows = self.summary.power.len().div_ceil(COLS).max(1) as u32;
-        (1700, (260 * rows).max(620))
+        (1700, (280 * rows).max(620))
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
@@ -65,8 +65,11 @@ impl Figure for CampaignFigure<'_> {
                 ))
                 .map_err(plot_err)?;
             }
-            ch.draw_series(pts.iter().map(|&(x, y)| Circle::new((x, y), 4, BLUE.filled())))
-                .map_err(plot_err)?;
+            ch.draw_series(
+                pts.iter()
+                    .map(|&(x, y)| Circle::new((x, y), 4, BLUE.filled())),
+            )
+            .map_err(plot_err)?;
         }
         draw_confusion(self.summary, &right)
     }
@@ -80,7 +83,7 @@ fn draw_confusion<DB: DrawingBackend>(s: &Summary, area: &DrawingArea<DB, Shift>
     let label_w = 190i32;
     let label_h = 150i32;
     let title_h = 30i32;
-    let cw = ((w as i32 - label_w) / nc as i32).max(8);
+    let cw = ((w as i32 - label_w) / nc as i32).clamp(8, 70);
     let chh = ((h as i32 - label_h - title_h) / nr as i32).clamp(8, 40);
     area.draw(&Text::new(
         "confusion matrix (rows: truth, columns: verdict)",
