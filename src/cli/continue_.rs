@@ -1,10 +1,10 @@
 //! `gearbif continue`: pseudo-arclength continuation of a periodic orbit in one parameter.
 
 use super::common::{check_frequency, GearArgs, Output};
-use crate::continuation::{switch_branch, Branch, Continuation, ContinuationOptions, Param};
+use crate::continuation::{switch_branch, Branch, Continuation, ContinuationOptions};
 use crate::error::{Error, Result};
 use crate::maps::Section;
-use crate::model::Gear;
+use crate::model::{Gear, GearParam, Parameter};
 use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};
 
 /// Arguments of `gearbif continue`.
@@ -205,7 +205,7 @@ pub fn run(a: Args) -> Result<()> {
     check_frequency(a.f)?;
     let params = a.gear.params()?;
     let gear = params.driven(a.f)?;
-    let param = Param::from_name(&a.param)?;
+    let param = GearParam::from_name(&a.param)?;
     let (lo, hi) = parse_range(&a.range)?;
     let sign = match a.direction.as_str() {
         "up" => 1.0,
@@ -239,7 +239,7 @@ pub fn run(a: Args) -> Result<()> {
         })?;
         let sw = switch_branch(b0, sp, -sign * 1e-3 * sp.param.abs().max(1.0), &shooting)?;
         let b1 = Continuation::from_orbit(
-            sw.gear,
+            sw.system,
             param,
             &sw.orbit,
             ContinuationOptions {
