@@ -7,6 +7,7 @@
 
 use super::truth::{Drive, TruthModel};
 use crate::error::{Error, Result};
+use crate::numerics::{Bisection, Side};
 
 /// The integrator's settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -174,22 +175,17 @@ impl Rk4Filippov {
             st.x = x1;
             return;
         }
-        let (mut lo, mut hi) = (0.0, h);
+        // the step length at which ω reaches Σ: the predicate "s ω ≤ 0" switches from false to true
+        let mut b = Bisection::new(0.0, h);
         let mut x_hi = x1;
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
-                break;
-            }
+        while let Some(mid) = b.next_point() {
             let xm = sys.rk4(st.t, st.x, mid, s);
             stats.steps += 1;
-            if s * xm[1] > 0.0 {
-                lo = mid;
-            } else {
-                hi = mid;
+            if b.update(mid, s * xm[1] <= 0.0) == Side::Hi {
                 x_hi = xm;
             }
         }
+        let hi = b.hi();
         st.t += hi;
         st.x = [x_hi[0], 0.0];
         st.phase = sys.phase_on_sigma(st.t, st.x[0]);
@@ -207,18 +203,11 @@ impl Rk4Filippov {
             st.t += h;
             return;
         }
-        let (mut lo, mut hi) = (st.t, st.t + h);
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
-                break;
-            }
-            if sys.release_margin(mid, beta).0 > 0.0 {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
+        let mut b = Bisection::new(st.t, st.t + h);
+        while let Some(mid) = b.next_point() {
+            b.update(mid, sys.release_margin(mid, beta).0 > 0.0);
         }
+        let hi = b.hi();
         st.t = hi;
         let (_, a) = sys.release_margin(hi, beta);
         st.phase = Phase::Slip(a.signum());
