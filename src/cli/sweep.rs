@@ -3,12 +3,10 @@
 
 use super::common::{angle_deg, count, frequency, limits, output_dir, tolerance, GearArgs};
 use crate::analysis::ClassifyOptions;
-use crate::sweep::{
-    Axis, Method, Protocol, SweepObserver, SweepOutcome, SweepParam, SweepRunner, SweepSpec,
-};
+use crate::sweep::{Axis, Method, Protocol, SweepOutcome, SweepParam, SweepRunner, SweepSpec};
 use crate::Result;
 use indicatif::{ProgressBar, ProgressStyle};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Arguments of `gearbif sweep`.
 #[derive(Debug, clap::Args)]
@@ -104,17 +102,23 @@ impl Progress {
     }
 }
 
-impl SweepObserver for Progress {
-    fn started(&self, total: usize, done: usize) {
-        self.bar.set_length(total as u64);
-        self.bar.set_position(done as u64);
-        self.bar.reset_eta();
-    }
-    fn point_done(&self, _row: usize, _col: usize) {
-        self.bar.inc(1);
-    }
-    fn row_done(&self, row: usize, _path: Option<&Path>) {
-        self.bar.set_message(format!("(row {row} checkpointed)"));
+impl crate::progress::Observer for Progress {
+    fn observe(&self, event: &crate::progress::Event<'_>) {
+        use crate::progress::Event;
+        match *event {
+            Event::Started { total, done } => {
+                if let Some(total) = total {
+                    self.bar.set_length(total as u64);
+                }
+                self.bar.set_position(done as u64);
+                self.bar.reset_eta();
+            }
+            Event::SweepPoint { .. } => self.bar.inc(1),
+            Event::RowDone { row, .. } => {
+                self.bar.set_message(format!("(row {row} checkpointed)"));
+            }
+            _ => {}
+        }
     }
 }
 
