@@ -16,8 +16,8 @@ use crate::model::gear::cogging_free_parallel_angles;
 use crate::model::{Convention, Gear, GearParam, GearParams, Parametrised};
 use crate::orbits::{orbit_from_simulation, OrbitSpec, ShootingOptions};
 use crate::sweep::{
-    lock_loss_hysteresis, Hysteresis, Method, PointRecord, Protocol, SweepObserver, SweepOutcome,
-    SweepResult, SweepRunner, SweepSpec,
+    lock_loss_hysteresis, Hysteresis, Method, PointRecord, Protocol, SweepOutcome, SweepResult,
+    SweepRunner, SweepSpec,
 };
 use serde::Serialize;
 
@@ -819,7 +819,7 @@ pub fn advice(
 pub fn compute_report(
     gear: &GearParams,
     opts: &ReportOptions,
-    observer: &dyn SweepObserver,
+    observer: &dyn crate::progress::Observer,
 ) -> Result<ReportData> {
     gear.validate()?;
     let classify = ClassifyOptions {

@@ -24,7 +24,7 @@ pub use compute::{
 };
 
 use crate::error::Result;
-use crate::sweep::{Axis, SweepObserver, SweepParam};
+use crate::sweep::{Axis, SweepParam};
 use serde::Serialize;
 use std::path::Path;
 
@@ -255,7 +255,7 @@ pub fn build_report(
     gear: &crate::model::GearParams,
     opts: &ReportOptions,
     dir: impl AsRef<Path>,
-    observer: &dyn SweepObserver,
+    observer: &dyn crate::progress::Observer,
 ) -> Result<Report> {
     let dir = dir.as_ref();
     let d = compute_report(gear, opts, observer)?;
