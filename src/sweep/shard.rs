@@ -99,10 +99,15 @@ struct Manifest {
 
 const MANIFEST: &str = "shard.json";
 
+/// Reads a JSON file of a checkpoint; a file that does not parse is an [`Error::Recording`] naming
+/// it and the line at fault.
 fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| Error::Io(format!("{}: {e}", path.display())))?;
-    serde_json::from_str(&text).map_err(|e| Error::Io(format!("{}: {e}", path.display())))
+    let bytes = std::fs::read(path).map_err(|e| Error::Io(format!("{}: {e}", path.display())))?;
+    serde_json::from_slice(&bytes).map_err(|e| Error::Recording {
+        file: path.display().to_string(),
+        line: (e.line() > 0).then_some(e.line()),
+        what: format!("corrupt shard checkpoint ({e})"),
+    })
 }
 
 /// Writes the manifest of a new shard checkpoint, or checks that an existing one names the same
@@ -156,6 +161,15 @@ fn read_shard(dir: &Path) -> Result<ShardData> {
             "{}: spec.json hashes to {hash} but the manifest records {}",
             dir.display(),
             manifest.spec_hash
+        )));
+    }
+    // a shard no run can have written (run_shard checks 0 <= i < N and i < rows)
+    let Shard { index, count } = manifest.shard;
+    let nrows = spec.rows.values.len();
+    if count == 0 || index >= count || count > nrows {
+        return Err(Error::InvalidInput(format!(
+            "{}: shard {index}/{count} is impossible for a sweep of {nrows} rows",
+            man_path.display()
         )));
     }
     Ok(ShardData {
