@@ -541,6 +541,13 @@ proptest! {
             Err(Error::Recording { file, .. }) => {
                 prop_assert!(file.ends_with(".json"), "{}", file);
             }
+            // a file that does not parse: the format error names it, the JSON error its line
+            Err(Error::Format { what, source, .. }) => {
+                prop_assert!(what.ends_with(".json"), "{}", what);
+                let s = source.to_string();
+                prop_assert!(s.contains("line") || s.contains("UTF-8") || s.contains("utf-8"), "{}", s);
+            }
+            Err(Error::File { path, .. }) => prop_assert!(path.ends_with(".json"), "{}", path),
             Err(Error::InvalidInput(m)) => prop_assert!(!m.is_empty()),
             Err(e) => prop_assert!(false, "untyped error {:?}", e),
         }
