@@ -217,7 +217,8 @@ pub fn same_slot(a: &Effect, b: &Effect) -> bool {
 }
 
 /// Dictionary for the sparse search: trig(kα + lβ) with |k|, |l| ≤ 2 (not already in the base
-/// model or the catalog), and velocity/sign terms modulated by cos β, sin β.
+/// model or the catalog) and cos/sin 3β, velocity/sign terms modulated by cos β, sin β, and dry
+/// friction modulated by cos/sin(kα + lβ) for (k, l) = (0, 2), (1, 0), (2, 0), (1, ±1).
 pub fn dictionary() -> Vec<Term> {
     let mut v = Vec::new();
     for k in 0..=2i8 {
@@ -233,7 +234,15 @@ pub fn dictionary() -> Vec<Term> {
             v.push(Term::Sin(k, l));
         }
     }
+    // torques with the third harmonic of β
+    v.extend([Term::Cos(0, 3), Term::Sin(0, 3)]);
     v.extend([Term::VCosB, Term::VSinB, Term::SCosB, Term::SSinB]);
+    // dry friction modulated by harmonics of α and β: sgn β̇ · cos/sin(kα + lβ)
+    for (k, l) in [(0, 2), (1, 0), (2, 0), (1, 1), (1, -1)] {
+        for sin in [false, true] {
+            v.push(Term::STrig(k, l, sin));
+        }
+    }
     v
 }
 

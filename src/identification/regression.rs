@@ -54,6 +54,9 @@ pub enum Term {
     SCosB,
     /// −sgn β̇ · sin β (dictionary).
     SSinB,
+    /// −sgn β̇ · cos(kα + lβ), or sin when the flag is set (dictionary: dry friction modulated by
+    /// the angles).
+    STrig(i8, i8, bool),
     /// A base parameter varying linearly over the recording session: the base term of
     /// `param` times the session position s ∈ [−½, ½] on `clock` (`parameter_drift`).
     Drift(DriftParam, Clock),
@@ -138,6 +141,13 @@ impl Term {
             Term::VSinB => "-dbeta sin(beta)".into(),
             Term::SCosB => "-sgn(dbeta)cos(beta)".into(),
             Term::SSinB => "-sgn(dbeta)sin(beta)".into(),
+            Term::STrig(k, l, sin) => format!(
+                "-sgn(dbeta){}({k}alpha{:+}beta)",
+                if *sin { "sin" } else { "cos" },
+                l
+            )
+            .replace("+1beta", "+beta")
+            .replace("-1beta", "-beta"),
             Term::Drift(p, c) => format!("drift[{},{}]", p.name(), c.name()),
             Term::Compliance => "input_compliance".into(),
             Term::DrivenOffset => "driven_alpha_offset".into(),
@@ -148,7 +158,7 @@ impl Term {
     pub fn breaks_symmetry(&self) -> bool {
         match self {
             Term::SinB | Term::CosB | Term::VCosB | Term::VSinB | Term::SCosB | Term::SSinB => true,
-            Term::Cos(k, l) | Term::Sin(k, l) => (k + l).rem_euclid(2) == 1,
+            Term::Cos(k, l) | Term::Sin(k, l) | Term::STrig(k, l, _) => (k + l).rem_euclid(2) == 1,
             _ => false,
         }
     }
@@ -296,6 +306,10 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
         Term::VSinB => (-v * b.sin(), false),
         Term::SCosB => (b.cos(), true),
         Term::SSinB => (b.sin(), true),
+        Term::STrig(k, l, sin) => {
+            let x = k as f64 * al + l as f64 * b;
+            (if sin { x.sin() } else { x.cos() }, true)
+        }
     }
 }
 
