@@ -61,7 +61,11 @@ fn within(est: f64, err: f64, truth: f64, k: f64) {
 fn findings_improve_heldout(d: &Diagnosis) {
     for f in &d.report.findings {
         if let (Some(b), Some(a)) = (f.heldout_rms_before_rad, f.heldout_rms_after_rad) {
-            assert!(a < b, "{} made the held-out prediction worse: {b} → {a}", f.effect);
+            assert!(
+                a < b,
+                "{} made the held-out prediction worse: {b} → {a}",
+                f.effect
+            );
         }
         assert!(f.size.is_some(), "{} without a size", f.effect);
     }
@@ -124,7 +128,12 @@ fn static_torque_and_latency_together_are_both_found_and_sized() {
     let s = st.size.as_ref().unwrap();
     assert_eq!((s.name.as_str(), s.unit.as_str()), ("amplitude", "s^-2"));
     within(s.value, s.sigma, 4.0, 3.0);
-    within(st.params["phase_deg"], st.params["phase_err_deg"], 60.0, 3.0);
+    within(
+        st.params["phase_deg"],
+        st.params["phase_err_deg"],
+        60.0,
+        3.0,
+    );
     let lat = finding(&d, "sensor_latency");
     let s = lat.size.as_ref().unwrap();
     within(s.value, s.sigma, t.latency, 3.0);
@@ -138,7 +147,11 @@ fn quadratic_drag_is_named_and_sized() {
     o.samples_per_turn = 55;
     let (set, _) = synthesize(&o).unwrap();
     let d = run_set(&set);
-    assert_eq!(d.report.verdict, "quadratic_drag", "{:#?}", d.report.findings);
+    assert_eq!(
+        d.report.verdict, "quadratic_drag",
+        "{:#?}",
+        d.report.findings
+    );
     findings_improve_heldout(&d);
     let s = d.report.findings[0].size.as_ref().unwrap();
     within(s.value, s.sigma, 0.025, 3.0);
@@ -154,7 +167,11 @@ fn shafts_six_degrees_off_give_coupling_geometry_with_the_angles() {
     set.gear.theta_deg = true_deg + 6.0;
     set.gear.phi_deg = true_deg + 6.0;
     let d = run_set(&set);
-    assert_eq!(d.report.verdict, "coupling_geometry", "{:#?}", d.report.findings);
+    assert_eq!(
+        d.report.verdict, "coupling_geometry",
+        "{:#?}",
+        d.report.findings
+    );
     let f = finding(&d, "coupling_geometry");
     let s = f.size.as_ref().unwrap();
     within(s.value, s.sigma, t.coefficients.delta(), 3.0);
@@ -233,12 +250,22 @@ fn truth_set<S: DrivenOscillator>(
     let mut rng = Rng::new(seed);
     let noise = noise_deg.to_radians();
     let mut runs = Vec::new();
-    let mut record = |kind: RunKind, file: String, sys: &S, x0: [f64; 2], times: Vec<f64>, alpha: Vec<f64>, rng: &mut Rng| {
+    let mut record = |kind: RunKind,
+                      file: String,
+                      sys: &S,
+                      x0: [f64; 2],
+                      times: Vec<f64>,
+                      alpha: Vec<f64>,
+                      rng: &mut Rng| {
         let opts = FlowOptions::with_tol(1e-9).samples(times.clone());
         let f = EventDriven
             .flow(sys, 0.0, x0, *times.last().unwrap(), &opts)
             .unwrap();
-        let beta = f.samples.iter().map(|s| s.beta + noise * rng.normal()).collect();
+        let beta = f
+            .samples
+            .iter()
+            .map(|s| s.beta + noise * rng.normal())
+            .collect();
         runs.push(Run {
             kind,
             file,
@@ -320,7 +347,11 @@ fn vector_load_friction_is_not_named_a_drag() {
     let set = truth_set(make, &c, 0.45, 61);
     let d = run_set(&set);
     findings_improve_heldout(&d);
-    assert_ne!(d.report.verdict, "quadratic_drag", "{:#?}", d.report.findings);
+    assert_ne!(
+        d.report.verdict, "quadratic_drag",
+        "{:#?}",
+        d.report.findings
+    );
     assert!(
         d.report.findings.iter().all(|f| !f.effect.contains("drag")),
         "{:#?}",
@@ -355,4 +386,35 @@ fn ringdown_fits_recover_kappa_and_g() {
     within(k.delta_abs, k.delta_err, c.delta().abs(), 3.5);
     assert!((k.inertia - set.gear.coupling() / k.g).abs() <= 1e-12 * k.inertia);
     assert!(k.inertia_err / k.inertia >= set.gear.coupling_rel_tol());
+}
+
+#[test]
+fn friction_modulated_by_cos_2beta_is_unexplained_and_named_by_its_term() {
+    // out of the catalog: dry friction η(1 + 0.3 cos 2β)
+    let (mut c, geo) = paper_truth();
+    c.zeta = 1.0;
+    let eta = 22.0;
+    let make = |alpha0: f64, rate: f64| TruthGear {
+        base: AugmentedGear {
+            c,
+            geo,
+            alpha0,
+            alpha_rate: rate,
+        },
+        friction: move |_al: f64, b: f64| eta * (1.0 + 0.3 * (2.0 * b).cos()),
+    };
+    let set = truth_set(make, &c, 0.4, 62);
+    let d = run_set(&set);
+    findings_improve_heldout(&d);
+    assert_eq!(d.report.verdict, "unexplained", "{:#?}", d.report.findings);
+    let f = &d.report.findings[0];
+    let name = "-sgn(dbeta)cos(0alpha+2beta)";
+    within(
+        f.params[name],
+        f.params[&format!("{name}_err")],
+        0.3 * eta,
+        3.0,
+    );
+    assert!(!f.discriminating_experiment.is_empty());
+    assert_eq!(f.size.as_ref().unwrap().name, name);
 }

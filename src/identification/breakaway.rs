@@ -96,6 +96,7 @@ pub fn judge(
     p.insert("events".to_string(), all.sticks as f64);
     let mut ev = BTreeMap::new();
     ev.insert("heldout_z".into(), json!(cmp.z));
+    ev.insert("heldout_z_cluster_by_run".into(), json!(cmp.z_cluster));
     ev.insert("z_threshold".into(), json!(z_crit));
     ev.insert("heldout_chi2_gain".into(), json!(cmp.gain));
     ev.insert("windows".into(), json!(cmp.windows));

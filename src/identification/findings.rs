@@ -55,13 +55,8 @@ pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<Effec
             "deg",
         ),
         "drive_steps" => mk("offset", "offset_deg", "offset_err_deg", "deg"),
-        "static_friction" => mk(
-            "excess",
-            "excess_relative",
-            "excess_relative_err",
-            "1",
-        ),
-        "parameter_drift" => ["eta", "zeta", "g"].iter().find_map(|n| {
+        "static_friction" => mk("excess", "excess_relative", "excess_relative_err", "1"),
+        "parameter_drift" | "condition_dependence" => ["eta", "zeta", "g"].iter().find_map(|n| {
             mk(
                 &format!("{n}_change"),
                 &format!("{n}_change"),
@@ -76,7 +71,13 @@ pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<Effec
         "unexplained" => effect
             .terms
             .iter()
-            .filter_map(|t| Some((t.name(), *p.get(&t.name())?, *p.get(&format!("{}_err", t.name()))?)))
+            .filter_map(|t| {
+                Some((
+                    t.name(),
+                    *p.get(&t.name())?,
+                    *p.get(&format!("{}_err", t.name()))?,
+                ))
+            })
             .max_by(|a, b| (a.1 / a.2).abs().total_cmp(&(b.1 / b.2).abs()))
             .map(|(n, v, e)| EffectSize {
                 name: n,
@@ -115,10 +116,15 @@ pub fn params_of(effect: &Effect, st: &ModelState) -> BTreeMap<String, f64> {
 }
 
 /// The judgement's numbers as evidence.
-pub fn judgement_evidence(t: &Tried, cmp: &Comparison, folds: usize) -> BTreeMap<String, serde_json::Value> {
+pub fn judgement_evidence(
+    t: &Tried,
+    cmp: &Comparison,
+    folds: usize,
+) -> BTreeMap<String, serde_json::Value> {
     let mut ev = BTreeMap::new();
     ev.insert("round".into(), json!(t.round));
     ev.insert("heldout_z".into(), json!(cmp.z));
+    ev.insert("heldout_z_cluster_by_run".into(), json!(cmp.z_cluster));
     ev.insert("z_threshold".into(), json!(t.z_crit));
     ev.insert("heldout_chi2_gain".into(), json!(cmp.gain));
     ev.insert("windows".into(), json!(cmp.windows));
@@ -127,7 +133,12 @@ pub fn judgement_evidence(t: &Tried, cmp: &Comparison, folds: usize) -> BTreeMap
     ev.insert("delta_bic_weak_form".into(), json!(t.candidate.weak_dbic));
     ev.insert(
         "terms".into(),
-        json!(t.candidate.terms.iter().map(|x| x.name()).collect::<Vec<_>>()),
+        json!(t
+            .candidate
+            .terms
+            .iter()
+            .map(|x| x.name())
+            .collect::<Vec<_>>()),
     );
     ev
 }
@@ -162,11 +173,13 @@ pub fn judged_finding(
     runs: &[CleanRun],
     folds: usize,
     rivals: &[String],
+    fin: &ModelState,
 ) -> Option<Finding> {
     let st = t.state.as_ref()?;
     let cmp = t.cmp?;
     let e = &t.candidate.effect;
-    let params = params_of(e, st);
+    // parameters from the final model refitted to convergence (it holds every accepted effect)
+    let params = params_of(e, fin);
     let mut ev = judgement_evidence(t, &cmp, folds);
     ev.insert(
         "simulation_refit".into(),
@@ -252,6 +265,7 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                 "latency_start_s": c.latency.map(|l| l.0),
                 "delta_bic_weak_form": c.weak_dbic,
                 "heldout_z": t.cmp.map(|m| m.z),
+                "heldout_z_cluster_by_run": t.cmp.map(|m| m.z_cluster),
                 "screening_z": t.screen.map(|m| m.z),
                 "z_threshold": t.z_crit,
                 "heldout_chi2_gain": t.cmp.map(|m| m.gain),

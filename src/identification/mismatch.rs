@@ -3,8 +3,8 @@
 //! and κ(α0) from the ring-downs. Words with the numbers behind them; nothing here names an
 //! effect.
 
-use super::regression::{delta_bic, fit, Design, LinFit, Term};
 use super::preprocess::CleanRun;
+use super::regression::{delta_bic, fit, Design, LinFit, Term};
 use super::report::Mismatch;
 use super::ringdown::KappaFit;
 use serde_json::json;
@@ -69,7 +69,6 @@ fn fingerprint_group(
     Some((x.norm(), dchi, p))
 }
 
-
 /// Thresholds of [`locate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MismatchOptions {
@@ -92,7 +91,6 @@ pub fn locate(
 ) -> (Vec<Mismatch>, Vec<f64>) {
     let nr = runs.len();
     let mut mismatch = Vec::new();
-    let infl = base_fit.n as f64 / base_fit.n_eff;
     let mut chi_run = vec![f64::NAN; nr];
     for (r, cr) in chi_run.iter_mut().enumerate() {
         let idx: Vec<usize> = (0..design.rows()).filter(|&i| design.run[i] == r).collect();
@@ -119,6 +117,24 @@ pub fn locate(
             evidence: bad.iter().map(|(f, c)| (f.clone(), json!(c))).collect(),
         });
     }
+    fingerprints(design, base_fit, runs, opts, &mut mismatch);
+    symmetry(design, opts, &mut mismatch);
+    consistency(design, base_cols, runs, &mut mismatch);
+    if let Some(k) = kappa {
+        kappa_checks(k, &mut mismatch);
+    }
+    (mismatch, chi_run)
+}
+
+/// Residual fingerprints: harmonics of α and β, velocity, sign of velocity.
+fn fingerprints(
+    design: &Design,
+    base_fit: &LinFit,
+    runs: &[CleanRun],
+    opts: &MismatchOptions,
+    mismatch: &mut Vec<Mismatch>,
+) {
+    let infl = base_fit.n as f64 / base_fit.n_eff;
     {
         let rr = &base_fit.resid;
         let (cen, sig) = (&design.centre, &design.sigma);
@@ -206,8 +222,11 @@ pub fn locate(
             }
         }
     }
-    // symmetry test: a flexible symmetric model (base, symmetric catalog and dictionary terms)
-    // against the same plus every symmetry-breaking term
+}
+
+/// The symmetry test: a flexible symmetric model (base, symmetric catalog and dictionary terms)
+/// against the same plus every symmetry-breaking term.
+fn symmetry(design: &Design, opts: &MismatchOptions, mismatch: &mut Vec<Mismatch>) {
     let sym_terms: Vec<Term> = design
         .terms
         .iter()
@@ -220,11 +239,11 @@ pub fn locate(
         .copied()
         .filter(|t| !t.breaks_symmetry())
         .collect();
-    let symm_cols = cols_of(&design, &symm_terms);
-    let symm_fit = fit(&design, &symm_cols);
+    let symm_cols = cols_of(design, &symm_terms);
+    let symm_fit = fit(design, &symm_cols);
     let mut sym_cols = symm_cols.clone();
-    sym_cols.extend(cols_of(&design, &sym_terms));
-    if let (Some(sf), Some(s0)) = (fit(&design, &sym_cols), symm_fit.as_ref()) {
+    sym_cols.extend(cols_of(design, &sym_terms));
+    if let (Some(sf), Some(s0)) = (fit(design, &sym_cols), symm_fit.as_ref()) {
         let dbic = delta_bic(&sf, s0);
         let broken = dbic < -opts.bic_threshold;
         mismatch.push(Mismatch {
@@ -242,12 +261,20 @@ pub fn locate(
             .collect(),
         });
     }
-    // consistency between ring-downs and driven runs
+}
+
+/// Ring-downs against driven runs: the base coefficients fitted separately.
+fn consistency(
+    design: &Design,
+    base_cols: &[usize],
+    runs: &[CleanRun],
+    mismatch: &mut Vec<Mismatch>,
+) {
     let has_rd = runs.iter().any(|r| r.ringdown);
     let has_dr = runs.iter().any(|r| !r.ringdown);
     if has_rd && has_dr {
-        let drd = subset(&design, |i| runs[design.run[i]].ringdown);
-        let ddr = subset(&design, |i| !runs[design.run[i]].ringdown);
+        let drd = subset(design, |i| runs[design.run[i]].ringdown);
+        let ddr = subset(design, |i| !runs[design.run[i]].ringdown);
         if let (Some(a), Some(b)) = (fit(&drd, base_cols), fit(&ddr, base_cols)) {
             let mut ev = BTreeMap::new();
             let mut worst: (f64, &str) = (0.0, "");
@@ -281,36 +308,36 @@ pub fn locate(
             }
         }
     }
-    if let Some(k) = kappa {
-        if k.once_per_turn_err.is_finite() && k.once_per_turn > 3.0 * k.once_per_turn_err {
-            mismatch.push(Mismatch {
-                where_: "ring-downs: stiffness κ not 180°-periodic in α0".into(),
-                evidence: [
-                    (
-                        "once_per_turn_amplitude".to_string(),
-                        json!(k.once_per_turn),
-                    ),
-                    ("once_per_turn_err".to_string(), json!(k.once_per_turn_err)),
-                ]
-                .into_iter()
-                .collect(),
-            });
-        }
-        let z = (k.delta_abs - k.delta_nominal.abs())
-            / (k.delta_err.powi(2) + k.delta_nominal_err.powi(2)).sqrt();
-        if z.abs() > 3.0 {
-            mismatch.push(Mismatch {
-                where_: "ring-downs: |Δ| from κ(α0) differs from the nominal shaft angles".into(),
-                evidence: [
-                    ("delta_abs".to_string(), json!(k.delta_abs)),
-                    ("delta_nominal".to_string(), json!(k.delta_nominal)),
-                    ("z".to_string(), json!(z)),
-                ]
-                .into_iter()
-                .collect(),
-            });
-        }
-    }
+}
 
-    (mismatch, chi_run)
+/// κ(α0) of the ring-downs: not 180°-periodic, |Δ| against the nominal shaft angles.
+fn kappa_checks(k: &KappaFit, mismatch: &mut Vec<Mismatch>) {
+    if k.once_per_turn_err.is_finite() && k.once_per_turn > 3.0 * k.once_per_turn_err {
+        mismatch.push(Mismatch {
+            where_: "ring-downs: stiffness κ not 180°-periodic in α0".into(),
+            evidence: [
+                (
+                    "once_per_turn_amplitude".to_string(),
+                    json!(k.once_per_turn),
+                ),
+                ("once_per_turn_err".to_string(), json!(k.once_per_turn_err)),
+            ]
+            .into_iter()
+            .collect(),
+        });
+    }
+    let z = (k.delta_abs - k.delta_nominal.abs())
+        / (k.delta_err.powi(2) + k.delta_nominal_err.powi(2)).sqrt();
+    if z.abs() > 3.0 {
+        mismatch.push(Mismatch {
+            where_: "ring-downs: |Δ| from κ(α0) differs from the nominal shaft angles".into(),
+            evidence: [
+                ("delta_abs".to_string(), json!(k.delta_abs)),
+                ("delta_nominal".to_string(), json!(k.delta_nominal)),
+                ("z".to_string(), json!(z)),
+            ]
+            .into_iter()
+            .collect(),
+        });
+    }
 }

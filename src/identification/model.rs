@@ -273,17 +273,13 @@ impl AugmentedGear {
     }
     fn friction_varies(&self) -> bool {
         self.c.eta_load != 0.0
-            || self
-                .c
-                .extra
-                .iter()
-                .any(|&(t, th)| {
-                    th != 0.0
-                        && matches!(
-                            t,
-                            ExtraTerm::FricCos | ExtraTerm::FricSin | ExtraTerm::FricTrig { .. }
-                        )
-                })
+            || self.c.extra.iter().any(|&(t, th)| {
+                th != 0.0
+                    && matches!(
+                        t,
+                        ExtraTerm::FricCos | ExtraTerm::FricSin | ExtraTerm::FricTrig { .. }
+                    )
+            })
     }
 }
 

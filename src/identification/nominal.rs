@@ -133,10 +133,20 @@ pub fn shaft_angles(setup: &GearSetup, delta: Value) -> Option<Finding> {
     p.insert("delta_tolerance_high".into(), hi);
     p.insert("z_outside_tolerance".into(), outside / s);
     // implied angles along three lines through the nominal point
-    let lines: [(&str, Box<dyn Fn(f64) -> f64>); 3] = [
-        ("common_shift", Box::new(|x| shaft_index(th + x, ph + x))),
-        ("theta_at_nominal_phi", Box::new(|x| shaft_index(th + x, ph))),
-        ("phi_at_nominal_theta", Box::new(|x| shaft_index(th, ph + x))),
+    type Line<'a> = (&'a str, Box<dyn Fn(f64) -> f64>);
+    let lines: [Line; 3] = [
+        (
+            "common_shift",
+            Box::new(move |x| shaft_index(th + x, ph + x)),
+        ),
+        (
+            "theta_at_nominal_phi",
+            Box::new(move |x| shaft_index(th + x, ph)),
+        ),
+        (
+            "phi_at_nominal_theta",
+            Box::new(move |x| shaft_index(th, ph + x)),
+        ),
     ];
     for (name, f) in lines.iter() {
         if let Some((x, dd)) = solve_near_zero(f, d) {

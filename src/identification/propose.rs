@@ -88,9 +88,20 @@ pub fn propose(
     let lat = latency.unwrap_or(0.0);
     let mut all: Vec<Term> = current.to_vec();
     for e in catalog() {
-        all.extend(e.terms.iter().filter(|t| !all.contains(t)).copied().collect::<Vec<_>>());
+        all.extend(
+            e.terms
+                .iter()
+                .filter(|t| !all.contains(t))
+                .copied()
+                .collect::<Vec<_>>(),
+        );
     }
-    all.extend(dictionary().into_iter().filter(|t| !all.contains(t)).collect::<Vec<_>>());
+    all.extend(
+        dictionary()
+            .into_iter()
+            .filter(|t| !all.contains(t))
+            .collect::<Vec<_>>(),
+    );
     let d = build(ctx.runs, ctx.geo, &all, ctx.weak, lat);
     let Some(cur) = fit(&d, &cols_of(&d, current)) else {
         return vec![];

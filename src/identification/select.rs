@@ -145,6 +145,31 @@ pub fn evaluate(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<M
     evaluate_on(ctx, ctx.wins, cur, cand)
 }
 
+/// The final model refitted to convergence (the judge's refits stop after a few
+/// Levenberg–Marquardt steps from their warm starts: enough to judge, not to report), with its
+/// held-out errors recomputed.
+pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
+    if st.effects.is_empty() {
+        return st.clone();
+    }
+    let model = st.model(ctx.runs, ctx.geo);
+    let opts = ShootingOptions {
+        patience: 4,
+        ..*ctx.shooting
+    };
+    match refit(&model, &st.fit.theta, ctx.wins, &opts) {
+        Some(fit) => {
+            let held = heldout(&model, &fit, ctx.wins, ctx.folds);
+            ModelState {
+                fit,
+                held,
+                ..st.clone()
+            }
+        }
+        None => st.clone(),
+    }
+}
+
 /// Screening z below which a candidate is not refitted on all judging windows.
 pub const SCREEN_Z: f64 = 1.0;
 
@@ -199,8 +224,9 @@ pub fn select(
                 .as_ref()
                 .map(|s| compare(&cur.held, &s.held, ctx.wins, ctx.runs));
             progress(&format!(
-                "  screening z = {}, held-out z = {} (threshold {z_crit:.2}), gain = {}",
+                "  screening z = {} (gain {}), held-out z = {} (threshold {z_crit:.2}), gain = {}",
                 scr.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
+                scr.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
                 cmp.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
                 cmp.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
             ));

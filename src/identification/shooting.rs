@@ -166,7 +166,11 @@ impl SimFit {
     }
     /// χ² of every window of `wins` at the solution: from the residuals for the used windows,
     /// by a fresh state fit for the others; and the warm start of each used window.
-    pub fn window_chi2(&self, model: &SimModel, wins: &[Win]) -> (Vec<Option<f64>>, Vec<Option<[f64; 2]>>) {
+    pub fn window_chi2(
+        &self,
+        model: &SimModel,
+        wins: &[Win],
+    ) -> (Vec<Option<f64>>, Vec<Option<[f64; 2]>>) {
         let mut warm: Vec<Option<[f64; 2]>> = vec![None; wins.len()];
         let mut chi2: Vec<Option<f64>> = vec![None; wins.len()];
         for (k, &(wi, row0)) in self.used.iter().enumerate() {
@@ -176,7 +180,9 @@ impl SimFit {
         }
         let missing: Vec<usize> = (0..wins.len()).filter(|&k| chi2[k].is_none()).collect();
         let fresh = par_map(missing.len(), |j| {
-            model.window_chi2(&self.theta, &wins[missing[j]]).map(|x| x.0)
+            model
+                .window_chi2(&self.theta, &wins[missing[j]])
+                .map(|x| x.0)
         });
         for (j, k) in missing.into_iter().enumerate() {
             chi2[k] = fresh[j];

@@ -5,7 +5,7 @@
 
 use super::model::{Coefficients, ExtraTerm};
 use super::preprocess::CleanRun;
-use super::regression::{session_positions, Clock, DriftParam, Term};
+use super::regression::{session_positions, DriftParam, Term};
 
 /// The simulation form of a dictionary term (an [`ExtraTerm`] slot), `None` for catalog terms.
 pub fn extra_term(t: Term) -> Option<ExtraTerm> {
@@ -88,10 +88,7 @@ pub fn coefficients_for_run(
     let pos = session_positions(runs)[run];
     for (&t, &v) in terms.iter().zip(coef) {
         if let Term::Drift(p, clock) = t {
-            let s = match clock {
-                Clock::RunIndex => pos.0,
-                Clock::SessionTime => pos.1,
-            };
+            let s = pos[clock.index()];
             let dv = v * s;
             match p {
                 DriftParam::Zeta => c.zeta += dv,
