@@ -204,7 +204,18 @@ pub fn fit_base(
         phi: setup.phi_deg.to_radians(),
     };
     progress("equation-error rows (weak form), base fit");
-    let design = build(&prep.runs, &geo0, &BASE_TERMS, &opts.weak, 0.0);
+    // every catalog and dictionary term (base terms first): the mismatch tests use them
+    let mut terms: Vec<Term> = BASE_TERMS.to_vec();
+    for t in super::catalog::catalog()
+        .into_iter()
+        .flat_map(|e| e.terms)
+        .chain(super::catalog::dictionary())
+    {
+        if !terms.contains(&t) {
+            terms.push(t);
+        }
+    }
+    let design = build(&prep.runs, &geo0, &terms, &opts.weak, 0.0);
     let weak = fit(&design, &[0, 1, 2, 3]).ok_or_else(|| {
         Error::InvalidInput(
             "too few usable samples for the equation-error fit (runs too short or always at rest)"
