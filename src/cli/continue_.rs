@@ -1,6 +1,7 @@
 //! `gearbif continue`: pseudo-arclength continuation of a periodic orbit in one parameter.
 
 use super::common::{check_frequency, GearArgs, Output};
+use crate::continuation::multiple_shooting::{continue_branch, MultipleShootingOptions};
 use crate::continuation::{switch_branch, Branch, Continuation, ContinuationOptions, Param};
 use crate::error::{Error, Result};
 use crate::maps::Section;
@@ -52,11 +53,15 @@ pub struct Args {
     /// Integrator tolerance.
     #[arg(long, default_value_t = 1e-11)]
     tol: f64,
-    /// Stop when a multiplier modulus exceeds this.
+    /// Single shooting is trusted up to this multiplier modulus; beyond it the branch is continued
+    /// by multiple shooting (or stops, with --no-multiple-shooting).
     #[arg(long, default_value_t = 1e4)]
     max_multiplier: f64,
+    /// Stop at --max-multiplier instead of switching to multiple shooting.
+    #[arg(long)]
+    no_multiple_shooting: bool,
     /// After the continuation, switch at special point number N (flip or symmetry-breaking) and
-    /// continue the new branch too.
+    /// continue the new branch too, on the side of the point where it exists (away from the point).
     #[arg(long)]
     switch_at: Option<usize>,
     /// Write the branch (JSON) to this file.
@@ -173,6 +178,13 @@ fn summary(b: &Branch) -> String {
         b.map_evaluations,
         b.stop
     ));
+    if let Some(i) = b.multiple_shooting_from {
+        s.push_str(&format!(
+            "  multiple shooting from point {i} ({} = {:.6}) on\n",
+            b.param.name(),
+            b.points.get(i).map(|p| p.param).unwrap_or(f64::NAN)
+        ));
+    }
     for (i, sp) in b.specials.iter().enumerate() {
         let mu = sp.floquet.multipliers;
         s.push_str(&format!(
@@ -227,7 +239,13 @@ pub fn run(a: Args) -> Result<()> {
         shooting,
         ..Default::default()
     };
-    let branch = Continuation::from_orbit(gear, param, &orbit, opts)?.run(None)?;
+    let ms = (!a.no_multiple_shooting).then(MultipleShootingOptions::default);
+    let branch = continue_branch(
+        Continuation::from_orbit(gear, param, &orbit, opts)?,
+        &opts,
+        ms.as_ref(),
+        None,
+    )?;
     let mut branches = vec![branch];
     if let Some(n) = a.switch_at {
         let b0 = &branches[0];
@@ -238,16 +256,18 @@ pub fn run(a: Args) -> Result<()> {
             ))
         })?;
         let sw = switch_branch(b0, sp, -sign * 1e-3 * sp.param.abs().max(1.0), &shooting)?;
-        let b1 = Continuation::from_orbit(
-            sw.gear,
-            param,
-            &sw.orbit,
-            ContinuationOptions {
-                ds: sign * 0.25 * a.ds.abs(),
-                ..opts
-            },
-        )?
-        .run(None)?;
+        // the new branch exists on the side where the switch found it: continue away from the point
+        let side = (param.get(&sw.gear) - sp.param).signum();
+        let o1 = ContinuationOptions {
+            ds: side * 0.25 * a.ds.abs(),
+            ..opts
+        };
+        let b1 = continue_branch(
+            Continuation::from_orbit(sw.gear, param, &sw.orbit, o1)?,
+            &o1,
+            ms.as_ref(),
+            None,
+        )?;
         branches.push(b1);
     }
     if let Some(p) = &a.out {

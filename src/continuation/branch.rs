@@ -110,6 +110,9 @@ pub enum StopReason {
     MultiplierLimit(f64),
     /// The corrector failed at the smallest step size.
     StepTooSmall(String),
+    /// The branch ran onto a branch already computed (same orbits, up to the symmetry R, the 2π
+    /// lift and the choice of map); the detail names it. Used by the automatic diagram.
+    KnownBranch(String),
     /// Not stopped yet.
     Running,
 }
@@ -129,8 +132,13 @@ pub struct Branch {
     pub specials: Vec<SpecialPoint>,
     /// Why the continuation stopped.
     pub stop: StopReason,
-    /// Map evaluations (each one integration with sensitivities).
+    /// Map evaluations (each one integration with sensitivities; with multiple shooting one
+    /// evaluation of all segments).
     pub map_evaluations: usize,
+    /// Index of the first point computed by multiple shooting (where single shooting reached its
+    /// multiplier limit), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multiple_shooting_from: Option<usize>,
 }
 
 impl Branch {

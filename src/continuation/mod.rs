@@ -13,6 +13,9 @@
 //! column (with the chain rule for Θ, Δ = cos²Θ − 2 sin²Θ).
 
 pub mod branch;
+pub mod diagram;
+pub mod identity;
+pub mod multiple_shooting;
 pub mod two_param;
 
 pub use branch::{Branch, BranchPoint, NonsmoothJump, SpecialKind, SpecialPoint, StopReason};
@@ -282,6 +285,7 @@ impl Continuation {
                 specials: Vec::new(),
                 stop: StopReason::Running,
                 map_evaluations: 0,
+                multiple_shooting_from: None,
             },
         };
         let (solved, _) = c.eval(c.last.u)?;
