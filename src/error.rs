@@ -15,6 +15,33 @@ pub enum Error {
         /// What the admissible range is.
         reason: &'static str,
     },
+    /// A parameter name that the system does not declare.
+    #[error("unknown parameter `{name}` (expected one of: {expected})")]
+    UnknownParameter {
+        /// The name given.
+        name: String,
+        /// The names the system declares.
+        expected: String,
+    },
+    /// The parameter has no column in the map's parameter Jacobian, so it cannot be continued.
+    #[error("parameter `{name}` has no Jacobian column: it can be swept but not continued")]
+    NoParameterColumn {
+        /// The parameter's name.
+        name: &'static str,
+    },
+    /// A simulation did not settle on a periodic orbit of period ≤ `max_period`.
+    #[error(
+        "no period <= {max_period} detected after {relax_periods} periods (best closing error \
+         {best_closing_error:e}); quasi-periodic, chaotic or not yet relaxed"
+    )]
+    NoPeriodDetected {
+        /// Largest period tried, in drive periods.
+        max_period: usize,
+        /// Drive periods of relaxation before the test.
+        relax_periods: usize,
+        /// The smallest closing error |P_T^k(x) − x − (2πp, 0)| seen.
+        best_closing_error: f64,
+    },
     /// A state or time given to the integrator is non-finite or inconsistent.
     #[error("invalid input: {0}")]
     InvalidInput(String),

@@ -2,26 +2,39 @@
 //! must find every special point of the hand-made example (docs/continuation.md), each to 1e-6 Hz,
 //! and recognise the branches it meets again instead of recomputing them.
 
-use gearbif::continuation::diagram::{diagram, Criticality, Diagram, DiagramOptions, DIAGRAM_SCHEMA};
+use gearbif::continuation::diagram::{
+    diagram, lock_seeds, Criticality, Diagram, DiagramOptions, DIAGRAM_SCHEMA,
+};
 use gearbif::continuation::{SpecialKind, StopReason};
-use gearbif::model::Gear;
+use gearbif::model::{Gear, GearParam};
 
 fn find(d: &Diagram, kind: SpecialKind, f: f64, tol: f64) -> Option<usize> {
-    d.special_points
-        .iter()
-        .position(|p| p.point.kind == kind && p.same_as.is_none() && (p.point.param - f).abs() < tol)
+    d.special_points.iter().position(|p| {
+        p.point.kind == kind && p.same_as.is_none() && (p.point.param - f).abs() < tol
+    })
 }
 
 #[test]
 fn theta25_diagram_finds_every_documented_special_point() {
     let t0 = std::time::Instant::now();
     let gear = Gear::paper(25.0, 2.0).unwrap();
+    // CI size: period doublings followed up to period 8 (the flip on the period-8 branch is still
+    // located, not switched); `gearbif diagram --theta-deg 25 --range 1.5:3` goes to period 16
     let opts = DiagramOptions {
-        range: (1.5, 3.0),
-        ..Default::default()
+        grid: 4,
+        max_period: 8,
+        ..DiagramOptions::new(GearParam::F, (1.5, 3.0))
     };
-    let d = diagram(&gear, &opts).unwrap();
-    println!("diagram: {} runs, {} map evaluations, {:?}", d.branches.len(), d.map_evaluations, t0.elapsed());
+    // no analytic branch at Θ = 25° (Δ ≠ ±1): the seeds come from simulations only
+    let seeds = lock_seeds(&gear, &opts.continuation.shooting);
+    assert!(seeds.is_empty());
+    let d = diagram(&gear, &opts, seeds).unwrap();
+    println!(
+        "diagram: {} runs, {} map evaluations, {:?}",
+        d.branches.len(),
+        d.map_evaluations,
+        t0.elapsed()
+    );
     for (i, b) in d.branches.iter().enumerate() {
         let (lo, hi) = b.branch.param_range().unwrap_or((f64::NAN, f64::NAN));
         println!(
@@ -53,13 +66,26 @@ fn theta25_diagram_finds_every_documented_special_point() {
     let tol = 1e-6;
     let sb_sub = find(&d, SpecialKind::SymmetryBreaking, 2.077740215, tol).expect("SB 2.0777");
     let sb_sup = find(&d, SpecialKind::SymmetryBreaking, 2.501384436, tol).expect("SB 2.5014");
-    assert_eq!(d.special_points[sb_sub].criticality, Some(Criticality::Subcritical));
-    assert_eq!(d.special_points[sb_sup].criticality, Some(Criticality::Supercritical));
+    assert_eq!(
+        d.special_points[sb_sub].criticality,
+        Some(Criticality::Subcritical)
+    );
+    assert_eq!(
+        d.special_points[sb_sup].criticality,
+        Some(Criticality::Supercritical)
+    );
     for f in [1.854934873, 1.821913436, 1.816292918] {
         find(&d, SpecialKind::Flip, f, tol).unwrap_or_else(|| panic!("flip at {f}"));
     }
     find(&d, SpecialKind::Fold, 1.957902300, tol).expect("fold 1.9579");
-    for f in [1.927811511, 1.930900381, 1.944786963, 2.370338766, 2.364173282, 2.342996371] {
+    for f in [
+        1.927811511,
+        1.930900381,
+        1.944786963,
+        2.370338766,
+        2.364173282,
+        2.342996371,
+    ] {
         find(&d, SpecialKind::Nonsmooth, f, tol).unwrap_or_else(|| panic!("nonsmooth at {f}"));
     }
     // the narrow T window is born at a nonsmooth fold (a multiplier jumps across +1)

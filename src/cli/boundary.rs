@@ -5,9 +5,10 @@ use super::common::{GearArgs, Output};
 use super::continue_::{parse_range, parse_section, parse_state};
 use super::locate::parse_kind;
 use crate::continuation::two_param::{follow, grid};
-use crate::continuation::{Param, SpecialKind};
+use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
 use crate::maps::Section;
+use crate::model::{GearParam, Parameter, Parametrised};
 use crate::orbits::{OrbitSpec, ShootingOptions};
 
 /// Arguments of `gearbif boundary`.
@@ -65,16 +66,16 @@ pub fn run(a: Args) -> Result<()> {
     let params = a.gear.params()?;
     let base = params.driven(1.0)?;
     let kind = parse_kind(&a.kind)?;
-    let free = Param::from_name(&a.free)?;
-    let along = Param::from_name(&a.along)?;
+    let free = GearParam::from_name(&a.free)?;
+    let along = GearParam::from_name(&a.along)?;
     let opts = ShootingOptions {
         tol: a.tol,
         ..Default::default()
     };
     let curves = if a.start_state.is_none()
         && kind == SpecialKind::Fold
-        && along == Param::ThetaDeg
-        && free == Param::F
+        && along == GearParam::ThetaDeg
+        && free == GearParam::F
     {
         crate::continuation::two_param::lock_loss_boundary(&base, a.step, &opts)?
     } else {
@@ -90,7 +91,7 @@ pub fn run(a: Args) -> Result<()> {
             Section::Stroboscopic => OrbitSpec::stroboscopic(1, a.winding),
         };
         let vals = grid(lo, hi, a.step, a.reverse);
-        let g = along.set(&free.set(&base, f0)?, vals[0])?;
+        let g = base.with_param(free, f0)?.with_param(along, vals[0])?;
         let c = follow(&g, &spec, kind, free, along, x, f0, &vals, &opts)?;
         vec![(format!("{} curve", kind.label()), c)]
     };

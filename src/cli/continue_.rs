@@ -2,10 +2,11 @@
 
 use super::common::{check_frequency, GearArgs, Output};
 use crate::continuation::multiple_shooting::{continue_branch, MultipleShootingOptions};
-use crate::continuation::{switch_branch, Branch, Continuation, ContinuationOptions, Param};
+use crate::continuation::pinned::switch_at;
+use crate::continuation::{Branch, Continuation, ContinuationOptions};
 use crate::error::{Error, Result};
 use crate::maps::Section;
-use crate::model::Gear;
+use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};
 
 /// Arguments of `gearbif continue`.
@@ -217,7 +218,7 @@ pub fn run(a: Args) -> Result<()> {
     check_frequency(a.f)?;
     let params = a.gear.params()?;
     let gear = params.driven(a.f)?;
-    let param = Param::from_name(&a.param)?;
+    let param = GearParam::from_name(&a.param)?;
     let (lo, hi) = parse_range(&a.range)?;
     let sign = match a.direction.as_str() {
         "up" => 1.0,
@@ -255,15 +256,17 @@ pub fn run(a: Args) -> Result<()> {
                 b0.specials.len()
             ))
         })?;
-        let sw = switch_branch(b0, sp, -sign * 1e-3 * sp.param.abs().max(1.0), &shooting)?;
-        // the new branch exists on the side where the switch found it: continue away from the point
-        let side = (param.get(&sw.gear) - sp.param).signum();
+        // pinned switching: the new orbit is found at a fixed distance from the bifurcating one,
+        // with the parameter free, so it lands on the side where the new branch exists; the new
+        // branch is continued away from the point
+        let (sys1, orbit1) = switch_at(b0, sp, 1e-2, &shooting)?;
+        let side = (sys1.param(param) - sp.param).signum();
         let o1 = ContinuationOptions {
             ds: side * 0.25 * a.ds.abs(),
             ..opts
         };
         let b1 = continue_branch(
-            Continuation::from_orbit(sw.gear, param, &sw.orbit, o1)?,
+            Continuation::from_orbit(sys1, param, &orbit1, o1)?,
             &o1,
             ms.as_ref(),
             None,

@@ -4,9 +4,10 @@
 use super::common::{check_frequency, GearArgs, Output};
 use super::continue_::{parse_section, parse_state};
 use crate::continuation::two_param::{locate_augmented, CurvePoint};
-use crate::continuation::{Param, SpecialKind};
+use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
 use crate::maps::Section;
+use crate::model::{GearParam, Parameter, Parametrised};
 use crate::orbits::{OrbitSpec, ShootingOptions};
 use serde::Serialize;
 
@@ -74,13 +75,13 @@ pub fn run(a: Args) -> Result<()> {
     check_frequency(a.f)?;
     let gear = a.gear.params()?.driven(a.f)?;
     let kind = parse_kind(&a.kind)?;
-    let param = Param::from_name(&a.param)?;
+    let param = GearParam::from_name(&a.param)?;
     let spec = match parse_section(&a.section)? {
         Section::HalfPeriod => OrbitSpec::symmetric(a.winding),
         Section::Stroboscopic => OrbitSpec::stroboscopic(a.period, a.winding),
     };
     let x = parse_state(&a.state)?;
-    let lam0 = param.get(&gear);
+    let lam0 = gear.param(param);
     let o1 = ShootingOptions {
         tol: a.tol,
         ..Default::default()

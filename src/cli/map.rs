@@ -6,7 +6,7 @@ use super::methods::{DriveArgs, MethodArgs};
 use crate::error::{Error, Result};
 use crate::integrator::{FlowOptions, Mode, Sensitivity, Stats};
 use crate::maps::{multipliers, poincare_map, Section};
-use crate::model::{Convention, DrivenOscillator, Gear};
+use crate::model::{Convention, DrivenOscillator};
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -121,7 +121,7 @@ pub fn run(a: Args) -> Result<()> {
         winding: (img.x[0] - x[0]) / std::f64::consts::TAU,
         mode: img.mode,
         jac_x: [[jx[(0, 0)], jx[(0, 1)]], [jx[(1, 0)], jx[(1, 1)]]],
-        param_names: Gear::PARAM_NAMES[..np].to_vec(),
+        param_names: (0..np).map(|k| gear.param_name(k)).collect(),
         jac_p: [
             (0..np).map(|c| jp[(0, c)]).collect(),
             (0..np).map(|c| jp[(1, c)]).collect(),

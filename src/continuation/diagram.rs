@@ -21,14 +21,14 @@
 
 use super::identity::{lies_on_branch, section_distance, IdentityOptions, OrbitImages};
 use super::multiple_shooting::{extend_by_multiple_shooting, MultipleShootingOptions};
+use super::pinned::{new_spec, switch_pinned};
 use super::{
-    Branch, Continuation, ContinuationOptions, Param, SpecialKind, SpecialPoint,
-    StepOutcome, StopReason,
+    Branch, Continuation, ContinuationOptions, SpecialKind, SpecialPoint, StepOutcome, StopReason,
 };
 use crate::error::{Error, Result};
-use crate::model::Gear;
-use crate::orbits::{orbit_from_simulation, residual, shoot, OrbitSpec, PeriodicOrbit};
-use nalgebra::{Matrix3, Vector3};
+use crate::model::{Gear, Parameter, Parametrised};
+use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, PeriodicOrbit};
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
@@ -36,10 +36,10 @@ use std::collections::VecDeque;
 pub const DIAGRAM_SCHEMA: &str = "gearbif.diagram/1";
 
 /// Options of [`diagram`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct DiagramOptions {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DiagramOptions<P> {
     /// The parameter.
-    pub param: Param,
+    pub param: P,
     /// Its range [lo, hi].
     pub range: (f64, f64),
     /// Number of parameter values at which attractors are sought by simulation.
@@ -61,11 +61,12 @@ pub struct DiagramOptions {
     pub max_runs: usize,
 }
 
-impl Default for DiagramOptions {
-    fn default() -> Self {
+impl<P: Parameter> DiagramOptions<P> {
+    /// Defaults for the parameter `param` over `range`.
+    pub fn new(param: P, range: (f64, f64)) -> Self {
         Self {
-            param: Param::F,
-            range: (1.0, 2.0),
+            param,
+            range,
             grid: 6,
             relax_periods: 300,
             max_period: 16,
@@ -108,7 +109,8 @@ pub enum Origin {
 
 /// One continuation run of the diagram.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DiagramBranch {
+#[serde(bound(serialize = "S: Serialize", deserialize = "S: DeserializeOwned"))]
+pub struct DiagramBranch<S: Parametrised = Gear> {
     /// Where its start orbit came from.
     pub origin: Origin,
     /// +1 or −1: the initial direction in the parameter.
@@ -117,7 +119,7 @@ pub struct DiagramBranch {
     /// see [`super::identity`]).
     pub primitive: usize,
     /// The branch.
-    pub branch: Branch,
+    pub branch: Branch<S>,
 }
 
 /// Criticality of a symmetry-breaking or flip point.
@@ -167,17 +169,18 @@ pub struct Seed {
 
 /// The automatic bifurcation diagram.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Diagram {
+#[serde(bound(serialize = "S: Serialize", deserialize = "S: DeserializeOwned"))]
+pub struct Diagram<S: Parametrised = Gear> {
     /// [`DIAGRAM_SCHEMA`].
     pub schema: String,
     /// The parameter.
-    pub param: Param,
+    pub param: S::Param,
     /// The range.
     pub range: (f64, f64),
     /// The system (at the first grid value).
-    pub gear: Gear,
+    pub system: S,
     /// The continuation runs.
-    pub branches: Vec<DiagramBranch>,
+    pub branches: Vec<DiagramBranch<S>>,
     /// Every special point (in the order found).
     pub special_points: Vec<DiagramPoint>,
     /// The seeds.
@@ -186,7 +189,7 @@ pub struct Diagram {
     pub map_evaluations: usize,
 }
 
-impl Diagram {
+impl<S: Parametrised> Diagram<S> {
     /// The distinct special points (those not `same_as` an earlier one) of a kind.
     pub fn distinct(&self, kind: SpecialKind) -> impl Iterator<Item = &DiagramPoint> {
         self.special_points
@@ -195,22 +198,48 @@ impl Diagram {
     }
 }
 
-struct Start {
-    gear: Gear,
+/// A seed known analytically (e.g. the gear's lock branch at Δ = ±1).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnalyticSeed<S> {
+    /// Its name ("stable lock", …).
+    pub name: String,
+    /// The system at the seed's parameter value.
+    pub system: S,
+    /// The orbit (shot from the analytic state).
+    pub orbit: Result<PeriodicOrbit>,
+}
+
+/// The gear's analytic lock branch (stable and unstable) as seeds, if Δ = ±1.
+pub fn lock_seeds(gear: &Gear, opts: &crate::orbits::ShootingOptions) -> Vec<AnalyticSeed<Gear>> {
+    let Ok(lb) = gear.lock_branch() else {
+        return Vec::new();
+    };
+    [("stable", lb.stable), ("unstable", lb.unstable)]
+        .into_iter()
+        .map(|(which, pt)| AnalyticSeed {
+            name: which.into(),
+            system: *gear,
+            orbit: shoot(gear, &OrbitSpec::symmetric(pt.winding), pt.state, opts),
+        })
+        .collect()
+}
+
+struct Start<S> {
+    gear: S,
     orbit: PeriodicOrbit,
     origin: Origin,
     /// For switches: run only these directions (both by default).
     directions: [f64; 2],
 }
 
-struct Builder<'a> {
-    opts: &'a DiagramOptions,
+struct Builder<'a, S: Parametrised> {
+    opts: &'a DiagramOptions<S::Param>,
     ident: IdentityOptions,
-    d: Diagram,
+    d: Diagram<S>,
 }
 
-impl Builder<'_> {
-    fn images(&self, gear: &Gear, spec: &OrbitSpec, x: [f64; 2]) -> Result<OrbitImages> {
+impl<S: Parametrised> Builder<'_, S> {
+    fn images(&self, gear: &S, spec: &OrbitSpec, x: [f64; 2]) -> Result<OrbitImages> {
         OrbitImages::of(gear, spec, x, self.opts.continuation.shooting.tol, 1e-6)
     }
 
@@ -228,7 +257,7 @@ impl Builder<'_> {
     }
 
     /// One continuation run from `start` in `direction`, stopped when it meets a known branch.
-    fn run(&mut self, start: &Start, direction: f64) -> Result<usize> {
+    fn run(&mut self, start: &Start<S>, direction: f64) -> Result<usize> {
         let p = self.opts.param;
         let (lo, hi) = self.opts.range;
         // switched branches start close to the bifurcation point: smaller first steps
@@ -243,7 +272,7 @@ impl Builder<'_> {
             ..self.opts.continuation
         };
         let im0 = self.images(&start.gear, &start.orbit.spec, start.orbit.x)?;
-        let mut c = Continuation::from_orbit(start.gear, p, &start.orbit, copts)?;
+        let mut c = Continuation::from_orbit(start.gear.clone(), p, &start.orbit, copts)?;
         let id = self.d.branches.len();
         let mut known_at = None;
         let mut steps = 0usize;
@@ -257,7 +286,7 @@ impl Builder<'_> {
                     }
                     let last = c.branch().points.last().cloned();
                     if let Some(pt) = last {
-                        let g = p.set(&start.gear, pt.param)?;
+                        let g = start.gear.with_param(p, pt.param)?;
                         if let Ok(im) = self.images(&g, &start.orbit.spec, pt.x) {
                             if let Some(k) = self.known(pt.param, &im, None)? {
                                 known_at = Some((k, pt.param));
@@ -303,7 +332,7 @@ impl Builder<'_> {
                 if (q.point.param - sp.param).abs() > tol {
                     continue;
                 }
-                let g = b.param.set(&b.gear, sp.param)?;
+                let g = b.system.with_param(b.param, sp.param)?;
                 let im = self.images(&g, &b.spec, sp.x)?;
                 if im.distance(q.point.x) < 1e-4 {
                     same_as = Some(j);
@@ -324,7 +353,7 @@ impl Builder<'_> {
 
     /// Starts for the new branches at special point `k`, if it is a distinct flip or symmetry-
     /// breaking point within the period limit.
-    fn switch_start(&mut self, k: usize) -> Option<Start> {
+    fn switch_start(&mut self, k: usize) -> Option<Start<S>> {
         let dp = &self.d.special_points[k];
         if dp.same_as.is_some() {
             return None;
@@ -334,20 +363,16 @@ impl Builder<'_> {
         let sp = dp.point.clone();
         match sp.kind {
             SpecialKind::Flip if 2 * b.spec.on_stroboscopic().iterations > self.opts.max_period => {
-                self.d.special_points[k].not_switched =
-                    Some(format!("period {} beyond max_period", 2 * b.spec.iterations));
+                self.d.special_points[k].not_switched = Some(format!(
+                    "period {} beyond max_period",
+                    2 * b.spec.iterations
+                ));
                 return None;
             }
             SpecialKind::Flip | SpecialKind::SymmetryBreaking => {}
             _ => return None,
         }
-        let new_spec = match sp.kind {
-            SpecialKind::Flip => OrbitSpec::stroboscopic(2 * b.spec.iterations, 2 * b.spec.winding),
-            _ => {
-                let s = b.spec.on_stroboscopic();
-                OrbitSpec::stroboscopic(s.iterations, s.winding)
-            }
-        };
+        let new_spec = new_spec(&b.spec, sp.kind).ok()?;
         let prim = self.d.branches[parent].primitive;
         match switch_pinned(
             b,
@@ -355,10 +380,10 @@ impl Builder<'_> {
             &new_spec,
             prim,
             self.opts.switch_offset,
-            &self.opts.continuation,
+            &self.opts.continuation.shooting,
         ) {
             Ok((gear, orbit)) => {
-                let lam = self.opts.param.get(&gear);
+                let lam = gear.param(self.opts.param);
                 let side = (lam - sp.param).signum();
                 // the parent's stability on the new branch's side of the point
                 let i = sp.after_point.min(b.points.len() - 1);
@@ -391,7 +416,7 @@ impl Builder<'_> {
         }
     }
 
-    fn process(&mut self, start: Start) -> Result<()> {
+    fn process(&mut self, start: Start<S>) -> Result<()> {
         let mut queue = VecDeque::from([start]);
         while let Some(st) = queue.pop_front() {
             let n0 = self.d.special_points.len();
@@ -413,7 +438,7 @@ impl Builder<'_> {
         Ok(())
     }
 
-    fn seed(&mut self, origin: Origin, gear: Gear, orbit: Result<PeriodicOrbit>) -> Result<()> {
+    fn seed(&mut self, origin: Origin, gear: S, orbit: Result<PeriodicOrbit>) -> Result<()> {
         let orbit = match orbit {
             Ok(o) => o,
             Err(e) => {
@@ -427,7 +452,7 @@ impl Builder<'_> {
                 return Ok(());
             }
         };
-        let lam = self.opts.param.get(&gear);
+        let lam = gear.param(self.opts.param);
         let im = self.images(&gear, &orbit.spec, orbit.x)?;
         if let Some(k) = self.known(lam, &im, None)? {
             self.d.seeds.push(Seed {
@@ -456,149 +481,29 @@ impl Builder<'_> {
     }
 }
 
-/// Branch switching with the amplitude pinned: at a flip or symmetry-breaking point (x*, λ*) with
-/// critical eigenvector v, solves the new problem `new_spec` for (x, λ) with
-///
-/// ```text
-///   Pᵏ(x; λ) − x − (s, 0) = 0,   q · (x − x*, λ − λ*) = ε,
-/// ```
-///
-/// q = (v, 0) minus its component along the parent branch's tangent, so the parent branch (also a
-/// solution of the new problem) is excluded and λ lands by itself on the side where the new branch
-/// exists (no direction to guess). ε runs through `offset` × (1, 0.3, 3, 0.1, 10) with both signs.
-/// A solution counts only if it lies within 2 % of λ* and its orbit's primitive length (see
-/// [`super::identity`]) is twice the parent's `parent_primitive` (the period-doubled or the
-/// asymmetric orbit, not another orbit that also solves the new problem).
-fn switch_pinned(
-    b: &Branch,
-    sp: &SpecialPoint,
-    new_spec: &OrbitSpec,
-    parent_primitive: usize,
-    offset: f64,
-    copts: &ContinuationOptions,
-) -> Result<(Gear, PeriodicOrbit)> {
-    let v = sp
-        .eigenvector
-        .ok_or_else(|| Error::Continuation("the special point carries no eigenvector".into()))?;
-    let n = b.points.len();
-    if n < 2 {
-        return Err(Error::Continuation("parent branch too short".into()));
-    }
-    let i = sp.after_point.min(n - 2);
-    let (pa, pb) = (&b.points[i], &b.points[i + 1]);
-    let t = Vector3::new(pb.x[0] - pa.x[0], pb.x[1] - pa.x[1], pb.param - pa.param);
-    let t = if t.norm() > 0.0 { t.normalize() } else { Vector3::z() };
-    let e = Vector3::new(v[0], v[1], 0.0);
-    let q = e - e.dot(&t) * t;
-    if q.norm() < 1e-3 {
-        return Err(Error::Continuation(
-            "the critical eigenvector is tangent to the parent branch".into(),
-        ));
-    }
-    let q = q.normalize();
-    let sh = &copts.shooting;
-    let mut last_err = None;
-    for scale in [1.0, 0.3, 3.0, 0.1, 10.0] {
-        for sgn in [1.0, -1.0] {
-            let eps = sgn * scale * offset;
-            let u0 = Vector3::new(sp.x[0], sp.x[1], sp.param) + eps * q;
-            match pinned_newton(b, new_spec, Vector3::new(sp.x[0], sp.x[1], sp.param), q, eps, u0, sh) {
-                Ok((gear, orbit)) => {
-                    let lam = b.param.get(&gear);
-                    let near = (lam - sp.param).abs() < 0.02 * sp.param.abs().max(1.0);
-                    let prim = OrbitImages::of(&gear, new_spec, orbit.x, sh.tol, 1e-6)
-                        .map(|im| im.primitive)
-                        .unwrap_or(0);
-                    // must differ from the parent's orbit at the same parameter
-                    let distinct = shoot(&gear, &b.spec, sp.x, sh)
-                        .map(|old| section_distance(old.x, orbit.x, 1.0) > 0.1 * eps.abs())
-                        .unwrap_or(false);
-                    if near && distinct && prim == 2 * parent_primitive {
-                        return Ok((gear, orbit));
-                    }
-                    last_err = Some(Error::Continuation(format!(
-                        "no new orbit near the point (found one at {} = {lam} with primitive \
-                         length {prim}, parent {parent_primitive})",
-                        b.param.name()
-                    )));
-                }
-                Err(e) => last_err = Some(e),
-            }
-        }
-    }
-    Err(last_err.unwrap_or_else(|| Error::Continuation("branch switching failed".into())))
-}
-
-/// Newton on {F_new(x, λ) = 0, q·(u − u*) = ε} from u0 = (x0, λ0).
-fn pinned_newton(
-    b: &Branch,
-    spec: &OrbitSpec,
-    ustar: Vector3<f64>,
-    q: Vector3<f64>,
-    eps: f64,
-    u0: Vector3<f64>,
-    sh: &crate::orbits::ShootingOptions,
-) -> Result<(Gear, PeriodicOrbit)> {
-    let mut u = u0;
-    for it in 0..sh.max_iter {
-        let gear = b.param.set(&b.gear, u[2])?;
-        let (r, img) = residual(&gear, spec, [u[0], u[1]], sh, true)?;
-        let jac = img
-            .jac_x
-            .ok_or_else(|| Error::Continuation("map returned no Jacobian".into()))?;
-        let fl = b.param.derivative(&img, u[2])?;
-        let g = q.dot(&(u - ustar)) - eps;
-        let a = Matrix3::new(
-            jac[(0, 0)] - 1.0,
-            jac[(0, 1)],
-            fl[0],
-            jac[(1, 0)],
-            jac[(1, 1)] - 1.0,
-            fl[1],
-            q[0],
-            q[1],
-            q[2],
-        );
-        let du = a
-            .lu()
-            .solve(&Vector3::new(-r[0], -r[1], -g))
-            .filter(|d| d.iter().all(|x| x.is_finite()))
-            .ok_or_else(|| Error::NewtonFailed {
-                iterations: it,
-                residual: r[0].hypot(r[1]),
-                reason: "singular pinned switching system".into(),
-            })?;
-        if r[0].hypot(r[1]) < sh.newton_tol && du.norm() < 10.0 * sh.newton_tol && g.abs() < 1e-12 {
-            let orbit = shoot(&gear, spec, [u[0], u[1]], sh)?;
-            return Ok((gear, orbit));
-        }
-        // keep the parameter step modest
-        let cap = 0.05 * u[2].abs().max(0.1);
-        let s = if du[2].abs() > cap { cap / du[2].abs() } else { 1.0 };
-        u += s * du;
-    }
-    Err(Error::NewtonFailed {
-        iterations: sh.max_iter,
-        residual: f64::NAN,
-        reason: "pinned branch switching".into(),
-    })
-}
-
 /// Computes the bifurcation diagram of `base` (its parameter value is replaced by the grid values)
-/// over `opts.range` (see the module docs).
-pub fn diagram(base: &Gear, opts: &DiagramOptions) -> Result<Diagram> {
+/// over `opts.range`, seeded by simulations on the grid and by `analytic` (see the module docs).
+pub fn diagram<S: Parametrised>(
+    base: &S,
+    opts: &DiagramOptions<S::Param>,
+    analytic: Vec<AnalyticSeed<S>>,
+) -> Result<Diagram<S>> {
     let (lo, hi) = opts.range;
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        return Err(Error::InvalidInput("diagram range must have lo < hi".into()));
+        return Err(Error::InvalidInput(
+            "diagram range must have lo < hi".into(),
+        ));
     }
     if opts.grid == 0 || opts.max_period == 0 {
-        return Err(Error::InvalidInput("grid and max_period must be >= 1".into()));
+        return Err(Error::InvalidInput(
+            "grid and max_period must be >= 1".into(),
+        ));
     }
     let p = opts.param;
     let values: Vec<f64> = (0..opts.grid)
         .map(|j| lo + (hi - lo) * (j as f64 + 0.5) / opts.grid as f64)
         .collect();
-    let g0 = p.set(base, values[0])?;
+    let g0 = base.with_param(p, values[0])?;
     let mut b = Builder {
         opts,
         ident: IdentityOptions {
@@ -609,22 +514,18 @@ pub fn diagram(base: &Gear, opts: &DiagramOptions) -> Result<Diagram> {
             schema: DIAGRAM_SCHEMA.into(),
             param: p,
             range: opts.range,
-            gear: g0,
+            system: g0,
             branches: Vec::new(),
             special_points: Vec::new(),
             seeds: Vec::new(),
             map_evaluations: 0,
         },
     };
-    // analytic lock branches (Δ = ±1)
-    if let Ok(lb) = g0.lock_branch() {
-        for (which, pt) in [("stable", lb.stable), ("unstable", lb.unstable)] {
-            let o = shoot(&g0, &OrbitSpec::symmetric(pt.winding), pt.state, &opts.continuation.shooting);
-            b.seed(Origin::Analytic { which: which.into() }, g0, o)?;
-        }
+    for a in analytic {
+        b.seed(Origin::Analytic { which: a.name }, a.system, a.orbit)?;
     }
     for &v in &values {
-        let g = p.set(base, v)?;
+        let g = base.with_param(p, v)?;
         for x0 in [[0.0, 0.0], [std::f64::consts::PI, 0.0]] {
             let o = orbit_from_simulation(
                 &g,
@@ -634,13 +535,13 @@ pub fn diagram(base: &Gear, opts: &DiagramOptions) -> Result<Diagram> {
                 true,
                 &opts.continuation.shooting,
             );
-            b.seed(Origin::Simulation { at: v }, g, o)?;
+            b.seed(Origin::Simulation { at: v }, g.clone(), o)?;
         }
     }
     Ok(b.d)
 }
 
-/// The distance (β modulo 2π) between two special points' states: used to report matches.
+/// The distance (β modulo 2π) between two special points' states.
 pub fn state_distance(a: &SpecialPoint, b: &SpecialPoint) -> f64 {
     section_distance(a.x, b.x, 1.0)
 }

@@ -14,7 +14,7 @@ use super::Branch;
 use crate::error::Result;
 use crate::integrator::{EventDriven, FlowOptions};
 use crate::maps::{poincare_map, Section};
-use crate::model::DrivenOscillator;
+use crate::model::{DrivenOscillator, Parametrised};
 use crate::orbits::{shoot, OrbitSpec, ShootingOptions};
 use std::f64::consts::TAU;
 
@@ -97,8 +97,8 @@ impl Default for IdentityOptions {
 /// on `branch`, a branch of orbits with primitive length `branch_primitive`: each stretch of the
 /// branch that brackets `lam` is interpolated, and if it comes near an image, the branch's orbit
 /// there is shot at `lam` exactly and compared.
-pub fn lies_on_branch(
-    branch: &Branch,
+pub fn lies_on_branch<S: Parametrised>(
+    branch: &Branch<S>,
     branch_primitive: usize,
     lam: f64,
     orbit: &OrbitImages,
@@ -107,7 +107,7 @@ pub fn lies_on_branch(
     if orbit.primitive != branch_primitive {
         return Ok(false);
     }
-    let gear = branch.param.set(&branch.gear, lam)?;
+    let gear = branch.system.with_param(branch.param, lam)?;
     let pts = &branch.points;
     for w in pts.windows(2) {
         let (a, b) = (&w[0], &w[1]);
@@ -115,8 +115,15 @@ pub fn lies_on_branch(
         if !(lam >= lo && lam <= hi) {
             continue;
         }
-        let s = if hi > lo { (lam - a.param) / (b.param - a.param) } else { 0.0 };
-        let xi = [a.x[0] + s * (b.x[0] - a.x[0]), a.x[1] + s * (b.x[1] - a.x[1])];
+        let s = if hi > lo {
+            (lam - a.param) / (b.param - a.param)
+        } else {
+            0.0
+        };
+        let xi = [
+            a.x[0] + s * (b.x[0] - a.x[0]),
+            a.x[1] + s * (b.x[1] - a.x[1]),
+        ];
         if orbit.distance(xi) > opts.coarse_tol * (1.0 + 0.1 * xi[1].abs()) {
             continue;
         }

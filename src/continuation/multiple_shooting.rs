@@ -12,9 +12,9 @@
 //! branch over to multiple shooting instead of stopping; the points are appended to the same
 //! [`Branch`] and `Branch::multiple_shooting_from` records where the hand-over happened.
 
-use super::{Branch, BranchPoint, Continuation, ContinuationOptions, Param, StopReason};
+use super::{Branch, BranchPoint, Continuation, ContinuationOptions, Observer, StopReason};
 use crate::error::{Error, Result};
-use crate::model::Gear;
+use crate::model::{param_derivative, Parametrised};
 use crate::orbits::block_cyclic::CyclicBlockSystem;
 use crate::orbits::multiple_shooting::{
     evaluate, refine, segment_states, segments_for, shoot_multiple, Segments,
@@ -52,9 +52,9 @@ enum MsStep {
 }
 
 /// The multiple-shooting continuation's state.
-struct MsState {
-    gear: Gear,
-    param: Param,
+struct MsState<S: Parametrised> {
+    sys: S,
+    param: S::Param,
     spec: OrbitSpec,
     opts: ContinuationOptions,
     ms: MultipleShootingOptions,
@@ -67,20 +67,21 @@ struct MsState {
     evals: usize,
 }
 
-impl MsState {
+impl<S: Parametrised> MsState<S> {
     fn weights(&self) -> Vector3<f64> {
         Vector3::new(1.0, self.opts.omega_weight, 1.0)
     }
 
     fn eval(&mut self, y: &[[f64; 2]], lam: f64) -> Result<Segments> {
         self.evals += 1;
-        let sys = self.param.set(&self.gear, lam)?;
+        let sys = self.sys.with_param(self.param, lam)?;
         evaluate(&sys, &self.spec, y, &self.opts.shooting, true)
     }
 
     /// The bordered system at `seg` with the border row `border` (scaled (x₀, λ) coefficients).
     fn system(&self, seg: &Segments, lam: f64, border: &Vector3<f64>) -> Result<CyclicBlockSystem> {
         let w = self.weights();
+        let sys = self.sys.with_param(self.param, lam)?;
         let mut diagonal = Vec::with_capacity(seg.images.len());
         let mut param_columns = Vec::with_capacity(seg.images.len());
         for img in &seg.images {
@@ -88,7 +89,11 @@ impl MsState {
                 .jac_x
                 .ok_or_else(|| Error::Continuation("segment without Jacobian".into()))?;
             diagonal.push(DMatrix::from_column_slice(2, 2, b.as_slice()));
-            let c = self.param.derivative(img, lam)?;
+            let jp = img
+                .jac_p
+                .as_ref()
+                .ok_or_else(|| Error::Continuation("segment without parameter Jacobian".into()))?;
+            let c = param_derivative(&sys, self.param, jp)?;
             param_columns.push(DMatrix::from_column_slice(2, 1, &c));
         }
         Ok(CyclicBlockSystem {
@@ -100,15 +105,26 @@ impl MsState {
     }
 
     /// Full tangent (dy, dλ) with the scaled (x₀, λ) part of unit length, oriented along `prev`.
-    fn tangent(&self, seg: &Segments, lam: f64, prev: &Vector3<f64>) -> Result<(Vec<[f64; 2]>, f64, Vector3<f64>)> {
+    fn tangent(
+        &self,
+        seg: &Segments,
+        lam: f64,
+        prev: &Vector3<f64>,
+    ) -> Result<(Vec<[f64; 2]>, f64, Vector3<f64>)> {
         let a = self.system(seg, lam, prev)?;
         let m = seg.images.len();
         let z = a.solve(&vec![DVector::zeros(2); m], &DVector::from_element(1, 1.0))?;
         let w = self.weights();
-        let t3 = Vector3::new(z.states[0][0] * w[0], z.states[0][1] * w[1], z.params[0] * w[2]);
+        let t3 = Vector3::new(
+            z.states[0][0] * w[0],
+            z.states[0][1] * w[1],
+            z.params[0] * w[2],
+        );
         let nrm = t3.norm();
         if !(nrm > 0.0 && nrm.is_finite()) {
-            return Err(Error::Continuation("degenerate multiple-shooting tangent".into()));
+            return Err(Error::Continuation(
+                "degenerate multiple-shooting tangent".into(),
+            ));
         }
         let sg = if t3.dot(prev) < 0.0 { -1.0 } else { 1.0 } / nrm;
         let dy = z.states.iter().map(|d| [sg * d[0], sg * d[1]]).collect();
@@ -156,9 +172,6 @@ impl MsState {
                 x[1] += dx[1];
             }
             lam += d.params[0];
-            if self.param == Param::F && lam <= 0.0 {
-                break;
-            }
         }
         Err(Error::NewtonFailed {
             iterations: 10,
@@ -201,11 +214,11 @@ impl MsState {
                 Err(e) => {
                     self.ds *= 0.5;
                     if self.ds < self.opts.ds_min {
-                        return Ok(MsStep::Stop(StopReason::StepTooSmall(format!(
-                            "multiple shooting at {} = {}: {e}",
-                            self.param.name(),
-                            self.lam
-                        ))));
+                        let _ = e;
+                        return Ok(MsStep::Stop(StopReason::StepTooSmall {
+                            at: self.lam,
+                            ds_min: self.opts.ds_min,
+                        }));
                     }
                 }
             }
@@ -230,7 +243,11 @@ impl MsState {
             (y, lam, seg) = (r.0, r.1, r.2);
             bound = Some(b);
         }
-        let du = Vector3::new(y[0][0] - self.y[0][0], y[0][1] - self.y[0][1], lam - self.lam);
+        let du = Vector3::new(
+            y[0][0] - self.y[0][0],
+            y[0][1] - self.y[0][1],
+            lam - self.lam,
+        );
         let arc = arclength + du.component_mul(&w).norm();
         self.y = y;
         self.lam = lam;
@@ -253,7 +270,7 @@ impl MsState {
         while self.seg.max_growth() > self.ms.max_segment_growth
             && 2 * self.y.len() <= self.ms.max_segments
         {
-            let sys = self.param.set(&self.gear, self.lam)?;
+            let sys = self.sys.with_param(self.param, self.lam)?;
             let y = refine(&sys, &self.spec, &self.y, self.opts.shooting.tol)?;
             let o = shoot_multiple(&sys, &self.spec, &y, &self.opts.shooting)?;
             self.y = o.states;
@@ -267,8 +284,8 @@ impl MsState {
 /// from its last point, in the direction of its last step, with the continuation options `opts`
 /// (the same ones the single-shooting run used). The new points are appended; the stop reason is
 /// replaced by the multiple-shooting run's.
-pub fn extend_by_multiple_shooting(
-    branch: &mut Branch,
+pub fn extend_by_multiple_shooting<S: Parametrised>(
+    branch: &mut Branch<S>,
     opts: &ContinuationOptions,
     ms: &MultipleShootingOptions,
 ) -> Result<()> {
@@ -281,15 +298,15 @@ pub fn extend_by_multiple_shooting(
     let (a, b) = (&branch.points[n - 2], &branch.points[n - 1]);
     let w = Vector3::new(1.0, opts.omega_weight, 1.0);
     let dir = Vector3::new(b.x[0] - a.x[0], b.x[1] - a.x[1], b.param - a.param).component_mul(&w);
-    if !(dir.norm() > 0.0) {
+    if dir.norm().is_nan() || dir.norm() <= 0.0 {
         return Err(Error::Continuation("no direction to continue in".into()));
     }
-    let sys = branch.param.set(&branch.gear, b.param)?;
+    let sys = branch.system.with_param(branch.param, b.param)?;
     let m = segments_for(b.floquet.spectral_radius(), ms.max_segment_growth);
     let y0 = segment_states(&sys, &branch.spec, b.x, m, opts.shooting.tol)?;
     let orbit = shoot_multiple(&sys, &branch.spec, &y0, &opts.shooting)?;
     let mut st = MsState {
-        gear: branch.gear,
+        sys: branch.system.clone(),
         param: branch.param,
         spec: branch.spec,
         opts: *opts,
@@ -298,7 +315,9 @@ pub fn extend_by_multiple_shooting(
         lam: b.param,
         seg: evaluate(&sys, &branch.spec, &y0, &opts.shooting, true)?,
         tangent: dir.normalize(),
-        ds: (b.arclength - a.arclength).abs().clamp(opts.ds_min, opts.ds_max),
+        ds: (b.arclength - a.arclength)
+            .abs()
+            .clamp(opts.ds_min, opts.ds_max),
         evals: 1,
     };
     st.seg = st.eval(&st.y.clone(), st.lam)?;
@@ -311,9 +330,13 @@ pub fn extend_by_multiple_shooting(
             break StopReason::MaxSteps(opts.max_steps);
         }
         steps += 1;
-        match st.step(arc).unwrap_or_else(|e| {
-            MsStep::Stop(StopReason::StepTooSmall(format!("multiple shooting: {e}")))
-        }) {
+        let at = st.lam;
+        match st
+            .step(arc)
+            .unwrap_or(MsStep::Stop(StopReason::StepTooSmall {
+                at,
+                ds_min: opts.ds_min,
+            })) {
             MsStep::Point(p) => {
                 arc = p.arclength;
                 branch.points.push(p);
@@ -332,12 +355,12 @@ pub fn extend_by_multiple_shooting(
 
 /// Runs a continuation; where single shooting stops at the multiplier limit, the branch is continued
 /// by multiple shooting (if `ms` is given) instead of stopping.
-pub fn continue_branch(
-    c: Continuation,
+pub fn continue_branch<S: Parametrised>(
+    c: Continuation<S>,
     opts: &ContinuationOptions,
     ms: Option<&MultipleShootingOptions>,
-    observer: Option<&mut dyn super::Observer>,
-) -> Result<Branch> {
+    observer: Option<&dyn Observer>,
+) -> Result<Branch<S>> {
     let mut branch = c.run(observer)?;
     if let (Some(ms), StopReason::MultiplierLimit(_)) = (ms, &branch.stop) {
         extend_by_multiple_shooting(&mut branch, opts, ms)?;

@@ -103,6 +103,7 @@ impl CyclicBlockSystem {
     }
 
     /// Solves the system for the right-hand sides r_i (one per segment) and r_b (border).
+    #[allow(clippy::needless_range_loop)] // segment j indexes B_j, C_j and r_j together
     pub fn solve(&self, rhs: &[DVector<f64>], rhs_border: &DVector<f64>) -> Result<CyclicSolution> {
         let (m, n, p) = self.dims()?;
         if rhs.len() != m || rhs.iter().any(|r| r.len() != n) || rhs_border.len() != p {
@@ -114,11 +115,7 @@ impl CyclicBlockSystem {
             return self.solve_dense(rhs, rhs_border);
         }
         let t = n + p; // tail unknowns: y_{m−1} and λ
-        let scale = self
-            .diagonal
-            .iter()
-            .map(|b| b.amax())
-            .fold(1.0, f64::max);
+        let scale = self.diagonal.iter().map(|b| b.amax()).fold(1.0, f64::max);
         let tiny = 1e-300_f64.max(scale * f64::EPSILON * 1e-6);
         // carried rows: columns [cur (n) | tail (t)], rhs
         let mut carried = DMatrix::zeros(n + p, n + t);
@@ -186,7 +183,9 @@ impl CyclicBlockSystem {
                 tail: w.view((0, 2 * n), (n, t)).into_owned(),
                 rhs: b.rows(0, n).into_owned(),
             });
-            carried.view_mut((0, 0), (n + p, n)).copy_from(&w.view((n, n), (n + p, n)));
+            carried
+                .view_mut((0, 0), (n + p, n))
+                .copy_from(&w.view((n, n), (n + p, n)));
             carried
                 .view_mut((0, n), (n + p, t))
                 .copy_from(&w.view((n, 2 * n), (n + p, t)));
@@ -207,11 +206,10 @@ impl CyclicBlockSystem {
             if j + 1 < m - 1 {
                 r -= &pr.next * &states[j + 1];
             }
-            let y = pr
-                .u
-                .solve_upper_triangular(&r)
-                .filter(|v| v.iter().all(|x| x.is_finite()))
-                .ok_or_else(|| singular(j))?;
+            let y =
+                pr.u.solve_upper_triangular(&r)
+                    .filter(|v| v.iter().all(|x| x.is_finite()))
+                    .ok_or_else(|| singular(j))?;
             states[j] = y;
         }
         Ok(CyclicSolution {
@@ -220,7 +218,11 @@ impl CyclicBlockSystem {
         })
     }
 
-    fn solve_dense(&self, rhs: &[DVector<f64>], rhs_border: &DVector<f64>) -> Result<CyclicSolution> {
+    fn solve_dense(
+        &self,
+        rhs: &[DVector<f64>],
+        rhs_border: &DVector<f64>,
+    ) -> Result<CyclicSolution> {
         let (m, n, p) = self.dims()?;
         let a = self.to_dense()?;
         let mut b = DVector::zeros(m * n + p);
@@ -251,7 +253,13 @@ mod tests {
         ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     }
 
-    fn random_system(m: usize, n: usize, p: usize, growth: f64, seed: &mut u64) -> CyclicBlockSystem {
+    fn random_system(
+        m: usize,
+        n: usize,
+        p: usize,
+        growth: f64,
+        seed: &mut u64,
+    ) -> CyclicBlockSystem {
         let mut mk = |r: usize, c: usize, s: f64| DMatrix::from_fn(r, c, |_, _| s * lcg(seed));
         CyclicBlockSystem {
             diagonal: (0..m).map(|_| mk(n, n, growth)).collect(),
@@ -264,7 +272,14 @@ mod tests {
     #[test]
     fn structured_elimination_equals_dense_lu() {
         let mut seed = 7u64;
-        for &(m, n, p) in &[(1, 2, 0), (2, 2, 0), (5, 2, 1), (17, 2, 1), (6, 3, 2), (40, 2, 0)] {
+        for &(m, n, p) in &[
+            (1, 2, 0),
+            (2, 2, 0),
+            (5, 2, 1),
+            (17, 2, 1),
+            (6, 3, 2),
+            (40, 2, 0),
+        ] {
             let sys = random_system(m, n, p, 3.0, &mut seed);
             let rhs: Vec<DVector<f64>> = (0..m)
                 .map(|_| DVector::from_fn(n, |_, _| lcg(&mut seed)))
@@ -291,6 +306,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::needless_range_loop)]
     fn strongly_growing_blocks_stay_accurate() {
         // B_i = diag(e^3, e^-3): monodromy e^{±3m}; with m = 30 the product has condition ~e^180,
         // but the segmented system is well conditioned: y_i = B_i^{-1}... solved exactly.

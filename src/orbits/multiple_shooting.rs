@@ -109,7 +109,11 @@ impl Segments {
 }
 
 /// Duration of the orbit's map, D = k·T (P_T) or k·T/2 (G), and the segment boundaries t_i = i·D/m.
-pub fn segment_times<S: DrivenOscillator + ?Sized>(sys: &S, spec: &OrbitSpec, m: usize) -> Vec<f64> {
+pub fn segment_times<S: DrivenOscillator + ?Sized>(
+    sys: &S,
+    spec: &OrbitSpec,
+    m: usize,
+) -> Vec<f64> {
     let d = spec.periods() * sys.period();
     (0..=m).map(|i| d * i as f64 / m as f64).collect()
 }
@@ -124,18 +128,24 @@ pub fn evaluate<S: DrivenOscillator + ?Sized>(
 ) -> Result<Segments> {
     let m = states.len();
     if m == 0 {
-        return Err(Error::InvalidInput("multiple shooting needs >= 1 segment".into()));
+        return Err(Error::InvalidInput(
+            "multiple shooting needs >= 1 segment".into(),
+        ));
     }
-    if states.iter().any(|x| !(x[0].is_finite() && x[1].is_finite())) {
+    if states
+        .iter()
+        .any(|x| !(x[0].is_finite() && x[1].is_finite()))
+    {
         return Err(Error::InvalidInput("non-finite segment state".into()));
     }
     let s = spec.shift(sys)?;
-    let sym = match spec.section {
-        Section::Stroboscopic => None,
-        Section::HalfPeriod => Some(sys.half_period_symmetry().ok_or_else(|| {
-            Error::Unsupported("this system has no half-period symmetry".into())
-        })?),
-    };
+    let sym =
+        match spec.section {
+            Section::Stroboscopic => None,
+            Section::HalfPeriod => Some(sys.half_period_symmetry().ok_or_else(|| {
+                Error::Unsupported("this system has no half-period symmetry".into())
+            })?),
+        };
     let times = segment_times(sys, spec, m);
     // dt_i/dp = (t_i / T) dT/dp for parameters that change the period
     let np = sys.n_params();
@@ -208,7 +218,9 @@ pub fn segment_states<S: DrivenOscillator + ?Sized>(
     tol: f64,
 ) -> Result<Vec<[f64; 2]>> {
     if m == 0 {
-        return Err(Error::InvalidInput("multiple shooting needs >= 1 segment".into()));
+        return Err(Error::InvalidInput(
+            "multiple shooting needs >= 1 segment".into(),
+        ));
     }
     let times = segment_times(sys, spec, m);
     let o = FlowOptions::with_tol(tol);
@@ -234,7 +246,11 @@ pub fn refine<S: DrivenOscillator + ?Sized>(
     let mut out = Vec::with_capacity(2 * m);
     for (i, x) in states.iter().enumerate() {
         out.push(*x);
-        out.push(EventDriven.flow(sys, times[2 * i], *x, times[2 * i + 1], &o)?.x);
+        out.push(
+            EventDriven
+                .flow(sys, times[2 * i], *x, times[2 * i + 1], &o)?
+                .x,
+        );
     }
     Ok(out)
 }
