@@ -6,7 +6,7 @@ use thiserror::Error;
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum Error {
     /// A parameter is non-finite or outside its admissible range.
-    #[error("invalid parameter `{name}` = {value}: {reason}")]
+    #[error("invalid parameter `{name}` = {}: {reason}", show(*value))]
     InvalidParameter {
         /// The parameter's name as in the docs (e.g. `inertia`, `f`).
         name: &'static str,
@@ -74,7 +74,8 @@ pub enum Error {
     /// The requested operation is not available for this system (e.g. no half-period symmetry).
     #[error("unsupported: {0}")]
     Unsupported(String),
-    /// A recording set (experiment.toml or a CSV file) is malformed.
+    /// An input file is malformed: a recording set's experiment.toml or CSV file, a `--config`
+    /// TOML file or a sweep checkpoint.
     #[error("{file}{}: {what}", line.map(|l| format!(":{l}")).unwrap_or_default())]
     Recording {
         /// The file at fault.
@@ -84,6 +85,16 @@ pub enum Error {
         /// What is wrong.
         what: String,
     },
+}
+
+/// A number for a message: plain when moderate, in scientific notation when very large or small
+/// (so `1e308` is not printed with 309 digits).
+pub(crate) fn show(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// Result alias used throughout the crate.

@@ -1,8 +1,8 @@
 //! `gearbif boundary`: a two-parameter curve of special points, by default the lock-loss boundary
 //! f_c(Θ) of the locked orbit over Θ ∈ [0°, 54.74°] (both senses of rotation).
 
-use super::common::{GearArgs, Output};
-use super::continue_::{parse_range, parse_section, parse_state};
+use super::common::{limits, output_file, tolerance, GearArgs, Output};
+use super::continue_::{check_winding, parse_range, parse_section, parse_state};
 use super::locate::parse_kind;
 use crate::continuation::two_param::{follow, grid};
 use crate::continuation::SpecialKind;
@@ -25,29 +25,29 @@ pub struct Args {
     /// The parameter stepped (theta for parallel shafts).
     #[arg(long, default_value = "theta")]
     along: String,
-    /// Range `lo:hi` of the stepped parameter (default 0:54.7356 for theta).
+    /// Range `lo:hi` of the stepped parameter (finite, lo < hi; default 0:54.7356 for theta).
     #[arg(long, allow_hyphen_values = true)]
     range: Option<String>,
-    /// Step of the stepped parameter.
+    /// Step of the stepped parameter (finite, > 0, at most 100000 steps over the range).
     #[arg(long, default_value_t = 1.0)]
     step: f64,
     /// Start: free-parameter value, state and winding at the first value of the range (default: the
     /// analytic lock fold at Θ = 0 and at 54.74°, i.e. the lock-loss boundary).
     #[arg(long)]
     start_free: Option<f64>,
-    /// Start state `beta,omega`.
+    /// Start state `beta,omega` (rad, rad/s; |beta| <= 2π, |omega| <= 1e6).
     #[arg(long, allow_hyphen_values = true)]
     start_state: Option<String>,
     /// Step the range downwards (from hi to lo); the start is then at hi.
     #[arg(long)]
     reverse: bool,
-    /// Winding of the orbit.
+    /// Winding of the orbit, |p| <= 1000.
     #[arg(long, allow_hyphen_values = true, default_value_t = 1)]
     winding: i32,
     /// Orbit problem: sym or strob.
     #[arg(long, default_value = "sym")]
     section: String,
-    /// Integrator tolerance.
+    /// Integrator tolerance, in (0, 1).
     #[arg(long, default_value_t = 1e-11)]
     tol: f64,
     /// Write the curves (JSON).
@@ -68,6 +68,7 @@ pub fn run(a: Args) -> Result<()> {
     let kind = parse_kind(&a.kind)?;
     let free = GearParam::from_name(&a.free)?;
     let along = GearParam::from_name(&a.along)?;
+    check_args(&a)?;
     let opts = ShootingOptions {
         tol: a.tol,
         ..Default::default()
@@ -143,4 +144,32 @@ pub fn run(a: Args) -> Result<()> {
         }
         s
     })
+}
+
+/// The domain checks of `boundary`, all before any curve is computed.
+fn check_args(a: &Args) -> Result<()> {
+    tolerance("tol", a.tol)?;
+    check_winding(a.winding)?;
+    parse_section(&a.section)?;
+    let (lo, hi) = parse_range(a.range.as_deref().unwrap_or("0:54.7356103"))?;
+    if !(a.step.is_finite() && a.step > 0.0) || (hi - lo) / a.step > limits::GRID_MAX as f64 {
+        return Err(Error::InvalidInput(format!(
+            "--step = {} must be finite and > 0 with at most {} steps over {lo}:{hi}",
+            a.step,
+            limits::GRID_MAX
+        )));
+    }
+    if let Some(s) = &a.start_state {
+        parse_state(s)?;
+    }
+    if let Some(f) = a.start_free {
+        crate::error::finite("start-free", f)?;
+    }
+    if let Some(p) = &a.out {
+        output_file("--out", p, false)?;
+    }
+    if let Some(p) = &a.plot {
+        output_file("--plot", p, true)?;
+    }
+    Ok(())
 }

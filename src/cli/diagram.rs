@@ -2,7 +2,9 @@
 //! from simulations and analytic branches, continuation, switching at every flip and
 //! symmetry-breaking point, branches recognised modulo symmetry, lift and map).
 
-use super::common::{check_frequency, GearArgs, Output};
+use super::common::{
+    check_frequency, count, limits, output_file, tolerance, within, GearArgs, Output,
+};
 use super::continue_::parse_range;
 use crate::continuation::diagram::{diagram, lock_seeds, Diagram, DiagramOptions};
 use crate::continuation::multiple_shooting::MultipleShootingOptions;
@@ -117,21 +119,48 @@ fn summary(d: &Diagram) -> String {
     s
 }
 
+/// The domain checks of `diagram`, all before any orbit is computed.
+fn check_args(a: &Args) -> Result<()> {
+    tolerance("tol", a.tol)?;
+    within(
+        "ds-max",
+        a.ds_max,
+        f64::MIN_POSITIVE,
+        f64::MAX,
+        "must be > 0",
+    )?;
+    if !(a.ds.is_finite() && a.ds > 0.0 && a.ds <= a.ds_max) {
+        return Err(Error::InvalidInput(format!(
+            "--ds = {} must be finite, > 0 and at most --ds-max = {}",
+            a.ds, a.ds_max
+        )));
+    }
+    count("grid", a.grid, 1, 1000)?;
+    count("max-period", a.max_period, 1, 64)?;
+    count("relax", a.relax, 1, limits::TURNS_MAX)?;
+    count("max-steps", a.max_steps, 1, limits::TURNS_MAX)?;
+    if let Some(p) = &a.out {
+        output_file("--out", p, false)?;
+    }
+    if let Some(p) = &a.plot {
+        output_file("--plot", p, true)?;
+    }
+    Ok(())
+}
+
 /// Runs `gearbif diagram`.
 pub fn run(a: Args) -> Result<()> {
     let param = GearParam::from_name(&a.param)?;
     let (lo, hi) = parse_range(&a.range)?;
     let f = if param == GearParam::F {
+        frequency("f", lo)?;
+        frequency("f", hi)?;
         0.5 * (lo + hi)
     } else {
         a.f
     };
     check_frequency(f)?;
-    if a.grid == 0 || a.max_period == 0 {
-        return Err(Error::InvalidInput(
-            "--grid and --max-period must be >= 1".into(),
-        ));
-    }
+    check_args(&a)?;
     let gear = a.gear.params()?.driven(f)?;
     let shooting = ShootingOptions {
         tol: a.tol,

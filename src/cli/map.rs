@@ -1,7 +1,7 @@
 //! `gearbif map`: the stroboscopic map P_T (or the half-period map G) of a state, with its Jacobians
 //! in the state and the parameters, and the multipliers.
 
-use super::common::{GearArgs, Output};
+use super::common::{count, limits, GearArgs, Output};
 use super::methods::{DriveArgs, MethodArgs};
 use crate::error::{Error, Result};
 use crate::integrator::{FlowOptions, Mode, Sensitivity, Stats};
@@ -32,7 +32,7 @@ pub struct Args {
     /// Which Poincaré map.
     #[arg(long, value_enum, default_value_t = SectionArg::Strobe)]
     section: SectionArg,
-    /// Number of applications k of the map [1] (the result is P^k).
+    /// Number of applications k of the map [1], 1 to 1000000 (the result is P^k).
     #[arg(long, default_value_t = 1)]
     iterations: usize,
     /// Print JSON.
@@ -83,12 +83,7 @@ pub fn run(a: Args) -> Result<()> {
     let gear = a.drive.gear(&a.gear)?;
     let x = a.drive.x0(&gear)?;
     let method = a.method.method()?;
-    if a.iterations == 0 || a.iterations > 1_000_000 {
-        return Err(Error::InvalidInput(format!(
-            "--iterations must be in 1..=1000000, got {}",
-            a.iterations
-        )));
-    }
+    count("iterations", a.iterations, 1, limits::TURNS_MAX)?;
     let section = match a.section {
         SectionArg::Strobe => Section::Stroboscopic,
         SectionArg::Half => Section::HalfPeriod,

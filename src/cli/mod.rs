@@ -10,8 +10,8 @@ mod boundary;
 mod classify;
 mod common;
 mod continue_;
-mod diagram;
 mod diagnose;
+mod diagram;
 mod figure;
 mod fit;
 mod info;
@@ -23,7 +23,7 @@ mod simulate;
 mod sweep;
 mod synth;
 
-pub use common::{GearArgs, Output};
+pub use common::{parse_config, GearArgs, GearConfig, Output};
 
 use clap::{Parser, Subcommand};
 
