@@ -99,3 +99,56 @@ fn theta25_diagram_finds_every_documented_special_point() {
         .any(|b| matches!(b.branch.stop, StopReason::KnownBranch(_))));
     assert!(d.seeds.iter().any(|s| s.known));
 }
+
+#[test]
+fn pinned_switch_at_the_subcritical_point_continues_to_lower_f() {
+    // what `continue --switch-at` does: the new orbit is found with the parameter free, on the side
+    // where the asymmetric branch exists (below 2.0777 Hz), and continued away from the point
+    use gearbif::continuation::pinned::switch_at;
+    use gearbif::continuation::{Continuation, ContinuationOptions};
+    use gearbif::model::Parametrised;
+    use gearbif::orbits::{OrbitSpec, ShootingOptions};
+    let opts = ContinuationOptions {
+        ds: 0.02,
+        ds_max: 0.05,
+        param_min: 1.9,
+        param_max: 2.2,
+        ..Default::default()
+    };
+    let gear = Gear::paper(25.0, 1.9).unwrap();
+    let sym = Continuation::new(
+        gear,
+        GearParam::F,
+        OrbitSpec::symmetric(1),
+        [2.98, 0.6],
+        opts,
+    )
+    .unwrap()
+    .run(None)
+    .unwrap();
+    let sb = sym
+        .specials_of(SpecialKind::SymmetryBreaking)
+        .next()
+        .unwrap()
+        .clone();
+    assert!((sb.param - 2.077740215).abs() < 1e-6);
+    let (sys, orbit) = switch_at(&sym, &sb, 1e-2, &ShootingOptions::default()).unwrap();
+    let f1 = sys.param(GearParam::F);
+    assert!(f1 < sb.param && sb.param - f1 < 1e-2, "{f1}");
+    assert!(!orbit.floquet.stable);
+    let o1 = ContinuationOptions {
+        ds: -0.005,
+        ds_max: 0.02,
+        max_steps: 200,
+        ..opts
+    };
+    let asym = Continuation::from_orbit(sys, GearParam::F, &orbit, o1)
+        .unwrap()
+        .run(None)
+        .unwrap();
+    let nf = asym
+        .specials_of(SpecialKind::Nonsmooth)
+        .find(|s| (s.param - 1.927811511).abs() < 1e-6)
+        .expect("the nonsmooth fold at 1.9278 Hz");
+    assert_eq!(nf.jump.as_ref().unwrap().crosses.as_deref(), Some("fold"));
+}

@@ -3,7 +3,7 @@
 //! symmetry-breaking point, branches recognised modulo symmetry, lift and map).
 
 use super::common::{
-    check_frequency, count, limits, output_file, tolerance, within, GearArgs, Output,
+    check_frequency, count, frequency, limits, output_file, tolerance, within, GearArgs, Output,
 };
 use super::continue_::parse_range;
 use crate::continuation::diagram::{diagram, lock_seeds, Diagram, DiagramOptions};
