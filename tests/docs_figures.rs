@@ -85,8 +85,12 @@ fn check_command(img: &Path, cmd: &str) -> Result<(), String> {
     match words.as_slice() {
         ["cargo", "run", "--release", "--", sub, rest @ ..] => {
             let cli = format!("src/cli/{}.rs", sub.replace('-', "_"));
+            // `continue` is a keyword: its module is continue_.rs
+            let cli_ = format!("src/cli/{}_.rs", sub.replace('-', "_"));
             let cli = if root().join(&cli).is_file() {
                 cli
+            } else if root().join(&cli_).is_file() {
+                cli_
             } else if *sub == "bench-integrators" {
                 "src/cli/bench.rs".to_string()
             } else {
