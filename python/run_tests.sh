@@ -4,11 +4,12 @@
 #
 #   python/run_tests.sh [pytest arguments]
 #
-# The extension is built with `maturin develop` in the cargo target directory ($CARGO_TARGET_DIR,
-# default target/) with the dev profile at opt-level 2: the settings of the test profile, so after
-# `cargo test --all-features` gearbif and its dependencies are reused and only the PyO3 crates and the
-# bindings compile. The venv lives in the target directory ($GEARBIF_VENV overrides it); Python
-# packages come from PyPI: maturin, numpy, pytest, matplotlib.
+# The extension is built by `maturin develop` (dev profile) in the cargo target directory
+# ($CARGO_TARGET_DIR, default target/); a rebuild is incremental. It cannot reuse the artifacts of
+# `cargo test`: PyO3's proc macros unify other features of syn (so serde_derive, serde and every crate
+# deriving serde get new hashes), so its first build compiles the core and its dependencies once more
+# (without the CLI, plotting and diffsol). The venv lives in the target directory ($GEARBIF_VENV
+# overrides it); Python packages come from PyPI: maturin, numpy, pytest, matplotlib.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -21,7 +22,7 @@ fi
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check \
     "maturin>=1.9,<2" numpy pytest matplotlib
 start=$(date +%s)
-VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" CARGO_TARGET_DIR="$target" CARGO_PROFILE_DEV_OPT_LEVEL=2 \
+VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" CARGO_TARGET_DIR="$target" \
     "$venv/bin/maturin" develop --manifest-path python/Cargo.toml
 echo "== extension built in $(($(date +%s) - start)) s"
 # the tests cross-check against the CLI binary that `cargo test` built in the same target directory
