@@ -12,9 +12,9 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use gearbif::continuation::two_param::lock_loss_boundary;
 use gearbif::continuation::{
-    switch_branch, Continuation, ContinuationOptions, Param, SpecialKind, StepOutcome,
+    switch_branch, Continuation, ContinuationOptions, SpecialKind, StepOutcome,
 };
-use gearbif::model::Gear;
+use gearbif::model::{Gear, GearParam};
 use gearbif::orbits::{quasi_static_sweep, OrbitSpec, ShootingOptions};
 use std::hint::black_box;
 
@@ -28,7 +28,7 @@ fn lock_to_fold() -> f64 {
         ..Default::default()
     };
     let x = gear.lock_branch().unwrap().stable.state;
-    let mut c = Continuation::new(gear, Param::F, OrbitSpec::symmetric(1), x, opts).unwrap();
+    let mut c = Continuation::new(gear, GearParam::F, OrbitSpec::symmetric(1), x, opts).unwrap();
     loop {
         if let Some(f) = c.branch().specials_of(SpecialKind::Fold).next() {
             return f.param;
@@ -48,10 +48,16 @@ fn theta25_all() -> usize {
         ..Default::default()
     };
     let gear = Gear::paper(25.0, 1.5).unwrap();
-    let sym = Continuation::new(gear, Param::F, OrbitSpec::symmetric(1), [2.98, 0.6], opts)
-        .unwrap()
-        .run(None)
-        .unwrap();
+    let sym = Continuation::new(
+        gear,
+        GearParam::F,
+        OrbitSpec::symmetric(1),
+        [2.98, 0.6],
+        opts,
+    )
+    .unwrap()
+    .run(None)
+    .unwrap();
     let sb = sym
         .specials_of(SpecialKind::SymmetryBreaking)
         .last()
@@ -59,8 +65,8 @@ fn theta25_all() -> usize {
         .clone();
     let sw = switch_branch(&sym, &sb, -1e-3, &ShootingOptions::default()).unwrap();
     let asym = Continuation::from_orbit(
-        sw.gear,
-        Param::F,
+        sw.system,
+        GearParam::F,
         &sw.orbit,
         ContinuationOptions {
             ds: -0.01,

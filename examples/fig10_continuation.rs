@@ -5,10 +5,10 @@
 //! Run: `cargo run --release --example fig10_continuation [OUTDIR]` (figures and JSON go to OUTDIR,
 //! default `target/fig10`).
 
-use gearbif::continuation::{Continuation, ContinuationOptions, Param, SpecialKind};
+use gearbif::continuation::{Continuation, ContinuationOptions, SpecialKind};
 use gearbif::integrator::{EventDriven, FlowOptions};
 use gearbif::maps::{poincare_map, Section};
-use gearbif::model::Gear;
+use gearbif::model::{Gear, GearParam};
 use gearbif::orbits::OrbitSpec;
 use std::f64::consts::{FRAC_PI_2, TAU};
 
@@ -30,7 +30,8 @@ fn main() -> gearbif::Result<()> {
         ..Default::default()
     };
     let start = gear.lock_branch()?.stable.state;
-    let b = Continuation::new(gear, Param::F, OrbitSpec::symmetric(1), start, opts)?.run(None)?;
+    let b =
+        Continuation::new(gear, GearParam::F, OrbitSpec::symmetric(1), start, opts)?.run(None)?;
     println!(
         "lock branch: {} points, {} map evaluations, {:?}, stop {:?}",
         b.points.len(),

@@ -8,9 +8,9 @@
 
 use gearbif::continuation::two_param::follow;
 use gearbif::continuation::{
-    switch_branch, Branch, Continuation, ContinuationOptions, Param, SpecialKind,
+    switch_branch, Branch, Continuation, ContinuationOptions, SpecialKind,
 };
-use gearbif::model::Gear;
+use gearbif::model::{Gear, GearParam};
 use gearbif::orbits::{quasi_static_sweep, OrbitSpec, ShootingOptions};
 
 fn report(name: &str, b: &Branch) {
@@ -61,8 +61,14 @@ fn main() -> gearbif::Result<()> {
         ..Default::default()
     };
     let gear = Gear::paper(25.0, 1.5)?;
-    let sym =
-        Continuation::new(gear, Param::F, OrbitSpec::symmetric(1), [2.98, 0.6], opts)?.run(None)?;
+    let sym = Continuation::new(
+        gear,
+        GearParam::F,
+        OrbitSpec::symmetric(1),
+        [2.98, 0.6],
+        opts,
+    )?
+    .run(None)?;
     report("symmetric branch (G, winding 1)", &sym);
     let sb_hi = sym
         .specials_of(SpecialKind::SymmetryBreaking)
@@ -71,8 +77,8 @@ fn main() -> gearbif::Result<()> {
         .ok_or_else(|| gearbif::Error::Continuation("no symmetry-breaking point".into()))?;
     let sw = switch_branch(&sym, &sb_hi, -1e-3, &sh)?;
     let asym = Continuation::from_orbit(
-        sw.gear,
-        Param::F,
+        sw.system,
+        GearParam::F,
         &sw.orbit,
         ContinuationOptions {
             ds: -0.005,
@@ -93,8 +99,8 @@ fn main() -> gearbif::Result<()> {
         .ok_or_else(|| gearbif::Error::Continuation("no symmetry-breaking point".into()))?;
     let sw2 = switch_branch(&sym, &sb_lo, -1e-3, &sh)?;
     let asym2 = Continuation::from_orbit(
-        sw2.gear,
-        Param::F,
+        sw2.system,
+        GearParam::F,
         &sw2.orbit,
         ContinuationOptions {
             ds: -0.005,
@@ -119,8 +125,8 @@ fn main() -> gearbif::Result<()> {
         match switch_branch(&last, &fl, -1e-4, &sh) {
             Ok(s) => {
                 let b = Continuation::from_orbit(
-                    s.gear,
-                    Param::F,
+                    s.system,
+                    GearParam::F,
                     &s.orbit,
                     ContinuationOptions {
                         ds: -0.002,
@@ -180,8 +186,8 @@ fn main() -> gearbif::Result<()> {
                 &g,
                 &OrbitSpec::symmetric(1),
                 SpecialKind::SymmetryBreaking,
-                Param::F,
-                Param::ThetaDeg,
+                GearParam::F,
+                GearParam::ThetaDeg,
                 sp.x,
                 sp.param,
                 &vals,

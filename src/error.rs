@@ -6,7 +6,7 @@ use thiserror::Error;
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum Error {
     /// A parameter is non-finite or outside its admissible range.
-    #[error("invalid parameter `{name}` = {value}: {reason}")]
+    #[error("invalid parameter `{name}` = {}: {reason}", show(*value))]
     InvalidParameter {
         /// The parameter's name as in the docs (e.g. `inertia`, `f`).
         name: &'static str,
@@ -14,6 +14,33 @@ pub enum Error {
         value: f64,
         /// What the admissible range is.
         reason: &'static str,
+    },
+    /// A parameter name that the system does not declare.
+    #[error("unknown parameter `{name}` (expected one of: {expected})")]
+    UnknownParameter {
+        /// The name given.
+        name: String,
+        /// The names the system declares.
+        expected: String,
+    },
+    /// The parameter has no column in the map's parameter Jacobian, so it cannot be continued.
+    #[error("parameter `{name}` has no Jacobian column: it can be swept but not continued")]
+    NoParameterColumn {
+        /// The parameter's name.
+        name: &'static str,
+    },
+    /// A simulation did not settle on a periodic orbit of period ≤ `max_period`.
+    #[error(
+        "no period <= {max_period} detected after {relax_periods} periods (best closing error \
+         {best_closing_error:e}); quasi-periodic, chaotic or not yet relaxed"
+    )]
+    NoPeriodDetected {
+        /// Largest period tried, in drive periods.
+        max_period: usize,
+        /// Drive periods of relaxation before the test.
+        relax_periods: usize,
+        /// The smallest closing error |P_T^k(x) − x − (2πp, 0)| seen.
+        best_closing_error: f64,
     },
     /// A state or time given to the integrator is non-finite or inconsistent.
     #[error("invalid input: {0}")]
@@ -47,7 +74,8 @@ pub enum Error {
     /// The requested operation is not available for this system (e.g. no half-period symmetry).
     #[error("unsupported: {0}")]
     Unsupported(String),
-    /// A recording set (experiment.toml or a CSV file) is malformed.
+    /// An input file is malformed: a recording set's experiment.toml or CSV file, a `--config`
+    /// TOML file or a sweep checkpoint.
     #[error("{file}{}: {what}", line.map(|l| format!(":{l}")).unwrap_or_default())]
     Recording {
         /// The file at fault.
@@ -57,6 +85,16 @@ pub enum Error {
         /// What is wrong.
         what: String,
     },
+}
+
+/// A number for a message: plain when moderate, in scientific notation when very large or small
+/// (so `1e308` is not printed with 309 digits).
+pub(crate) fn show(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// Result alias used throughout the crate.

@@ -26,9 +26,11 @@ pub mod integrator;
 pub mod io;
 pub mod maps;
 pub mod model;
+pub mod numerics;
 pub mod orbits;
 #[cfg(feature = "plot")]
 pub mod plotting;
+pub mod progress;
 pub mod report;
 pub mod sweep;
 

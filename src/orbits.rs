@@ -17,9 +17,10 @@
 //! returned as 0.
 
 use crate::error::{Error, Result};
-use crate::integrator::{EventDriven, EventKind, FlowOptions, Sensitivity};
+use crate::integrator::{EventDriven, EventKind, FlowMethod, FlowOptions, Sensitivity};
 use crate::maps::{multipliers, poincare_map, MapImage, Section};
 use crate::model::DrivenOscillator;
+use crate::numerics::{newton, Linearisation, NewtonOptions};
 use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};
@@ -278,7 +279,8 @@ impl PeriodicOrbit {
     }
 }
 
-/// Evaluates the shooting residual F(x) = Pᵏ(x) − x − (s, 0) and the map image (with Jacobians).
+/// Evaluates the shooting residual F(x) = Pᵏ(x) − x − (s, 0) and the map image (with Jacobians),
+/// with the event-driven integrator.
 pub fn residual<S: DrivenOscillator + ?Sized>(
     sys: &S,
     spec: &OrbitSpec,
@@ -286,9 +288,25 @@ pub fn residual<S: DrivenOscillator + ?Sized>(
     opts: &ShootingOptions,
     events: bool,
 ) -> Result<([f64; 2], MapImage)> {
+    residual_with(&EventDriven, sys, spec, x, opts, events)
+}
+
+/// [`residual`] with the flow computed by `method`.
+pub fn residual_with<S, M>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    x: [f64; 2],
+    opts: &ShootingOptions,
+    events: bool,
+) -> Result<([f64; 2], MapImage)>
+where
+    S: DrivenOscillator + ?Sized,
+    M: FlowMethod<S> + ?Sized,
+{
     let s = spec.shift(sys)?;
     let img = poincare_map(
-        &EventDriven,
+        method,
         sys,
         spec.section,
         x,
@@ -317,7 +335,7 @@ fn check_state(x: [f64; 2]) -> Result<()> {
     }
 }
 
-/// Newton shooting for a periodic orbit from the guess `x0`.
+/// Newton shooting for a periodic orbit from the guess `x0`, with the event-driven integrator.
 ///
 /// ```
 /// use gearbif::model::Gear;
@@ -335,70 +353,57 @@ pub fn shoot<S: DrivenOscillator + ?Sized>(
     x0: [f64; 2],
     opts: &ShootingOptions,
 ) -> Result<PeriodicOrbit> {
+    shoot_with(&EventDriven, sys, spec, x0, opts)
+}
+
+/// [`shoot`] with the flow computed by `method`: Newton ([`crate::numerics::newton`], with line
+/// search) on F(x) = 0 with the Jacobian Pᵏ'(x) − I.
+pub fn shoot_with<S, M>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    x0: [f64; 2],
+    opts: &ShootingOptions,
+) -> Result<PeriodicOrbit>
+where
+    S: DrivenOscillator + ?Sized,
+    M: FlowMethod<S> + ?Sized,
+{
     check_state(x0)?;
-    let mut x = x0;
-    let (mut r, mut img) = residual(sys, spec, x, opts, true)?;
-    let mut rn = Vector2::from(r).norm();
-    for it in 0..=opts.max_iter {
+    let eval = |x: &Vector2<f64>| -> Result<Linearisation<2, MapImage>> {
+        let (r, img) = residual_with(method, sys, spec, [x[0], x[1]], opts, true)?;
         let jac = img.jac_x.ok_or_else(|| Error::NewtonFailed {
-            iterations: it,
-            residual: rn,
+            iterations: 0,
+            residual: f64::NAN,
             reason: "map returned no Jacobian".into(),
         })?;
-        let a = jac - Matrix2::identity();
-        let step = a
-            .lu()
-            .solve(&(-Vector2::from(r)))
-            .filter(|d| d.iter().all(|v| v.is_finite()))
-            .ok_or_else(|| Error::NewtonFailed {
-                iterations: it,
-                residual: rn,
-                reason: "singular shooting matrix Pᵏ' − I (a multiplier is +1: fold)".into(),
-            })?;
-        let sn = step.norm();
-        if rn < opts.newton_tol && sn < opts.newton_tol.max(1e-12) * 10.0 {
-            return Ok(PeriodicOrbit {
-                x,
-                spec: *spec,
-                floquet: Floquet::of_orbit(&jac, &EventCounts::from_image(&img)),
-                events: EventCounts::from_image(&img),
-                residual: rn,
-                newton_iterations: it,
-            });
-        }
-        if it == opts.max_iter {
-            break;
-        }
-        // damped step: halve until the residual decreases (at most 8 halvings)
-        let mut lam = 1.0;
-        let mut accepted = false;
-        for _ in 0..8 {
-            let xt = [x[0] + lam * step[0], x[1] + lam * step[1]];
-            if let Ok((rt, it_img)) = residual(sys, spec, xt, opts, true) {
-                let rtn = Vector2::from(rt).norm();
-                if rtn < rn || rn < opts.newton_tol * 10.0 {
-                    x = xt;
-                    r = rt;
-                    rn = rtn;
-                    img = it_img;
-                    accepted = true;
-                    break;
-                }
-            }
-            lam *= 0.5;
-        }
-        if !accepted {
-            return Err(Error::NewtonFailed {
-                iterations: it,
-                residual: rn,
-                reason: "no descent along the Newton direction".into(),
-            });
-        }
-    }
-    Err(Error::NewtonFailed {
-        iterations: opts.max_iter,
-        residual: rn,
-        reason: "did not converge".into(),
+        Ok(Linearisation {
+            residual: Vector2::from(r),
+            jacobian: jac - Matrix2::identity(),
+            data: img,
+        })
+    };
+    let newton_opts = NewtonOptions {
+        line_search: true,
+        ..NewtonOptions::new(opts.newton_tol, opts.max_iter)
+    };
+    let sol = newton(
+        Vector2::new(x0[0], x0[1]),
+        &newton_opts,
+        eval,
+        |_, _| 1.0,
+        "shooting",
+    )?;
+    let img = &sol.at.data;
+    let events = EventCounts::from_image(img);
+    let jac = sol.at.jacobian + Matrix2::identity();
+    Ok(PeriodicOrbit {
+        x: [sol.x[0], sol.x[1]],
+        spec: *spec,
+        floquet: Floquet::of_orbit(&jac, &events),
+        events,
+        residual: sol.at.residual.norm(),
+        newton_iterations: sol.iterations,
     })
 }
 
@@ -416,7 +421,8 @@ pub struct DetectedPeriod {
 }
 
 /// Relaxes a simulation for `relax_periods` drive periods from `x0`, then detects its period k ≤
-/// `max_period` and winding on P_T (closing error below `closing_tol`).
+/// `max_period` and winding on P_T (closing error below `closing_tol`), integrating at tolerance
+/// `tol` with the event-driven integrator.
 pub fn detect_period<S: DrivenOscillator + ?Sized>(
     sys: &S,
     x0: [f64; 2],
@@ -425,25 +431,42 @@ pub fn detect_period<S: DrivenOscillator + ?Sized>(
     closing_tol: f64,
     tol: f64,
 ) -> Result<DetectedPeriod> {
+    detect_period_with(
+        &EventDriven,
+        sys,
+        x0,
+        relax_periods,
+        max_period,
+        closing_tol,
+        tol,
+    )
+}
+
+/// [`detect_period`] with the flow computed by `method`. Fails with [`Error::NoPeriodDetected`].
+pub fn detect_period_with<S, M>(
+    method: &M,
+    sys: &S,
+    x0: [f64; 2],
+    relax_periods: usize,
+    max_period: usize,
+    closing_tol: f64,
+    tol: f64,
+) -> Result<DetectedPeriod>
+where
+    S: DrivenOscillator + ?Sized,
+    M: FlowMethod<S> + ?Sized,
+{
     check_state(x0)?;
     let o = FlowOptions::with_tol(tol);
     let mut x = x0;
     if relax_periods > 0 {
-        x = poincare_map(
-            &EventDriven,
-            sys,
-            Section::Stroboscopic,
-            x,
-            relax_periods,
-            &o,
-        )?
-        .x;
+        x = poincare_map(method, sys, Section::Stroboscopic, x, relax_periods, &o)?.x;
     }
     x[0] = x[0].rem_euclid(TAU);
     let mut y = x;
     let mut best = f64::INFINITY;
     for k in 1..=max_period {
-        y = poincare_map(&EventDriven, sys, Section::Stroboscopic, y, 1, &o)?.x;
+        y = poincare_map(method, sys, Section::Stroboscopic, y, 1, &o)?.x;
         let p = ((y[0] - x[0]) / TAU).round();
         let err = (y[0] - x[0] - TAU * p).hypot(y[1] - x[1]);
         best = best.min(err);
@@ -456,19 +479,16 @@ pub fn detect_period<S: DrivenOscillator + ?Sized>(
             });
         }
     }
-    Err(Error::NewtonFailed {
-        iterations: max_period,
-        residual: best,
-        reason: format!(
-            "no period ≤ {max_period} detected after {relax_periods} periods (best closing error {best:e}); \
-             quasi-periodic, chaotic or not yet relaxed"
-        ),
+    Err(Error::NoPeriodDetected {
+        max_period,
+        relax_periods,
+        best_closing_error: best,
     })
 }
 
 /// Finds a periodic orbit from a simulation: relax, detect period and winding, then shoot. A period-1
 /// orbit of a system with a half-period symmetry whose half-period map closes is returned as a
-/// symmetric orbit (on G) when `prefer_symmetric` is set.
+/// symmetric orbit (on G) when `prefer_symmetric` is set. Event-driven integrator at `opts.tol`.
 pub fn orbit_from_simulation<S: DrivenOscillator + ?Sized>(
     sys: &S,
     x0: [f64; 2],
@@ -477,25 +497,44 @@ pub fn orbit_from_simulation<S: DrivenOscillator + ?Sized>(
     prefer_symmetric: bool,
     opts: &ShootingOptions,
 ) -> Result<PeriodicOrbit> {
-    let d = detect_period(
+    orbit_from_simulation_with(
+        &EventDriven,
         sys,
         x0,
         relax_periods,
         max_period,
-        1e-4,
-        opts.tol.max(1e-10),
-    )?;
+        prefer_symmetric,
+        opts,
+    )
+}
+
+/// [`orbit_from_simulation`] with the flow computed by `method`.
+pub fn orbit_from_simulation_with<S, M>(
+    method: &M,
+    sys: &S,
+    x0: [f64; 2],
+    relax_periods: usize,
+    max_period: usize,
+    prefer_symmetric: bool,
+    opts: &ShootingOptions,
+) -> Result<PeriodicOrbit>
+where
+    S: DrivenOscillator + ?Sized,
+    M: FlowMethod<S> + ?Sized,
+{
+    let d = detect_period_with(method, sys, x0, relax_periods, max_period, 1e-4, opts.tol)?;
     if prefer_symmetric && d.period == 1 && sys.half_period_symmetry().is_some() {
         let spec = OrbitSpec::symmetric(d.winding);
-        if let Ok((r, _)) = residual(sys, &spec, d.x, opts, false) {
+        if let Ok((r, _)) = residual_with(method, sys, &spec, d.x, opts, false) {
             if r[0].hypot(r[1]) < 1e-3 {
-                if let Ok(o) = shoot(sys, &spec, d.x, opts) {
+                if let Ok(o) = shoot_with(method, sys, &spec, d.x, opts) {
                     return Ok(o);
                 }
             }
         }
     }
-    shoot(
+    shoot_with(
+        method,
         sys,
         &OrbitSpec::stroboscopic(d.period, d.winding),
         d.x,
@@ -521,7 +560,7 @@ pub struct SweepPoint {
 /// A quasi-static sweep, as in the paper: at each value the simulation continues from the last state
 /// and relaxes for `relax_periods` periods; then symmetry (on G) and closing (on P_T) are measured.
 /// `make` builds the system at each value. An independent check of the continuation: no Newton, no
-/// Jacobians.
+/// Jacobians. Event-driven integrator at tolerance `tol`.
 pub fn quasi_static_sweep<S, F>(
     make: F,
     values: &[f64],
@@ -533,30 +572,39 @@ where
     S: DrivenOscillator,
     F: Fn(f64) -> Result<S>,
 {
+    quasi_static_sweep_with(&EventDriven, make, values, x0, relax_periods, tol)
+}
+
+/// [`quasi_static_sweep`] with the flow computed by `method`.
+pub fn quasi_static_sweep_with<S, M, F>(
+    method: &M,
+    make: F,
+    values: &[f64],
+    x0: [f64; 2],
+    relax_periods: usize,
+    tol: f64,
+) -> Result<Vec<SweepPoint>>
+where
+    S: DrivenOscillator,
+    M: FlowMethod<S> + ?Sized,
+    F: Fn(f64) -> Result<S>,
+{
     check_state(x0)?;
     let o = FlowOptions::with_tol(tol);
     let mut x = x0;
     let mut out = Vec::with_capacity(values.len());
     for &v in values {
         let sys = make(v)?;
-        x = poincare_map(
-            &EventDriven,
-            &sys,
-            Section::Stroboscopic,
-            x,
-            relax_periods,
-            &o,
-        )?
-        .x;
+        x = poincare_map(method, &sys, Section::Stroboscopic, x, relax_periods, &o)?.x;
         x[0] = x[0].rem_euclid(TAU);
-        let y = poincare_map(&EventDriven, &sys, Section::Stroboscopic, x, 1, &o)?.x;
+        let y = poincare_map(method, &sys, Section::Stroboscopic, x, 1, &o)?.x;
         let p = ((y[0] - x[0]) / TAU).round();
         let closing = (y[0] - x[0] - TAU * p).hypot(y[1] - x[1]);
         let asymmetry = match sys.half_period_symmetry() {
             Some(_) => {
                 let spec = OrbitSpec::symmetric(p as i32);
                 let s = spec.shift(&sys)?;
-                let g = poincare_map(&EventDriven, &sys, Section::HalfPeriod, x, 1, &o)?.x;
+                let g = poincare_map(method, &sys, Section::HalfPeriod, x, 1, &o)?.x;
                 (g[0] - x[0] - s).hypot(g[1] - x[1])
             }
             None => f64::NAN,

@@ -13,12 +13,12 @@
 use crate::analysis::ClassifyOptions;
 use crate::continuation::two_param::{lock_loss_boundary, Curve};
 use crate::continuation::{
-    switch_branch, Branch, Continuation, ContinuationOptions, Param, SpecialKind, SpecialPoint,
+    switch_branch, Branch, Continuation, ContinuationOptions, SpecialKind, SpecialPoint,
     StepOutcome,
 };
 use crate::error::Result;
 use crate::model::gear::cogging_free_parallel_angles;
-use crate::model::{Convention, Gear, GearParams};
+use crate::model::{Convention, Gear, GearParam, GearParams, Parametrised};
 use crate::orbits::{orbit_from_simulation, OrbitSpec, ShootingOptions};
 use crate::sweep::{
     hysteresis, Axis, Hysteresis, Method, PointRecord, Protocol, SweepObserver, SweepOutcome,
@@ -335,7 +335,7 @@ fn theta0_fold(gear: &GearParams) -> Result<(Branch, SpecialPoint, f64)> {
         max_multiplier: 1e3,
         ..Default::default()
     };
-    let mut c = Continuation::new(g, Param::F, OrbitSpec::symmetric(1), start, opts)?;
+    let mut c = Continuation::new(g, GearParam::F, OrbitSpec::symmetric(1), start, opts)?;
     loop {
         let fold = c.branch().specials_of(SpecialKind::Fold).next().cloned();
         if let Some(f) = fold {
@@ -367,7 +367,7 @@ fn theta25_symmetric(gear: &GearParams) -> Result<Branch> {
         ..Default::default()
     };
     let spec = OrbitSpec::symmetric(1);
-    let c = match Continuation::new(g, Param::F, spec, [2.98, 0.6], opts) {
+    let c = match Continuation::new(g, GearParam::F, spec, [2.98, 0.6], opts) {
         Ok(c) => c,
         Err(e) => {
             let o = orbit_from_simulation(&g, [2.98, 0.6], 300, 1, true, &opts.shooting).map_err(
@@ -383,7 +383,7 @@ fn theta25_symmetric(gear: &GearParams) -> Result<Branch> {
                     o.spec
                 )));
             }
-            Continuation::from_orbit(g, Param::F, &o, opts)?
+            Continuation::from_orbit(g, GearParam::F, &o, opts)?
         }
     };
     c.run(None)
@@ -522,7 +522,7 @@ pub fn section_bifurcations(
                             };
                             note = format!(
                                 "{crit}: the asymmetric orbit at {:.4} Hz is {} (μ of P_T {})",
-                                Param::F.get(&sw.gear),
+                                sw.system.param(GearParam::F),
                                 if stable { "stable" } else { "unstable" },
                                 fmt_mus(&sw.orbit.floquet.multipliers)
                             );
@@ -546,7 +546,7 @@ pub fn section_bifurcations(
                 md += " No supercritical symmetry-breaking point: no asymmetric branch continued.";
             }
             for (s, sw) in supercritical {
-                let away = (Param::F.get(&sw.gear) - s.param).signum();
+                let away = (sw.system.param(GearParam::F) - s.param).signum();
                 let opts = ContinuationOptions {
                     ds: 0.005 * away,
                     ds_max: 0.02,
@@ -555,7 +555,7 @@ pub fn section_bifurcations(
                     max_steps: 400,
                     ..Default::default()
                 };
-                match Continuation::from_orbit(sw.gear, Param::F, &sw.orbit, opts)
+                match Continuation::from_orbit(sw.system, GearParam::F, &sw.orbit, opts)
                     .and_then(|c| c.run(None))
                 {
                     Ok(asym) => {

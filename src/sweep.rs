@@ -251,6 +251,28 @@ impl SweepSpec {
         Ok(())
     }
 
+    /// True if `r` is row `i` of this spec: its index, its value and every column's value.
+    fn row_matches(&self, i: usize, r: &RowResult) -> bool {
+        let same = |a: f64, b: f64| a.to_bits() == b.to_bits();
+        r.row == i
+            && self
+                .rows
+                .values
+                .get(i)
+                .is_some_and(|&v| same(v, r.row_value))
+            && r.points.len() == self.cols.values.len()
+            && r.points
+                .iter()
+                .zip(&self.cols.values)
+                .enumerate()
+                .all(|(j, (p, &c))| {
+                    p.row == i
+                        && p.col == j
+                        && same(p.row_value, r.row_value)
+                        && same(p.col_value, c)
+                })
+    }
+
     /// The gear at a grid point.
     pub fn gear_at(&self, row_value: f64, col_value: f64) -> Result<Gear> {
         let mut p = self.gear;
@@ -531,7 +553,10 @@ impl<'a> SweepRunner<'a> {
         dir.join("rows").join(format!("row-{row:05}.json"))
     }
 
-    /// Loads finished rows from the checkpoint (checking that it belongs to the same spec).
+    /// Loads finished rows from the checkpoint (checking that it belongs to the same spec). A
+    /// spec.json that does not parse is refused (the error names the file and line); a row file
+    /// that does not parse or does not match the spec is ignored and its row recomputed; temporary
+    /// files left by a killed run are removed.
     fn load(&self) -> Result<Vec<Option<RowResult>>> {
         let n = self.spec.rows.values.len();
         let mut rows = vec![None; n];
@@ -540,26 +565,28 @@ impl<'a> SweepRunner<'a> {
         };
         let spec_path = dir.join("spec.json");
         if spec_path.exists() {
-            let text = std::fs::read_to_string(&spec_path)
+            let bytes = std::fs::read(&spec_path)
                 .map_err(|e| Error::Io(format!("{}: {e}", spec_path.display())))?;
-            let old: SweepSpec = serde_json::from_str(&text)
-                .map_err(|e| Error::Io(format!("{}: {e}", spec_path.display())))?;
+            let old: SweepSpec = serde_json::from_slice(&bytes).map_err(|e| Error::Recording {
+                file: spec_path.display().to_string(),
+                line: (e.line() > 0).then_some(e.line()),
+                what: format!("corrupt sweep checkpoint ({e}); delete its folder to start afresh"),
+            })?;
             if old != self.spec {
                 return Err(Error::InvalidInput(format!(
                     "checkpoint {} belongs to a different sweep; use another directory",
                     dir.display()
                 )));
             }
+            crate::io::remove_stale_temporaries(&dir.join("rows"));
             for (i, slot) in rows.iter_mut().enumerate() {
                 let p = Self::row_path(dir, i);
-                if p.exists() {
-                    let text = std::fs::read_to_string(&p)
+                if p.is_file() {
+                    let bytes = std::fs::read(&p)
                         .map_err(|e| Error::Io(format!("{}: {e}", p.display())))?;
-                    let r: RowResult = serde_json::from_str(&text)
-                        .map_err(|e| Error::Io(format!("{}: {e}", p.display())))?;
-                    if r.row == i && r.points.len() == self.spec.cols.values.len() {
-                        *slot = Some(r);
-                    }
+                    *slot = serde_json::from_slice::<RowResult>(&bytes)
+                        .ok()
+                        .filter(|r| self.spec.row_matches(i, r));
                 }
             }
         } else {

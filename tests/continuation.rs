@@ -5,7 +5,7 @@
 use approx::assert_relative_eq;
 use gearbif::continuation::two_param::{follow, locate_augmented};
 use gearbif::continuation::*;
-use gearbif::model::Gear;
+use gearbif::model::{Gear, GearParam, Parameter, Parametrised};
 use gearbif::orbits::{quasi_static_sweep, OrbitSpec, ShootingOptions};
 use gearbif::Error;
 use std::f64::consts::{FRAC_PI_2, TAU};
@@ -21,10 +21,16 @@ fn lock_branch_theta0() -> Branch {
         max_multiplier: 1e3,
         ..Default::default()
     };
-    Continuation::new(gear, Param::F, OrbitSpec::symmetric(1), lock.state, opts)
-        .unwrap()
-        .run(None)
-        .unwrap()
+    Continuation::new(
+        gear,
+        GearParam::F,
+        OrbitSpec::symmetric(1),
+        lock.state,
+        opts,
+    )
+    .unwrap()
+    .run(None)
+    .unwrap()
 }
 
 fn sym_branch_theta25(tol: f64) -> Branch {
@@ -40,10 +46,16 @@ fn sym_branch_theta25(tol: f64) -> Branch {
         },
         ..Default::default()
     };
-    Continuation::new(gear, Param::F, OrbitSpec::symmetric(1), [2.98, 0.6], opts)
-        .unwrap()
-        .run(None)
-        .unwrap()
+    Continuation::new(
+        gear,
+        GearParam::F,
+        OrbitSpec::symmetric(1),
+        [2.98, 0.6],
+        opts,
+    )
+    .unwrap()
+    .run(None)
+    .unwrap()
 }
 
 #[test]
@@ -102,7 +114,7 @@ fn theta0_lock_branch_equals_analytic_and_folds_at_fc() {
         &g,
         &OrbitSpec::symmetric(1),
         SpecialKind::Fold,
-        Param::F,
+        GearParam::F,
         [fold.x[0] + 0.01, fold.x[1]],
         fold.param - 0.1,
         &ShootingOptions::default(),
@@ -154,7 +166,7 @@ fn theta25_symmetry_breaking_points_located_and_converged() {
             &g,
             &OrbitSpec::symmetric(1),
             SpecialKind::SymmetryBreaking,
-            Param::F,
+            GearParam::F,
             s.x,
             s.param + 1e-3,
             &tight,
@@ -229,7 +241,7 @@ fn theta25_switch_to_asymmetric_branch_and_find_its_flip() {
         max_steps: 400,
         ..Default::default()
     };
-    let a = Continuation::from_orbit(sw.gear, Param::F, &sw.orbit, opts)
+    let a = Continuation::from_orbit(sw.system, GearParam::F, &sw.orbit, opts)
         .unwrap()
         .run(None)
         .unwrap();
@@ -254,7 +266,7 @@ fn theta25_switch_to_asymmetric_branch_and_find_its_flip() {
     assert_eq!(pd.spec, OrbitSpec::stroboscopic(2, 2));
     // it is not a fixed point of P_T
     let (r1, _) = gearbif::orbits::residual(
-        &pd.gear,
+        &pd.system,
         &OrbitSpec::stroboscopic(1, 1),
         pd.orbit.x,
         &ShootingOptions::default(),
@@ -277,8 +289,8 @@ fn fc_boundary_in_theta_hits_analytic_endpoints() {
         &g0,
         &OrbitSpec::symmetric(1),
         SpecialKind::Fold,
-        Param::F,
-        Param::ThetaDeg,
+        GearParam::F,
+        GearParam::ThetaDeg,
         [FRAC_PI_2, TAU * fc],
         fc - 0.05,
         &vals,
@@ -295,7 +307,7 @@ fn fc_boundary_in_theta_hits_analytic_endpoints() {
         .unwrap();
     let br = Continuation::from_orbit(
         start,
-        Param::F,
+        GearParam::F,
         &o,
         ContinuationOptions {
             ds: 1.0,
@@ -318,12 +330,12 @@ fn fc_boundary_in_theta_hits_analytic_endpoints() {
     );
     // Θ = 54.74° (Δ = −1): the reversed lock, winding −1, folds at the same analytic f_c
     let th = (2.0f64 / 3.0).sqrt().asin().to_degrees();
-    let g1 = Param::ThetaDeg.set(&g0, th).unwrap();
+    let g1 = g0.with_param(GearParam::ThetaDeg, th).unwrap();
     let p = locate_augmented(
         &g1,
         &OrbitSpec::symmetric(-1),
         SpecialKind::Fold,
-        Param::F,
+        GearParam::F,
         [FRAC_PI_2, -TAU * fc],
         fc - 0.1,
         &opts,
@@ -342,8 +354,8 @@ fn bad_options_are_errors_not_panics() {
         ..Default::default()
     };
     assert!(matches!(
-        Continuation::new(gear, Param::F, spec, x, bad),
-        Err(Error::InvalidInput(_))
+        Continuation::new(gear, GearParam::F, spec, x, bad),
+        Err(Error::InvalidParameter { name: "ds", .. })
     ));
     let out = ContinuationOptions {
         param_min: 10.0,
@@ -351,10 +363,13 @@ fn bad_options_are_errors_not_panics() {
         ..Default::default()
     };
     assert!(matches!(
-        Continuation::new(gear, Param::F, spec, x, out),
-        Err(gearbif::Error::InvalidInput(_))
+        Continuation::new(gear, GearParam::F, spec, x, out),
+        Err(gearbif::Error::InvalidParameter { name: "f", .. })
     ));
-    assert!(Param::from_name("nope").is_err());
+    assert!(matches!(
+        GearParam::from_name("nope"),
+        Err(Error::UnknownParameter { .. })
+    ));
     // switching at a fold is refused with a reason
     let b = lock_branch_theta0();
     let f = b.specials_of(SpecialKind::Fold).next().unwrap();
@@ -430,7 +445,7 @@ fn theta25_nonsmooth_fold_and_narrow_stable_window_confirmed_by_simulation() {
         max_steps: 300,
         ..Default::default()
     };
-    let a = Continuation::from_orbit(sw.gear, Param::F, &sw.orbit, opts)
+    let a = Continuation::from_orbit(sw.system, GearParam::F, &sw.orbit, opts)
         .unwrap()
         .run(None)
         .unwrap();
@@ -479,10 +494,11 @@ fn continuation_in_theta_uses_the_chain_rule_and_meets_the_fc_curve() {
     let spec = OrbitSpec::symmetric(1);
     let x = [2.0, 60.0];
     let (_, img) = gearbif::orbits::residual(&g, &spec, x, &sh, false).unwrap();
-    let d = Param::ThetaDeg.derivative(&img, 20.0).unwrap();
+    let d = gearbif::model::param_derivative(&g, GearParam::ThetaDeg, img.jac_p.as_ref().unwrap())
+        .unwrap();
     let h = 1e-5;
     let r = |th: f64| {
-        let gg = Param::ThetaDeg.set(&g, th).unwrap();
+        let gg = g.with_param(GearParam::ThetaDeg, th).unwrap();
         gearbif::orbits::residual(&gg, &spec, x, &sh, false)
             .unwrap()
             .0
@@ -491,7 +507,7 @@ fn continuation_in_theta_uses_the_chain_rule_and_meets_the_fc_curve() {
     for i in 0..2 {
         assert_relative_eq!(d[i], (rp[i] - rm[i]) / (2.0 * h), max_relative = 1e-5);
     }
-    assert_relative_eq!(Param::ThetaDeg.get(&g), 20.0, epsilon = 1e-10);
+    assert_relative_eq!(g.param(GearParam::ThetaDeg), 20.0, epsilon = 1e-10);
     // at f = f_c(25°) from the boundary, the lock branch continued in Θ folds at Θ = 25°
     let f25 = 28.2708171273;
     let g10 = Gear::paper(10.0, f25).unwrap();
@@ -499,7 +515,7 @@ fn continuation_in_theta_uses_the_chain_rule_and_meets_the_fc_curve() {
     assert!(o.floquet.stable);
     let b = Continuation::from_orbit(
         g10,
-        Param::ThetaDeg,
+        GearParam::ThetaDeg,
         &o,
         ContinuationOptions {
             ds: 1.0,

@@ -7,7 +7,10 @@ use gearbif::integrator::{
     EventDriven, EventKind, FixedStep, FlowMethod, FlowOptions, Mode, Sensitivity,
 };
 use gearbif::maps::{multipliers, poincare_map, Section};
-use gearbif::model::{Convention, CoulombOscillator, DrivenOscillator, ForcedPendulum, Gear};
+use gearbif::model::{
+    Convention, CoulombOscillator, DrivenOscillator, ForcedPendulum, Gear, GearParam, Parameter,
+    Parametrised,
+};
 use std::f64::consts::{PI, TAU};
 
 fn opts(tol: f64) -> FlowOptions {
@@ -41,11 +44,11 @@ fn fd_jacobian_gear(
         }
     }
     let mut jp = nalgebra::Matrix2xX::zeros(5);
-    for k in 0..5 {
-        let p = gear.param(k);
+    for (k, &q) in GearParam::COLUMNS.iter().enumerate() {
+        let p = gear.param(q);
         let h = 1e-6 * p.abs().max(1e-2);
-        let gp = gear.with_param(k, p + h).unwrap();
-        let gm = gear.with_param(k, p - h).unwrap();
+        let gp = gear.with_param(q, p + h).unwrap();
+        let gm = gear.with_param(q, p - h).unwrap();
         let (a, b) = (img(&gp, x), img(&gm, x));
         for i in 0..2 {
             jp[(i, k)] = (a[i] - b[i]) / (2.0 * h);
@@ -158,7 +161,7 @@ fn jacobians_match_finite_differences_with_crossings_and_sticks() {
             assert!(
                 d < 2e-5 * sp.max(1.0),
                 "Θ={th} f={f}: param column {} analytic {} vs FD {}",
-                Gear::PARAM_NAMES[k],
+                GearParam::COLUMNS[k].name(),
                 ap.column(k),
                 jp.column(k)
             );

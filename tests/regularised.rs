@@ -6,7 +6,7 @@
 use gearbif::integrator::{
     EventDriven, EventKind, FlowMethod, FlowOptions, ImplicitMethod, Regularised, Sensitivity,
 };
-use gearbif::model::{DrivenOscillator, Gear};
+use gearbif::model::{DrivenOscillator, Gear, GearParam, Parametrised};
 
 #[test]
 fn converges_linearly_in_epsilon_across_a_crossing() {
@@ -61,15 +61,16 @@ fn parameter_columns_match_finite_differences() {
     let jp = f.jac_p.unwrap();
     let plain = FlowOptions::with_tol(1e-11);
     // ζ, η, Δ, g at fixed end time (f changes the period; its column is a fixed-t derivative too)
-    for k in 0..5 {
-        let p = gear.param(k);
+    for (k, &q) in GearParam::COLUMNS.iter().enumerate() {
+        assert_eq!(gear.column(q).unwrap().index, k);
+        let p = gear.param(q);
         let h = 1e-5 * p.abs().max(1e-2);
         let xp = m
-            .flow(&gear.with_param(k, p + h).unwrap(), 0.0, x0, t1, &plain)
+            .flow(&gear.with_param(q, p + h).unwrap(), 0.0, x0, t1, &plain)
             .unwrap()
             .x;
         let xm = m
-            .flow(&gear.with_param(k, p - h).unwrap(), 0.0, x0, t1, &plain)
+            .flow(&gear.with_param(q, p - h).unwrap(), 0.0, x0, t1, &plain)
             .unwrap()
             .x;
         for i in 0..2 {

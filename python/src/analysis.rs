@@ -61,7 +61,10 @@ fn classify<'py>(
     // the document of `gearbif classify --json` (one method: event_driven)
     let doc = serde_json::json!({
         "schema": "gearbif.classify/1",
-        "theta_deg": gearbif::continuation::Param::ThetaDeg.get(&g),
+        "theta_deg": gearbif::model::params::Parametrised::param(
+            &g,
+            gearbif::model::gear::GearParam::ThetaDeg
+        ),
         "f_hz": g.f,
         "event_driven": r,
     });

@@ -6,8 +6,10 @@ use crate::dynamics::{orbit_dict, orbit_spec, shooting, spec_dict};
 use crate::errors::{invalid, IntoPyResult};
 use crate::systems::{gear as as_gear, PyGear};
 use gearbif::continuation::{
-    switch_branch as switch, Branch, Continuation, ContinuationOptions, Param, SpecialPoint,
+    switch_branch as switch, Branch, Continuation, ContinuationOptions, SpecialPoint,
 };
+use gearbif::model::gear::GearParam;
+use gearbif::model::params::{Parameter, Parametrised};
 use numpy::{Complex64, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyAny, PyDict, PyList};
@@ -210,7 +212,7 @@ impl PyBranch {
     #[getter]
     fn gear(&self) -> PyGear {
         PyGear {
-            inner: self.inner.gear,
+            inner: self.inner.system,
         }
     }
     /// The branch as a dict: one entry of `branches` in `gearbif continue --json`
@@ -283,7 +285,7 @@ fn continuation(
     locate_tol: f64,
 ) -> PyResult<PyBranch> {
     let g = as_gear(gear)?;
-    let param = Param::from_name(param).py()?;
+    let param = GearParam::from_name(param).py()?;
     let (lo, hi) = parse_range(range)?;
     let sh = shooting(tol, newton_tol, 30)?;
     let spec = orbit_spec(section, iterations, winding)?;
@@ -373,13 +375,13 @@ fn switch_branch<'py>(
     let (start, nb) = py
         .detach(|| {
             let sw = switch(b, &sp, dparam, &opts.shooting)?;
-            let nb = Continuation::from_orbit(sw.gear, b.param, &sw.orbit, opts)?.run(None)?;
+            let nb = Continuation::from_orbit(sw.system, b.param, &sw.orbit, opts)?.run(None)?;
             Ok::<_, gearbif::Error>((sw, nb))
         })
         .py()?;
     let d = orbit_dict(py, &start.orbit)?;
     d.set_item("separation", start.separation)?;
-    d.set_item("param", b.param.get(&start.gear))?;
+    d.set_item("param", start.system.param(b.param))?;
     Ok((PyBranch { inner: nb, opts }, d))
 }
 
@@ -433,7 +435,7 @@ fn lock_loss_boundary<'py>(
             PyArray1::from_vec(py, p.iter().map(|q| q.precision).collect()),
         )?;
         d.set_item("x", rows(py, p.len(), 2, |i, j| p[i].x[j]))?;
-        d.set_item("stopped", c.stopped.clone())?;
+        d.set_item("stopped", c.stopped.as_ref().map(|s| s.to_string()))?;
         out.append(d)?;
     }
     Ok(out)

@@ -56,6 +56,12 @@ create_exception!(
 );
 create_exception!(
     gearbif,
+    NoPeriodError,
+    GearbifError,
+    "A simulation did not settle on a periodic orbit of the largest period tried."
+);
+create_exception!(
+    gearbif,
     RecordingError,
     GearbifError,
     "A recording set (experiment.toml or a CSV file) is malformed (attributes: file, line)."
@@ -74,7 +80,9 @@ pub fn to_py(e: Error) -> PyErr {
             });
             err
         }
-        Error::InvalidInput(_) => InvalidInputError::new_err(msg),
+        Error::InvalidInput(_) | Error::UnknownParameter { .. } => InvalidInputError::new_err(msg),
+        Error::NoParameterColumn { .. } => UnsupportedError::new_err(msg),
+        Error::NoPeriodDetected { .. } => NoPeriodError::new_err(msg),
         Error::Integration { .. } => IntegrationError::new_err(msg),
         Error::NewtonFailed { .. } => NewtonError::new_err(msg),
         Error::Continuation(_) => ContinuationError::new_err(msg),
@@ -122,6 +130,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ContinuationError", py.get_type::<ContinuationError>())?;
     m.add("GearbifIOError", py.get_type::<GearbifIOError>())?;
     m.add("UnsupportedError", py.get_type::<UnsupportedError>())?;
+    m.add("NoPeriodError", py.get_type::<NoPeriodError>())?;
     m.add("RecordingError", py.get_type::<RecordingError>())?;
     Ok(())
 }

@@ -3,7 +3,8 @@
 
 use crate::convert::{complex2, to_python, vec2};
 use crate::errors::{invalid, IntoPyResult};
-use gearbif::continuation::Param;
+use gearbif::model::gear::GearParam;
+use gearbif::model::params::{Parameter, Parametrised};
 use gearbif::model::{
     Convention, CoulombOscillator, DrivenOscillator, ForcedPendulum, Gear, GearParams,
 };
@@ -209,9 +210,9 @@ impl PyGear {
     /// A copy with one parameter changed: name in f [Hz], g [1/s²], zeta [1/s], eta [1/s²],
     /// delta [1], theta [deg] (parallel shafts, sets Δ = cos²Θ − 2 sin²Θ).
     fn with_param(&self, name: &str, value: f64) -> PyResult<Self> {
-        let p = Param::from_name(name).py()?;
+        let p = GearParam::from_name(name).py()?;
         Ok(Self {
-            inner: p.set(&self.inner, value).py()?,
+            inner: Parametrised::with_param(&self.inner, p, value).py()?,
         })
     }
 
@@ -248,7 +249,7 @@ impl PyGear {
     /// Parallel shaft angle Θ [deg] with Δ = 1 − 3 sin²Θ, Θ ∈ [0°, 90°].
     #[getter]
     fn theta_deg(&self) -> f64 {
-        Param::ThetaDeg.get(&self.inner)
+        Parametrised::param(&self.inner, GearParam::ThetaDeg)
     }
     /// Drive phase α₀ at t = 0 [deg].
     #[getter]

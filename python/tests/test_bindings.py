@@ -80,6 +80,7 @@ def test_bad_input_raises_typed_exceptions(tmp_path):
         gearbif.ContinuationError,
         gearbif.GearbifIOError,
         gearbif.UnsupportedError,
+        gearbif.NoPeriodError,
         gearbif.RecordingError,
     ):
         assert issubclass(cls, gearbif.GearbifError)

@@ -1,9 +1,9 @@
 //! `gearbif bench-integrators`: a work-precision diagram of every integrator on one case.
 
-use super::common::{GearArgs, Output};
+use super::common::{count, limits, output_file, tolerance, within, GearArgs, Output};
 use super::methods::{parse_x0, DriveArgs};
 use crate::bench::{rhs_only_time, to_csv, work_precision, Candidate, WorkPrecisionSetup};
-use crate::error::{positive, Error, Result};
+use crate::error::{positive, Result};
 use crate::integrator::{EventDriven, FixedStep, FlowMethod, Sensitivity};
 use crate::model::Gear;
 use serde::Serialize;
@@ -26,20 +26,21 @@ pub struct Args {
         allow_hyphen_values = true
     )]
     x0: Option<String>,
-    /// Duration in drive periods [1] (1 = one stroboscopic map P_T).
+    /// Duration in drive periods [1], in (0, 1000] (1 = one stroboscopic map P_T).
     #[arg(long, default_value_t = 1.0)]
     periods: f64,
     /// Do not propagate the state Jacobian (default: P_T with its Jacobian).
     #[arg(long)]
     no_jacobian: bool,
-    /// Tolerances of the event-driven DP5 [dimensionless], comma-separated.
+    /// Tolerances of the event-driven DP5 [dimensionless], each in (0, 1), comma-separated.
     #[arg(
         long,
         value_delimiter = ',',
         default_value = "1e-4,1e-6,1e-8,1e-10,1e-12"
     )]
     event_tols: Vec<f64>,
-    /// Steps per period of the fixed-step RK4 [1], comma-separated (the paper uses 50).
+    /// Steps per period of the fixed-step RK4 [1], each 1 to 1000000, comma-separated (the paper
+    /// uses 50).
     #[arg(
         long,
         value_delimiter = ',',
@@ -50,13 +51,14 @@ pub struct Args {
     /// with every --reg-eps).
     #[arg(long, value_delimiter = ',', default_value = "1e-6,1e-8,1e-10")]
     reg_tols: Vec<f64>,
-    /// Regularisation velocities ε of the regularised method [rad/s], comma-separated.
+    /// Regularisation velocities ε of the regularised method [rad/s], each in (0, 1],
+    /// comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "1e-2,1e-3,1e-4,1e-5")]
     reg_eps: Vec<f64>,
-    /// Tolerance of the event-driven reference [dimensionless].
+    /// Tolerance of the event-driven reference [dimensionless], in (0, 1).
     #[arg(long, default_value_t = 1e-13)]
     reference_tol: f64,
-    /// Minimum wall time spent timing each point [s].
+    /// Minimum wall time spent timing each point [s], in [0, 60].
     #[arg(long, default_value_t = 0.05)]
     min_time: f64,
     /// CSV file of the points (family, method, tol, error, jac_error, rhs_evals, steps, time_s, repeats).
@@ -99,16 +101,29 @@ pub fn run(a: Args) -> Result<()> {
         None => [0.5, 2.0],
     };
     positive("periods", a.periods)?;
+    within("periods", a.periods, 0.0, 1e3, "must be in (0, 1e3]")?;
     for &e in &a.reg_eps {
-        positive("epsilon", e)?;
+        within(
+            "epsilon",
+            e,
+            f64::MIN_POSITIVE,
+            1.0,
+            "must be in (0, 1] rad/s",
+        )?;
     }
-    positive("reference-tol", a.reference_tol)?;
-    crate::error::non_negative("min-time", a.min_time)?;
+    tolerance("reference-tol", a.reference_tol)?;
+    within("min-time", a.min_time, 0.0, 60.0, "must be in [0, 60] s")?;
     for &t in a.event_tols.iter().chain(&a.reg_tols) {
-        positive("tol", t)?;
+        tolerance("tol", t)?;
     }
-    if a.fixed_steps.contains(&0) {
-        return Err(Error::InvalidInput("--fixed-steps must be >= 1".into()));
+    for &n in &a.fixed_steps {
+        count("fixed-steps", n, 1, limits::TURNS_MAX)?;
+    }
+    if let Some(p) = &a.csv {
+        output_file("--csv", p, false)?;
+    }
+    if let Some(p) = &a.figure {
+        output_file("--figure", p, true)?;
     }
     let fixed: Vec<FixedStep> = a
         .fixed_steps

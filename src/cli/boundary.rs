@@ -1,13 +1,14 @@
 //! `gearbif boundary`: a two-parameter curve of special points, by default the lock-loss boundary
 //! f_c(Θ) of the locked orbit over Θ ∈ [0°, 54.74°] (both senses of rotation).
 
-use super::common::{GearArgs, Output};
-use super::continue_::{parse_range, parse_section, parse_state};
+use super::common::{limits, output_file, tolerance, GearArgs, Output};
+use super::continue_::{check_winding, parse_range, parse_section, parse_state};
 use super::locate::parse_kind;
 use crate::continuation::two_param::{follow, grid};
-use crate::continuation::{Param, SpecialKind};
+use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
 use crate::maps::Section;
+use crate::model::{GearParam, Parameter, Parametrised};
 use crate::orbits::{OrbitSpec, ShootingOptions};
 
 /// Arguments of `gearbif boundary`.
@@ -24,17 +25,17 @@ pub struct Args {
     /// The parameter stepped (theta for parallel shafts).
     #[arg(long, default_value = "theta")]
     along: String,
-    /// Range `lo:hi` of the stepped parameter (default 0:54.7356 for theta).
+    /// Range `lo:hi` of the stepped parameter (finite, lo < hi; default 0:54.7356 for theta).
     #[arg(long, allow_hyphen_values = true)]
     range: Option<String>,
-    /// Step of the stepped parameter.
+    /// Step of the stepped parameter (finite, > 0, at most 100000 steps over the range).
     #[arg(long, default_value_t = 1.0)]
     step: f64,
     /// Start: free-parameter value, state and winding at the first value of the range (default: the
     /// analytic lock fold at Θ = 0 and at 54.74°, i.e. the lock-loss boundary).
     #[arg(long)]
     start_free: Option<f64>,
-    /// Start state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention).
+    /// Start state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention; |β| <= 2π, |ω| <= 1e6).
     #[arg(
         long = "start-state-rad",
         value_name = "BETA_RAD,OMEGA",
@@ -44,13 +45,13 @@ pub struct Args {
     /// Step the range downwards (from hi to lo); the start is then at hi.
     #[arg(long)]
     reverse: bool,
-    /// Winding of the orbit.
+    /// Winding of the orbit, |p| <= 1000.
     #[arg(long, allow_hyphen_values = true, default_value_t = 1)]
     winding: i32,
     /// Orbit problem: sym or strob.
     #[arg(long, default_value = "sym")]
     section: String,
-    /// Integrator tolerance.
+    /// Integrator tolerance, in (0, 1).
     #[arg(long, default_value_t = 1e-11)]
     tol: f64,
     /// Write the curves (JSON).
@@ -69,16 +70,17 @@ pub fn run(a: Args) -> Result<()> {
     let params = a.gear.params()?;
     let base = params.driven(1.0)?;
     let kind = parse_kind(&a.kind)?;
-    let free = Param::from_name(&a.free)?;
-    let along = Param::from_name(&a.along)?;
+    let free = GearParam::from_name(&a.free)?;
+    let along = GearParam::from_name(&a.along)?;
+    check_args(&a)?;
     let opts = ShootingOptions {
         tol: a.tol,
         ..Default::default()
     };
     let curves = if a.start_state.is_none()
         && kind == SpecialKind::Fold
-        && along == Param::ThetaDeg
-        && free == Param::F
+        && along == GearParam::ThetaDeg
+        && free == GearParam::F
     {
         crate::continuation::two_param::lock_loss_boundary(&base, a.step, &opts)?
     } else {
@@ -94,7 +96,7 @@ pub fn run(a: Args) -> Result<()> {
             Section::Stroboscopic => OrbitSpec::stroboscopic(1, a.winding),
         };
         let vals = grid(lo, hi, a.step, a.reverse);
-        let g = along.set(&free.set(&base, f0)?, vals[0])?;
+        let g = base.with_param(free, f0)?.with_param(along, vals[0])?;
         let c = follow(&g, &spec, kind, free, along, x, f0, &vals, &opts)?;
         vec![(format!("{} curve", kind.label()), c)]
     };
@@ -148,4 +150,32 @@ pub fn run(a: Args) -> Result<()> {
         }
         s
     })
+}
+
+/// The domain checks of `boundary`, all before any curve is computed.
+fn check_args(a: &Args) -> Result<()> {
+    tolerance("tol", a.tol)?;
+    check_winding(a.winding)?;
+    parse_section(&a.section)?;
+    let (lo, hi) = parse_range(a.range.as_deref().unwrap_or("0:54.7356103"))?;
+    if !(a.step.is_finite() && a.step > 0.0) || (hi - lo) / a.step > limits::GRID_MAX as f64 {
+        return Err(Error::InvalidInput(format!(
+            "--step = {} must be finite and > 0 with at most {} steps over {lo}:{hi}",
+            a.step,
+            limits::GRID_MAX
+        )));
+    }
+    if let Some(s) = &a.start_state {
+        parse_state(s)?;
+    }
+    if let Some(f) = a.start_free {
+        crate::error::finite("start-free", f)?;
+    }
+    if let Some(p) = &a.out {
+        output_file("--out", p, false)?;
+    }
+    if let Some(p) = &a.plot {
+        output_file("--plot", p, true)?;
+    }
+    Ok(())
 }

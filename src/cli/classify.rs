@@ -1,7 +1,7 @@
 //! `gearbif classify`: both classifications of one point (the paper's flowchart and the rigorous
 //! one), optionally with the paper's fixed-step integrator beside the exact one.
 
-use super::common::{check_frequency, GearArgs, Output};
+use super::common::{angle_deg, check_frequency, count, limits, tolerance, GearArgs, Output};
 use crate::analysis::{classify_point, ClassifyOptions, PointResult, ThdDefinition};
 use crate::integrator::{EventDriven, FixedStep};
 use crate::model::Gear;
@@ -13,25 +13,26 @@ use serde::Serialize;
 pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
-    /// Drive frequency f [Hz].
+    /// Drive frequency f [Hz], in [1e-3, 1e4].
     #[arg(long)]
     f: f64,
-    /// Input angle α at t = 0 [deg] (paper Fig. 6: 90).
+    /// Input angle α at t = 0 [deg], in [-360, 360] (paper Fig. 6: 90).
     #[arg(long, default_value_t = 90.0, allow_hyphen_values = true)]
     alpha0_deg: f64,
-    /// Output angle β at t = 0 [deg], in the chosen --convention (paper Fig. 6: 270 paper = 90 physical).
+    /// Output angle β at t = 0 [deg], in [-360, 360], in the chosen --convention (paper Fig. 6: 270
+    /// paper = 90 physical).
     #[arg(long, default_value_t = 90.0, allow_hyphen_values = true)]
     beta0_deg: f64,
-    /// Settling turns (paper: 90).
+    /// Settling turns, 0 to 1000000 (paper: 90).
     #[arg(long, default_value_t = 90)]
     settle: usize,
-    /// Recorded turns (paper: 10).
+    /// Recorded turns, 1 to 100000 (paper: 10).
     #[arg(long, default_value_t = 10)]
     record: usize,
-    /// Turns of the rigorous analysis after the window.
+    /// Turns of the rigorous analysis after the window, 2 to 1000000.
     #[arg(long, default_value_t = 60)]
     analysis: usize,
-    /// Integrator tolerance.
+    /// Integrator tolerance, in (0, 1).
     #[arg(long, default_value_t = 1e-9)]
     tol: f64,
     /// Use the THD as printed in the paper (denominator a1² + b1²) in the flowchart.
@@ -114,8 +115,12 @@ fn describe(name: &str, r: &PointResult) -> String {
 /// Runs `gearbif classify`.
 pub fn run(a: Args) -> Result<()> {
     check_frequency(a.f)?;
-    crate::error::finite("alpha0_deg", a.alpha0_deg)?;
-    crate::error::finite("beta0_deg", a.beta0_deg)?;
+    angle_deg("alpha0_deg", a.alpha0_deg)?;
+    angle_deg("beta0_deg", a.beta0_deg)?;
+    tolerance("tol", a.tol)?;
+    count("settle", a.settle, 0, limits::TURNS_MAX)?;
+    count("record", a.record, 1, 100_000)?;
+    count("analysis", a.analysis, 2, limits::TURNS_MAX)?;
     let p = a.gear.params()?;
     let gear = Gear::new(p.g(), p.delta(), p.zeta, p.eta, a.f)?
         .with_convention(a.gear.convention())

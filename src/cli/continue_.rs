@@ -1,10 +1,12 @@
 //! `gearbif continue`: pseudo-arclength continuation of a periodic orbit in one parameter.
 
-use super::common::{check_frequency, GearArgs, Output};
-use crate::continuation::{switch_branch, Branch, Continuation, ContinuationOptions, Param};
+use super::common::{
+    check_frequency, count, limits, output_file, start_state, tolerance, within, GearArgs, Output,
+};
+use crate::continuation::{switch_branch, Branch, Continuation, ContinuationOptions};
 use crate::error::{Error, Result};
 use crate::maps::Section;
-use crate::model::Gear;
+use crate::model::{Gear, GearParam, Parameter};
 use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};
 
 /// Arguments of `gearbif continue`.
@@ -12,22 +14,23 @@ use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};
 pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
-    /// Drive frequency f [Hz] of the start orbit.
+    /// Drive frequency f [Hz] of the start orbit, in [1e-3, 1e4].
     #[arg(long)]
     f: f64,
     /// Continuation parameter: f [Hz], theta (parallel shafts) [deg], delta [1], zeta [1/s],
     /// eta [1/s²] or g [1/s²].
     #[arg(long, default_value = "f")]
     param: String,
-    /// Parameter range `lo:hi` in the parameter's unit; the continuation stops on its bounds.
+    /// Parameter range `lo:hi` in the parameter's unit (finite, lo < hi); the continuation stops
+    /// on its bounds.
     #[arg(long, allow_hyphen_values = true)]
     range: String,
     /// Initial direction: up or down in the parameter.
     #[arg(long, default_value = "up")]
     direction: String,
-    /// Start state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention), as in the `x` of the
-    /// JSON outputs; default: from a simulation (relaxed, period and winding detected), or the
-    /// analytic lock with --lock.
+    /// Start state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention; |β| <= 2π,
+    /// |ω| <= 1e6), as in the `x` of the JSON outputs; default: from a simulation (relaxed, period
+    /// and winding detected), or the analytic lock with --lock.
     #[arg(
         long = "state-rad",
         value_name = "BETA_RAD,OMEGA",
@@ -40,25 +43,26 @@ pub struct Args {
     /// Orbit problem: `sym` (half-period map G, symmetric orbits) or `strob` (P_T^k).
     #[arg(long, default_value = "sym")]
     section: String,
-    /// Winding p (per period for sym, over k periods for strob); default: detected or ±1.
+    /// Winding p (per period for sym, over k periods for strob), |p| <= 1000; default: detected
+    /// or ±1.
     #[arg(long, allow_hyphen_values = true)]
     winding: Option<i32>,
-    /// Period k of the P_T^k problem.
+    /// Period k of the P_T^k problem, 1 to 1000.
     #[arg(long, default_value_t = 1)]
     period: usize,
-    /// Initial step (arclength).
+    /// Initial step (arclength), finite and nonzero, |ds| <= ds-max.
     #[arg(long, default_value_t = 0.02)]
     ds: f64,
-    /// Largest step.
+    /// Largest step, finite and > 0.
     #[arg(long, default_value_t = 0.1)]
     ds_max: f64,
-    /// Largest number of steps.
+    /// Largest number of steps, 1 to 1000000.
     #[arg(long, default_value_t = 2000)]
     max_steps: usize,
-    /// Integrator tolerance.
+    /// Integrator tolerance, in (0, 1).
     #[arg(long, default_value_t = 1e-11)]
     tol: f64,
-    /// Stop when a multiplier modulus exceeds this.
+    /// Stop when a multiplier modulus exceeds this (finite, > 1).
     #[arg(long, default_value_t = 1e4)]
     max_multiplier: f64,
     /// After the continuation, switch at special point number N (flip or symmetry-breaking) and
@@ -95,7 +99,7 @@ pub(crate) fn parse_range(s: &str) -> Result<(f64, f64)> {
     let (lo, hi) = (p(a)?, p(b)?);
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
         return Err(Error::InvalidInput(format!(
-            "range `{s}` must have lo < hi"
+            "range `{s}` must be finite numbers with lo < hi"
         )));
     }
     Ok((lo, hi))
@@ -113,6 +117,7 @@ pub(crate) fn parse_state(s: &str) -> Result<[f64; 2]> {
             "state `{s}` must be two finite numbers (β [rad], ω [rad/s])"
         )));
     }
+    start_state("state", v[0], v[1], false)?;
     Ok([v[0], v[1]])
 }
 
@@ -214,13 +219,14 @@ pub fn run(a: Args) -> Result<()> {
     check_frequency(a.f)?;
     let params = a.gear.params()?;
     let gear = params.driven(a.f)?;
-    let param = Param::from_name(&a.param)?;
+    let param = GearParam::from_name(&a.param)?;
     let (lo, hi) = parse_range(&a.range)?;
     let sign = match a.direction.as_str() {
         "up" => 1.0,
         "down" => -1.0,
         d => return Err(Error::InvalidInput(format!("direction `{d}`: up or down"))),
     };
+    check_args(&a)?;
     let shooting = ShootingOptions {
         tol: a.tol,
         ..Default::default()
@@ -248,7 +254,7 @@ pub fn run(a: Args) -> Result<()> {
         })?;
         let sw = switch_branch(b0, sp, -sign * 1e-3 * sp.param.abs().max(1.0), &shooting)?;
         let b1 = Continuation::from_orbit(
-            sw.gear,
+            sw.system,
             param,
             &sw.orbit,
             ContinuationOptions {
@@ -283,4 +289,68 @@ pub fn run(a: Args) -> Result<()> {
     Output { json: a.json }.emit(&tagged, || {
         branches.iter().map(summary).collect::<Vec<_>>().join("")
     })
+}
+
+/// The domain checks of `continue`, all before any orbit is computed.
+fn check_args(a: &Args) -> Result<()> {
+    tolerance("tol", a.tol)?;
+    within(
+        "ds-max",
+        a.ds_max,
+        f64::MIN_POSITIVE,
+        f64::MAX,
+        "must be > 0",
+    )?;
+    if a.ds == 0.0 || !a.ds.is_finite() || a.ds.abs() > a.ds_max {
+        return Err(Error::InvalidInput(format!(
+            "--ds = {} must be finite, nonzero and at most --ds-max = {}",
+            a.ds, a.ds_max
+        )));
+    }
+    count("max-steps", a.max_steps, 1, limits::TURNS_MAX)?;
+    count("period", a.period, 1, 1000)?;
+    within(
+        "max-multiplier",
+        a.max_multiplier,
+        1.0 + f64::EPSILON,
+        f64::MAX,
+        "must be finite and > 1",
+    )?;
+    if let Some(p) = a.winding {
+        check_winding(p)?;
+    }
+    if let Some(l) = a.lock.as_deref() {
+        if !matches!(l, "stable" | "unstable") {
+            return Err(Error::InvalidInput(format!(
+                "--lock `{l}`: expected stable or unstable"
+            )));
+        }
+    }
+    parse_section(&a.section)?;
+    if let Some(s) = &a.state {
+        parse_state(s)?;
+    }
+    if let Some(p) = &a.out {
+        output_file("--out", p, false)?;
+    }
+    for (flag, p) in [
+        ("--plot", &a.plot),
+        ("--plot-multipliers", &a.plot_multipliers),
+    ] {
+        if let Some(p) = p {
+            output_file(flag, p, true)?;
+        }
+    }
+    Ok(())
+}
+
+/// Checks a winding number: |p| <= 1000.
+pub(crate) fn check_winding(p: i32) -> Result<i32> {
+    if p.unsigned_abs() <= 1000 {
+        Ok(p)
+    } else {
+        Err(Error::InvalidInput(format!(
+            "--winding = {p} must be in -1000..=1000"
+        )))
+    }
 }

@@ -27,6 +27,7 @@ pub struct Args {
 /// Runs `gearbif diagnose`.
 pub fn run(a: Args) -> Result<()> {
     let t0 = Instant::now();
+    super::common::output_dir("--out", &a.out)?;
     let set = read_set(&a.set)?;
     let opts = DiagnoseOptions {
         heldout_predictions: !a.no_heldout,

@@ -1,7 +1,7 @@
 //! `gearbif figure <name>`: the paper's figures that the model can make (Figs. 5–10), an orbit
 //! diagram and the Lyapunov exponent against f, as SVG and PNG in an output folder.
 
-use super::common::GearArgs;
+use super::common::{output_dir, GearArgs};
 use super::sweep::Progress;
 use crate::analysis::classify::WindowSample;
 use crate::analysis::{classify_point, ClassifyOptions};
@@ -327,6 +327,7 @@ pub fn make(
 /// Runs `gearbif figure`.
 pub fn run(a: Args) -> Result<()> {
     let p = a.gear.params()?;
+    output_dir("--out", &a.out)?;
     let progress = Progress::new(a.quiet);
     let t = std::time::Instant::now();
     let files = make(a.name, &p, &a.out, a.full, &progress)?;

@@ -11,7 +11,7 @@ use serde::Serialize;
 pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
-    /// Drive frequency f [Hz] at which to report the lock angles (needs Δ = ±1).
+    /// Drive frequency f [Hz], in [1e-3, 1e4], at which to report the lock angles (needs Δ = ±1).
     #[arg(long)]
     f: Option<f64>,
     /// Print JSON.

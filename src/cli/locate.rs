@@ -1,12 +1,13 @@
 //! `gearbif locate`: refine one special point by Newton on the augmented system, with an error
 //! estimate from a second solve at a tenfold tighter integrator tolerance.
 
-use super::common::{check_frequency, GearArgs, Output};
-use super::continue_::{parse_section, parse_state};
+use super::common::{check_frequency, count, tolerance, GearArgs, Output};
+use super::continue_::{check_winding, parse_section, parse_state};
 use crate::continuation::two_param::{locate_augmented, CurvePoint};
-use crate::continuation::{Param, SpecialKind};
+use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
 use crate::maps::Section;
+use crate::model::{GearParam, Parameter, Parametrised};
 use crate::orbits::{OrbitSpec, ShootingOptions};
 use serde::Serialize;
 
@@ -15,7 +16,7 @@ use serde::Serialize;
 pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
-    /// Drive frequency f [Hz] (the guess when --param f).
+    /// Drive frequency f [Hz], in [1e-3, 1e4] (the guess when --param f).
     #[arg(long)]
     f: f64,
     /// Type: fold, flip, sb (symmetry-breaking) or ns (Neimark–Sacker).
@@ -24,7 +25,8 @@ pub struct Args {
     /// The parameter solved for (f, theta, delta, zeta, eta, g).
     #[arg(long, default_value = "f")]
     param: String,
-    /// Guess of the state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention).
+    /// Guess of the state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention; |β| <= 2π,
+    /// |ω| <= 1e6).
     #[arg(
         long = "state-rad",
         value_name = "BETA_RAD,OMEGA",
@@ -34,13 +36,13 @@ pub struct Args {
     /// Orbit problem: sym (G) or strob (P_T^k).
     #[arg(long, default_value = "sym")]
     section: String,
-    /// Winding.
+    /// Winding, |p| <= 1000.
     #[arg(long, allow_hyphen_values = true, default_value_t = 1)]
     winding: i32,
-    /// Period k (strob).
+    /// Period k (strob), 1 to 1000.
     #[arg(long, default_value_t = 1)]
     period: usize,
-    /// Integrator tolerance.
+    /// Integrator tolerance, in (0, 1).
     #[arg(long, default_value_t = 1e-11)]
     tol: f64,
     /// Print JSON.
@@ -76,15 +78,18 @@ pub(crate) fn parse_kind(s: &str) -> Result<SpecialKind> {
 /// Runs `gearbif locate`.
 pub fn run(a: Args) -> Result<()> {
     check_frequency(a.f)?;
+    tolerance("tol", a.tol)?;
+    check_winding(a.winding)?;
+    count("period", a.period, 1, 1000)?;
     let gear = a.gear.params()?.driven(a.f)?;
     let kind = parse_kind(&a.kind)?;
-    let param = Param::from_name(&a.param)?;
+    let param = GearParam::from_name(&a.param)?;
     let spec = match parse_section(&a.section)? {
         Section::HalfPeriod => OrbitSpec::symmetric(a.winding),
         Section::Stroboscopic => OrbitSpec::stroboscopic(a.period, a.winding),
     };
     let x = parse_state(&a.state)?;
-    let lam0 = param.get(&gear);
+    let lam0 = gear.param(param);
     let o1 = ShootingOptions {
         tol: a.tol,
         ..Default::default()

@@ -1,12 +1,12 @@
 //! `gearbif map`: the stroboscopic map P_T (or the half-period map G) of a state, with its Jacobians
 //! in the state and the parameters, and the multipliers.
 
-use super::common::{GearArgs, Output};
+use super::common::{count, limits, GearArgs, Output};
 use super::methods::{DriveArgs, MethodArgs};
 use crate::error::{Error, Result};
 use crate::integrator::{FlowOptions, Mode, Sensitivity, Stats};
 use crate::maps::{multipliers, poincare_map, Section};
-use crate::model::{Convention, DrivenOscillator, Gear};
+use crate::model::{Convention, DrivenOscillator};
 use serde::Serialize;
 use std::fmt::Write as _;
 
@@ -32,7 +32,7 @@ pub struct Args {
     /// Which Poincaré map.
     #[arg(long, value_enum, default_value_t = SectionArg::Strobe)]
     section: SectionArg,
-    /// Number of applications k of the map [1] (the result is P^k).
+    /// Number of applications k of the map [1], 1 to 1000000 (the result is P^k).
     #[arg(long, default_value_t = 1)]
     iterations: usize,
     /// Print JSON.
@@ -83,12 +83,7 @@ pub fn run(a: Args) -> Result<()> {
     let gear = a.drive.gear(&a.gear)?;
     let x = a.drive.x0(&gear)?;
     let method = a.method.method()?;
-    if a.iterations == 0 || a.iterations > 1_000_000 {
-        return Err(Error::InvalidInput(format!(
-            "--iterations must be in 1..=1000000, got {}",
-            a.iterations
-        )));
-    }
+    count("iterations", a.iterations, 1, limits::TURNS_MAX)?;
     let section = match a.section {
         SectionArg::Strobe => Section::Stroboscopic,
         SectionArg::Half => Section::HalfPeriod,
@@ -121,7 +116,7 @@ pub fn run(a: Args) -> Result<()> {
         winding: (img.x[0] - x[0]) / std::f64::consts::TAU,
         mode: img.mode,
         jac_x: [[jx[(0, 0)], jx[(0, 1)]], [jx[(1, 0)], jx[(1, 1)]]],
-        param_names: Gear::PARAM_NAMES[..np].to_vec(),
+        param_names: (0..np).map(|k| gear.param_name(k)).collect(),
         jac_p: [
             (0..np).map(|c| jp[(0, c)]).collect(),
             (0..np).map(|c| jp[(1, c)]).collect(),

@@ -1,8 +1,8 @@
 //! Arguments shared by the commands that integrate: the method and its settings, the drive
 //! frequency, the initial state.
 
-use super::common::{check_frequency, GearArgs};
-use crate::error::{finite, positive, Error, Result};
+use super::common::{check_frequency, count, limits, start_state, tolerance, within, GearArgs};
+use crate::error::{finite, Error, Result};
 use crate::integrator::{EventDriven, FixedStep, FlowMethod};
 use crate::model::Gear;
 use clap::Args;
@@ -25,13 +25,14 @@ pub struct MethodArgs {
     /// Integration method.
     #[arg(long, value_enum, default_value_t = MethodArg::Event)]
     pub method: MethodArg,
-    /// Tolerance [dimensionless]: rtol = tol, atol = 1e-3·tol (event and regularised methods).
+    /// Tolerance [dimensionless], in (0, 1): rtol = tol, atol = 1e-3·tol (event and regularised
+    /// methods).
     #[arg(long, default_value_t = 1e-9, allow_hyphen_values = true)]
     pub tol: f64,
-    /// Steps per drive period for `--method fixed` [1] (the paper uses 50).
+    /// Steps per drive period for `--method fixed` [1], 1 to 1000000 (the paper uses 50).
     #[arg(long, default_value_t = 50)]
     pub steps: usize,
-    /// Regularisation velocity ε for `--method regularised` [rad/s].
+    /// Regularisation velocity ε for `--method regularised` [rad/s], in (0, 1].
     #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
     pub epsilon: f64,
 }
@@ -39,26 +40,23 @@ pub struct MethodArgs {
 impl MethodArgs {
     /// Validates the settings and returns the chosen method.
     pub fn method(&self) -> Result<Box<dyn FlowMethod<Gear>>> {
-        positive("tol", self.tol)?;
-        if self.tol >= 1.0 {
-            return Err(Error::InvalidParameter {
-                name: "tol",
-                value: self.tol,
-                reason: "must be < 1",
-            });
-        }
+        tolerance("tol", self.tol)?;
         match self.method {
             MethodArg::Event => Ok(Box::new(EventDriven)),
             MethodArg::Fixed => {
-                if self.steps == 0 {
-                    return Err(Error::InvalidInput("--steps must be >= 1".into()));
-                }
+                count("steps", self.steps, 1, limits::TURNS_MAX)?;
                 Ok(Box::new(FixedStep {
                     steps_per_period: self.steps,
                 }))
             }
             MethodArg::Regularised => {
-                positive("epsilon", self.epsilon)?;
+                within(
+                    "epsilon",
+                    self.epsilon,
+                    f64::MIN_POSITIVE,
+                    1.0,
+                    "must be in (0, 1] rad/s",
+                )?;
                 #[cfg(feature = "diffsol-check")]
                 {
                     Ok(Box::new(crate::integrator::Regularised::new(self.epsilon)))
@@ -77,12 +75,13 @@ impl MethodArgs {
 /// The drive frequency and the initial state.
 #[derive(Debug, Clone, Args)]
 pub struct DriveArgs {
-    /// Drive (input) frequency f [Hz].
+    /// Drive (input) frequency f [Hz], in [1e-3, 1e4].
     #[arg(long, default_value_t = 2.7, allow_hyphen_values = true)]
     pub f: f64,
     /// Initial state "BETA,OMEGA": output angle β [deg] and velocity ω [rad/s] at t = 0, in the
-    /// chosen --convention (default: the locked-input equilibrium at α = 0, at rest). The states
-    /// of orbits (`continue`, `locate`, `boundary`: --state-rad) are in rad.
+    /// chosen --convention, |β| <= 360°, |ω| <= 1e6 rad/s (default: the locked-input equilibrium
+    /// at α = 0, at rest). The states of orbits (`continue`, `locate`, `boundary`: --state-rad)
+    /// are in rad.
     #[arg(
         long = "x0-deg",
         value_name = "BETA_DEG,OMEGA",
@@ -128,5 +127,6 @@ pub fn parse_x0(s: &str) -> Result<[f64; 2]> {
     };
     let beta = num("x0-deg beta", parts[0])?;
     let omega = num("x0-deg omega", parts[1])?;
+    start_state("--x0-deg", beta, omega, true)?;
     Ok([beta.to_radians(), omega])
 }

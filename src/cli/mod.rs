@@ -22,7 +22,7 @@ mod simulate;
 mod sweep;
 mod synth;
 
-pub use common::{GearArgs, Output};
+pub use common::{parse_config, GearArgs, GearConfig, Output};
 
 use clap::{Parser, Subcommand};
 

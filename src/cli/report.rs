@@ -1,6 +1,6 @@
 //! `gearbif report`: the self-contained report folder of a gear (report.md, report.json, figures).
 
-use super::common::GearArgs;
+use super::common::{output_dir, GearArgs};
 use super::sweep::Progress;
 use crate::report::{build_report, ReportOptions};
 use crate::Result;
@@ -25,6 +25,7 @@ pub struct Args {
 /// Runs `gearbif report`.
 pub fn run(a: Args) -> Result<()> {
     let gear = a.gear.params()?;
+    output_dir("--out", &a.out)?;
     let opts = if a.fine {
         ReportOptions::fine()?
     } else {

@@ -1,6 +1,6 @@
 //! `gearbif simulate`: a trajectory of the driven gear as CSV (and its events on Σ).
 
-use super::common::{GearArgs, Output};
+use super::common::{count, limits, output_file, within, GearArgs, Output};
 use super::methods::{DriveArgs, MethodArgs};
 use crate::error::{positive, Error, Result};
 use crate::integrator::{Event, EventKind, FlowOptions, Mode, Stats};
@@ -18,10 +18,10 @@ pub struct Args {
     drive: DriveArgs,
     #[command(flatten)]
     method: MethodArgs,
-    /// Number of drive periods to integrate [1] (may be fractional).
+    /// Number of drive periods to integrate [1], in (0, 1e6] (may be fractional).
     #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
     periods: f64,
-    /// Output samples per drive period [1].
+    /// Output samples per drive period [1], 1 to 1000000 (at most 5e7 samples in all).
     #[arg(long, default_value_t = 50)]
     samples_per_period: usize,
     /// CSV file for the trajectory (columns t [s], alpha, beta, omega [rad/s], delta = beta − alpha,
@@ -97,10 +97,17 @@ pub fn run(a: Args) -> Result<()> {
     let x0 = a.drive.x0(&gear)?;
     let method = a.method.method()?;
     positive("periods", a.periods)?;
-    if a.samples_per_period == 0 {
-        return Err(Error::InvalidInput(
-            "--samples-per-period must be >= 1".into(),
-        ));
+    within("periods", a.periods, 0.0, 1e6, "must be in (0, 1e6]")?;
+    count(
+        "samples-per-period",
+        a.samples_per_period,
+        1,
+        limits::TURNS_MAX,
+    )?;
+    for (flag, path) in [("--out", &a.out), ("--events", &a.events)] {
+        if let Some(p) = path {
+            output_file(flag, p, false)?;
+        }
     }
     let period = 1.0 / gear.f;
     let t_end = a.periods * period;

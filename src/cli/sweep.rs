@@ -1,9 +1,11 @@
 //! `gearbif sweep`: a two-parameter atlas with the paper's protocols, in parallel over rows, with
 //! a progress bar and resumable checkpoints in the output directory.
 
-use super::common::GearArgs;
+use super::common::{angle_deg, count, frequency, limits, output_dir, tolerance, GearArgs};
 use crate::analysis::ClassifyOptions;
-use crate::sweep::{Axis, Method, Protocol, SweepObserver, SweepOutcome, SweepRunner, SweepSpec};
+use crate::sweep::{
+    Axis, Method, Protocol, SweepObserver, SweepOutcome, SweepParam, SweepRunner, SweepSpec,
+};
 use crate::Result;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -14,7 +16,7 @@ pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
     /// Row axis (parallel): param:start:stop:step or param:start:stop:n:log
-    /// (param: theta, f, zeta, eta, inertia).
+    /// (param: theta [deg, within ±360], f [Hz, in [1e-3, 1e4]], zeta, eta [>= 0], inertia [> 0]).
     #[arg(long, default_value = "theta:0:50:10")]
     rows: String,
     /// Column axis (sequential; the semi-static protocol carries the state along it).
@@ -26,25 +28,25 @@ pub struct Args {
     /// Preset: the paper's Fig. 8 grid (overrides axes, protocol, start, settle).
     #[arg(long)]
     fig8: bool,
-    /// Drive frequency when f is not an axis [Hz].
+    /// Drive frequency when f is not an axis [Hz], in [1e-3, 1e4].
     #[arg(long, default_value_t = 1.0)]
     f: f64,
-    /// Input angle α at t = 0 [deg].
+    /// Input angle α at t = 0 [deg], in [-360, 360].
     #[arg(long, default_value_t = 90.0, allow_hyphen_values = true)]
     alpha0_deg: f64,
-    /// Output angle β at t = 0 [deg], in the --convention.
+    /// Output angle β at t = 0 [deg], in [-360, 360], in the --convention.
     #[arg(long, default_value_t = 90.0, allow_hyphen_values = true)]
     beta0_deg: f64,
-    /// Settling turns per point (paper: 90 fresh, 1000 semi-static).
+    /// Settling turns per point, 0 to 1000000 (paper: 90 fresh, 1000 semi-static).
     #[arg(long)]
     settle: Option<usize>,
-    /// Recorded turns per point.
+    /// Recorded turns per point, 1 to 100000.
     #[arg(long, default_value_t = 10)]
     record: usize,
-    /// Turns of the rigorous analysis per point (0: skip it).
+    /// Turns of the rigorous analysis per point, 0 (skip it) or 2 to 1000000.
     #[arg(long, default_value_t = 60)]
     analysis: usize,
-    /// Integrator tolerance.
+    /// Integrator tolerance, in (0, 1).
     #[arg(long, default_value_t = 1e-9)]
     tol: f64,
     /// Use the paper's fixed-step RK4 (T/50) instead of the exact integrator.
@@ -60,7 +62,7 @@ pub struct Args {
     #[arg(long)]
     quiet: bool,
     /// End the settling early once the state repeats (period ≤ 8 turns) to this distance
-    /// (e.g. 1e-8); default: integrate every settling turn as the paper did.
+    /// (e.g. 1e-8; in (0, 1)); default: integrate every settling turn as the paper did.
     #[arg(long)]
     settle_tol: Option<f64>,
 }
@@ -118,6 +120,7 @@ impl SweepObserver for Progress {
 
 /// The spec from the arguments.
 pub fn spec(a: &Args) -> Result<SweepSpec> {
+    check_args(a)?;
     let gear = a.gear.params()?;
     let mut s = if a.fig8 {
         SweepSpec::paper_fig8()?
@@ -198,6 +201,44 @@ pub fn run(a: Args) -> Result<()> {
             "stopped after {rows_done}/{rows_total} rows; rerun the same command to resume from {}",
             a.out.join("checkpoint").display()
         ),
+    }
+    Ok(())
+}
+
+/// The domain checks of `sweep`, all before any point is computed or any file written.
+fn check_args(a: &Args) -> Result<()> {
+    frequency("f", a.f)?;
+    angle_deg("alpha0_deg", a.alpha0_deg)?;
+    angle_deg("beta0_deg", a.beta0_deg)?;
+    tolerance("tol", a.tol)?;
+    if let Some(e) = a.settle_tol {
+        tolerance("settle_tol", e)?;
+    }
+    if let Some(n) = a.settle {
+        count("settle", n, 0, limits::TURNS_MAX)?;
+    }
+    count("record", a.record, 1, 100_000)?;
+    if a.analysis != 0 {
+        count("analysis", a.analysis, 2, limits::TURNS_MAX)?;
+    }
+    if !a.fig8 {
+        for axis in [&a.rows, &a.cols] {
+            check_axis(&Axis::parse(axis)?)?;
+        }
+    }
+    output_dir("--out", &a.out)
+}
+
+/// Checks every value of an axis against its parameter's domain.
+fn check_axis(axis: &Axis) -> Result<()> {
+    for &v in &axis.values {
+        match axis.param {
+            SweepParam::ThetaDeg => angle_deg("theta_deg", v).map(drop)?,
+            SweepParam::F => frequency("f", v).map(drop)?,
+            SweepParam::Zeta => crate::error::non_negative("zeta", v).map(drop)?,
+            SweepParam::Eta => crate::error::non_negative("eta", v).map(drop)?,
+            SweepParam::Inertia => crate::error::positive("inertia", v).map(drop)?,
+        }
     }
     Ok(())
 }

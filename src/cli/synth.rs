@@ -16,43 +16,43 @@ pub struct Args {
     /// List the effects and the meaning of `--size`, then exit.
     #[arg(long)]
     list: bool,
-    /// Effect size (see `--list`; e.g. 6 for static_torque in 1/s²).
+    /// Effect size, finite (see `--list`; e.g. 6 for static_torque in 1/s²).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     size: f64,
     /// Output folder (experiment.toml and CSVs).
     #[arg(long, required_unless_present = "list")]
     out: Option<PathBuf>,
-    /// Number of ring-downs.
+    /// Number of ring-downs, 0 to 1000 (ring-downs and driven runs: at least one in all).
     #[arg(long, default_value_t = 12)]
     ringdowns: usize,
-    /// Number of driven runs.
+    /// Number of driven runs, 0 to 1000.
     #[arg(long, default_value_t = 8)]
     driven: usize,
-    /// Input turns per driven run.
+    /// Input turns per driven run, in (0, 1e5].
     #[arg(long, default_value_t = 80.0)]
     turns: f64,
-    /// Lowest drive frequency, Hz.
+    /// Lowest drive frequency, Hz, in [1e-3, 1e4].
     #[arg(long, default_value_t = 0.5)]
     f_min: f64,
-    /// Highest drive frequency, Hz.
+    /// Highest drive frequency, Hz, in [1e-3, 1e4], >= --f-min.
     #[arg(long, default_value_t = 2.5)]
     f_max: f64,
-    /// Samples per input turn of driven runs.
+    /// Samples per input turn of driven runs, 8 to 10000.
     #[arg(long, default_value_t = 50)]
     samples_per_turn: usize,
-    /// Camera frame rate of ring-downs, 1/s.
+    /// Camera frame rate of ring-downs, 1/s, in (0, 1e5].
     #[arg(long, default_value_t = 100.0)]
     fps: f64,
-    /// Camera noise on β, deg.
+    /// Camera noise on β, deg, in [0, 180].
     #[arg(long, default_value_t = 0.5)]
     noise_deg: f64,
-    /// Fraction of outlier frames.
+    /// Fraction of outlier frames, in [0, 1).
     #[arg(long, default_value_t = 0.003)]
     outliers: f64,
-    /// Probability per sample that a gap starts.
+    /// Probability per sample that a gap starts, in [0, 1).
     #[arg(long, default_value_t = 0.001)]
     gaps: f64,
-    /// Extra sensor latency, s.
+    /// Extra sensor latency, s, in [0, 10].
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     latency: f64,
     /// Random seed (also draws the concealed truth).
@@ -79,6 +79,7 @@ pub fn run(a: Args) -> Result<()> {
             "synth needs --effect and --out".into(),
         ));
     };
+    check_args(&a, &out)?;
     let opts = SynthOptions {
         effect: effect.clone(),
         size: a.size,
@@ -122,4 +123,57 @@ pub fn run(a: Args) -> Result<()> {
         known.join(", ")
     );
     Ok(())
+}
+
+/// The domain checks of `synth`, all before anything is simulated or written.
+fn check_args(a: &Args, out: &std::path::Path) -> Result<()> {
+    use super::common::{count, frequency, output_dir, within};
+    crate::error::finite("size", a.size)?;
+    count("ringdowns", a.ringdowns, 0, 1000)?;
+    count("driven", a.driven, 0, 1000)?;
+    if a.ringdowns + a.driven == 0 {
+        return Err(crate::Error::InvalidInput(
+            "--ringdowns and --driven are both 0: nothing to record".into(),
+        ));
+    }
+    within(
+        "turns",
+        a.turns,
+        f64::MIN_POSITIVE,
+        1e5,
+        "must be in (0, 1e5]",
+    )?;
+    frequency("f_min", a.f_min)?;
+    frequency("f_max", a.f_max)?;
+    if a.f_min > a.f_max {
+        return Err(crate::Error::InvalidInput(format!(
+            "--f-min = {} must not exceed --f-max = {}",
+            a.f_min, a.f_max
+        )));
+    }
+    count("samples-per-turn", a.samples_per_turn, 8, 10_000)?;
+    within(
+        "fps",
+        a.fps,
+        f64::MIN_POSITIVE,
+        1e5,
+        "must be in (0, 1e5] 1/s",
+    )?;
+    within(
+        "noise_deg",
+        a.noise_deg,
+        0.0,
+        180.0,
+        "must be in [0, 180] deg",
+    )?;
+    within(
+        "outliers",
+        a.outliers,
+        0.0,
+        1.0 - f64::EPSILON,
+        "must be in [0, 1)",
+    )?;
+    within("gaps", a.gaps, 0.0, 1.0 - f64::EPSILON, "must be in [0, 1)")?;
+    within("latency", a.latency, 0.0, 10.0, "must be in [0, 10] s")?;
+    output_dir("--out", out)
 }

@@ -1,8 +1,9 @@
 //! The one result type of a continuation: a [`Branch`] with its points and special points, read by
 //! the CLI, the JSON output and the plots alike.
 
-use super::Param;
+use crate::model::{Gear, Parametrised};
 use crate::orbits::{EventCounts, Floquet, OrbitSpec};
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 /// One point of a branch.
@@ -108,21 +109,29 @@ pub enum StopReason {
     MaxSteps(usize),
     /// A multiplier exceeded the limit for single shooting.
     MultiplierLimit(f64),
-    /// The corrector failed at the smallest step size.
-    StepTooSmall(String),
+    /// The corrector failed at the smallest step size `ds_min` after the point at parameter `at`.
+    StepTooSmall {
+        /// Parameter value of the last point.
+        at: f64,
+        /// The smallest step tried.
+        ds_min: f64,
+    },
+    /// The branch left the parameter range but no orbit could be corrected onto the bound.
+    BoundNotReached(f64),
     /// Not stopped yet.
     Running,
 }
 
-/// A branch of periodic orbits with its special points.
+/// A branch of periodic orbits of system `S` with its special points.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Branch {
+#[serde(bound(serialize = "S: Serialize", deserialize = "S: DeserializeOwned"))]
+pub struct Branch<S: Parametrised = Gear> {
     /// The continuation parameter.
-    pub param: Param,
+    pub param: S::Param,
     /// The fixed-point problem (section, period, winding).
     pub spec: OrbitSpec,
     /// The system at the first point.
-    pub gear: crate::model::Gear,
+    pub system: S,
     /// The points, in continuation order.
     pub points: Vec<BranchPoint>,
     /// Located special points, in continuation order.
@@ -133,7 +142,7 @@ pub struct Branch {
     pub map_evaluations: usize,
 }
 
-impl Branch {
+impl<S: Parametrised> Branch<S> {
     /// Special points of a given kind.
     pub fn specials_of(&self, kind: SpecialKind) -> impl Iterator<Item = &SpecialPoint> {
         self.specials.iter().filter(move |s| s.kind == kind)

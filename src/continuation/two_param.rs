@@ -13,11 +13,14 @@
 //! built from the Jacobian, so its derivative would need second-order sensitivities).
 //! A curve is followed by natural continuation in the second parameter with a secant predictor.
 
-use super::{Param, SpecialKind};
+use super::SpecialKind;
 use crate::error::{Error, Result};
-use crate::model::Gear;
-use crate::orbits::{residual, EventCounts, Floquet, OrbitSpec, ShootingOptions};
+use crate::integrator::{EventDriven, FlowMethod};
+use crate::model::{param_derivative, Gear, GearParam, Parametrised};
+use crate::numerics::{newton, Linearisation, NewtonOptions};
+use crate::orbits::{residual_with, EventCounts, Floquet, OrbitSpec, ShootingOptions};
 use nalgebra::{Matrix3, Vector3};
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{FRAC_PI_2, TAU};
 
@@ -42,21 +45,64 @@ pub struct CurvePoint {
     pub newton_iterations: usize,
 }
 
+/// Why a two-parameter curve stopped before the last requested value.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "reason")]
+pub enum CurveStop {
+    /// The augmented Newton failed at `along` = `at`, also after halving the step five times.
+    NotConverged {
+        /// The value of the stepped parameter.
+        at: f64,
+        /// The solver's error.
+        error: String,
+    },
+    /// The solution lies far from the secant prediction: the Newton iteration jumped to another
+    /// curve.
+    Jumped {
+        /// The value of the stepped parameter.
+        at: f64,
+        /// The free parameter found.
+        free: f64,
+        /// The free parameter predicted.
+        predicted: f64,
+    },
+}
+
+impl std::fmt::Display for CurveStop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CurveStop::NotConverged { at, error } => write!(f, "at {at}: {error}"),
+            CurveStop::Jumped {
+                at,
+                free,
+                predicted,
+            } => write!(
+                f,
+                "at {at}: solution {free} is far from the prediction {predicted} (another curve?)"
+            ),
+        }
+    }
+}
+
 /// A two-parameter curve of special points.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Curve {
+#[serde(bound(
+    serialize = "S::Param: Serialize",
+    deserialize = "S::Param: DeserializeOwned"
+))]
+pub struct Curve<S: Parametrised = Gear> {
     /// Type of the special points.
     pub kind: SpecialKind,
     /// The parameter stepped along the curve.
-    pub along: Param,
+    pub along: S::Param,
     /// The parameter solved for.
-    pub free: Param,
+    pub free: S::Param,
     /// The orbit problem.
     pub spec: OrbitSpec,
     /// The points.
     pub points: Vec<CurvePoint>,
     /// Why the curve stopped before the last requested value, if it did.
-    pub stopped: Option<String>,
+    pub stopped: Option<CurveStop>,
 }
 
 fn test_value(kind: SpecialKind, f: &Floquet) -> f64 {
@@ -76,53 +122,43 @@ struct Eval {
     events: EventCounts,
 }
 
-fn eval(
-    gear: &Gear,
-    spec: &OrbitSpec,
+/// The orbit problem of one special point: everything but the unknowns.
+struct Problem<'a, S: Parametrised, M> {
+    method: &'a M,
+    sys: &'a S,
+    spec: &'a OrbitSpec,
     kind: SpecialKind,
-    free: Param,
-    u: &Vector3<f64>,
-    opts: &ShootingOptions,
-) -> Result<Eval> {
-    let sys = free.set(gear, u[2])?;
-    let (r, img) = residual(&sys, spec, [u[0], u[1]], opts, true)?;
-    let jac = img
-        .jac_x
-        .ok_or_else(|| Error::Continuation("map returned no Jacobian".into()))?;
-    let fl = free.derivative(&img, u[2])?;
-    let events = EventCounts::from_image(&img);
-    let fq = Floquet::of_orbit(&jac, &events);
-    Ok(Eval {
-        r,
-        jac,
-        fl,
-        psi: test_value(kind, &fq),
-        fq,
-        events,
-    })
+    free: S::Param,
+    opts: &'a ShootingOptions,
 }
 
-/// Solves the augmented system for a special point of type `kind` of the orbit problem `spec` of
-/// `gear`, with `free` the unknown parameter, from the guess (x0, λ0).
-pub fn locate_augmented(
-    gear: &Gear,
-    spec: &OrbitSpec,
-    kind: SpecialKind,
-    free: Param,
-    x0: [f64; 2],
-    lambda0: f64,
-    opts: &ShootingOptions,
-) -> Result<CurvePoint> {
-    if !(x0[0].is_finite() && x0[1].is_finite() && lambda0.is_finite()) {
-        return Err(Error::InvalidInput(
-            "non-finite start of the augmented Newton".into(),
-        ));
+impl<S: Parametrised, M: FlowMethod<S>> Problem<'_, S, M> {
+    fn eval(&self, u: &Vector3<f64>) -> Result<Eval> {
+        let sys = self.sys.with_param(self.free, u[2])?;
+        let (r, img) = residual_with(self.method, &sys, self.spec, [u[0], u[1]], self.opts, true)?;
+        let jac = img
+            .jac_x
+            .ok_or_else(|| Error::Continuation("map returned no Jacobian".into()))?;
+        let jp = img
+            .jac_p
+            .as_ref()
+            .ok_or_else(|| Error::Continuation("map returned no parameter Jacobian".into()))?;
+        let fl = param_derivative(&sys, self.free, jp)?;
+        let events = EventCounts::from_image(&img);
+        let fq = Floquet::of_orbit(&jac, &events);
+        Ok(Eval {
+            r,
+            jac,
+            fl,
+            psi: test_value(self.kind, &fq),
+            fq,
+            events,
+        })
     }
-    let mut u = Vector3::new(x0[0], x0[1], lambda0);
-    let mut last = f64::INFINITY;
-    for it in 0..opts.max_iter {
-        let e = eval(gear, spec, kind, free, &u, opts)?;
-        // forward differences of ψ
+
+    /// The augmented residual (F, ψ) and its Jacobian; the ψ row by forward differences.
+    fn linearise(&self, u: &Vector3<f64>) -> Result<Linearisation<3, Eval>> {
+        let e = self.eval(u)?;
         let hs = [
             1e-6,
             1e-6 * u[1].abs().max(1.0),
@@ -130,12 +166,11 @@ pub fn locate_augmented(
         ];
         let mut dpsi = [0.0; 3];
         for j in 0..3 {
-            let mut up = u;
+            let mut up = *u;
             up[j] += hs[j];
-            let ep = eval(gear, spec, kind, free, &up, opts)?;
-            dpsi[j] = (ep.psi - e.psi) / hs[j];
+            dpsi[j] = (self.eval(&up)?.psi - e.psi) / hs[j];
         }
-        let a = Matrix3::new(
+        let jacobian = Matrix3::new(
             e.jac[(0, 0)] - 1.0,
             e.jac[(0, 1)],
             e.fl[0],
@@ -146,78 +181,95 @@ pub fn locate_augmented(
             dpsi[1],
             dpsi[2],
         );
-        let du = a
-            .lu()
-            .solve(&Vector3::new(-e.r[0], -e.r[1], -e.psi))
-            .filter(|d| d.iter().all(|v| v.is_finite()))
-            .ok_or_else(|| Error::NewtonFailed {
-                iterations: it,
-                residual: e.r[0].hypot(e.r[1]).hypot(e.psi),
-                reason: "singular augmented matrix (degenerate special point)".into(),
-            })?;
-        let rn = e.r[0].hypot(e.r[1]);
-        if rn < opts.newton_tol && e.psi.abs() < 1e-9 && du.norm() < 1e-8 {
-            return Ok(CurvePoint {
-                along: f64::NAN,
-                free: u[2],
-                x: [u[0], u[1]],
-                floquet: e.fq,
-                events: e.events,
-                test_value: e.psi,
-                precision: du[2].abs() + opts.newton_tol,
-                newton_iterations: it,
-            });
-        }
-        let norm = rn.hypot(e.psi);
-        if it > 3 && norm > 4.0 * last {
-            break;
-        }
-        last = norm;
-        // limit the step in λ to 20 % of its value
-        let cap = 0.2 * u[2].abs().max(0.1);
-        let scale = if du[2].abs() > cap {
-            cap / du[2].abs()
-        } else {
-            1.0
-        };
-        u += scale * du;
-        if let Param::F = free {
-            if u[2] <= 0.0 {
-                break;
-            }
-        }
+        Ok(Linearisation {
+            residual: Vector3::new(e.r[0], e.r[1], e.psi),
+            jacobian,
+            data: e,
+        })
     }
-    Err(Error::NewtonFailed {
-        iterations: opts.max_iter,
-        residual: last,
-        reason: format!("augmented system for a {} point", kind.label()),
+}
+
+/// Solves the augmented system for a special point of type `kind` of the orbit problem `spec` of
+/// `sys`, with `free` the unknown parameter, from the guess (x0, λ0), with the event-driven
+/// integrator.
+pub fn locate_augmented<S: Parametrised>(
+    sys: &S,
+    spec: &OrbitSpec,
+    kind: SpecialKind,
+    free: S::Param,
+    x0: [f64; 2],
+    lambda0: f64,
+    opts: &ShootingOptions,
+) -> Result<CurvePoint> {
+    locate_augmented_with(&EventDriven, sys, spec, kind, free, x0, lambda0, opts)
+}
+
+/// [`locate_augmented`] with the flow computed by `method`: Newton on (F, ψ) = 0 to
+/// `opts.newton_tol`, the λ step capped at 20 % of λ.
+#[allow(clippy::too_many_arguments)]
+pub fn locate_augmented_with<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    kind: SpecialKind,
+    free: S::Param,
+    x0: [f64; 2],
+    lambda0: f64,
+    opts: &ShootingOptions,
+) -> Result<CurvePoint> {
+    if !(x0[0].is_finite() && x0[1].is_finite() && lambda0.is_finite()) {
+        return Err(Error::InvalidInput(
+            "non-finite start of the augmented Newton".into(),
+        ));
+    }
+    let problem = Problem {
+        method,
+        sys,
+        spec,
+        kind,
+        free,
+        opts,
+    };
+    let newton_opts = NewtonOptions {
+        divergence_ratio: 4.0,
+        ..NewtonOptions::new(opts.newton_tol, opts.max_iter)
+    };
+    let mut last_step = 0.0;
+    let sol = newton(
+        Vector3::new(x0[0], x0[1], lambda0),
+        &newton_opts,
+        |u| problem.linearise(u),
+        |u, du| {
+            last_step = du[2].abs();
+            let cap = 0.2 * u[2].abs().max(0.1);
+            if du[2].abs() > cap {
+                cap / du[2].abs()
+            } else {
+                1.0
+            }
+        },
+        &format!("augmented system for a {} point", kind.label()),
+    )?;
+    let e = &sol.at.data;
+    let du = crate::numerics::newton::solve(&sol.at.jacobian, &(-sol.at.residual))
+        .map(|d| d[2].abs())
+        .unwrap_or(last_step);
+    Ok(CurvePoint {
+        along: f64::NAN,
+        free: sol.x[2],
+        x: [sol.x[0], sol.x[1]],
+        floquet: e.fq,
+        events: e.events,
+        test_value: e.psi,
+        precision: du + opts.newton_tol,
+        newton_iterations: sol.iterations,
     })
 }
 
-/// Follows a special point of type `kind` along `along` (the values in `values`, in order), solving
-/// for `free` each time with a secant predictor. Stops with a reason at the first failure.
-#[allow(clippy::too_many_arguments)]
-pub fn follow(
-    gear: &Gear,
-    spec: &OrbitSpec,
-    kind: SpecialKind,
-    free: Param,
-    along: Param,
-    x0: [f64; 2],
-    free0: f64,
-    values: &[f64],
-    opts: &ShootingOptions,
-) -> Result<Curve> {
-    if free == along {
-        return Err(Error::InvalidInput(
-            "the free and the stepped parameter must differ".into(),
-        ));
-    }
-    let mut pts: Vec<CurvePoint> = Vec::new();
-    let mut stopped = None;
-    // predictor from the last two points (secant), or the start
-    let predict = |pts: &[CurvePoint], v: f64| match pts.len() {
-        0 => (x0, free0),
+/// The secant predictor of the next curve point at `v` from the last two points (or the start).
+fn predict(pts: &[CurvePoint], start: ([f64; 2], f64), v: f64) -> ([f64; 2], f64) {
+    match pts.len() {
+        0 => start,
         1 => (pts[0].x, pts[0].free),
         n => {
             let (a, b) = (&pts[n - 2], &pts[n - 1]);
@@ -230,28 +282,88 @@ pub fn follow(
                 b.free + c * (b.free - a.free),
             )
         }
-    };
+    }
+}
+
+/// Follows a special point of type `kind` along `along` (the values in `values`, in order), solving
+/// for `free` each time with a secant predictor, with the event-driven integrator. Stops with a
+/// reason at the first failure.
+#[allow(clippy::too_many_arguments)]
+pub fn follow<S: Parametrised>(
+    sys: &S,
+    spec: &OrbitSpec,
+    kind: SpecialKind,
+    free: S::Param,
+    along: S::Param,
+    x0: [f64; 2],
+    free0: f64,
+    values: &[f64],
+    opts: &ShootingOptions,
+) -> Result<Curve<S>> {
+    follow_with(
+        &EventDriven,
+        sys,
+        spec,
+        kind,
+        free,
+        along,
+        x0,
+        free0,
+        values,
+        opts,
+    )
+}
+
+/// [`follow`] with the flow computed by `method`.
+#[allow(clippy::too_many_arguments)]
+pub fn follow_with<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    kind: SpecialKind,
+    free: S::Param,
+    along: S::Param,
+    x0: [f64; 2],
+    free0: f64,
+    values: &[f64],
+    opts: &ShootingOptions,
+) -> Result<Curve<S>> {
+    if free == along {
+        return Err(Error::InvalidInput(
+            "the free and the stepped parameter must differ".into(),
+        ));
+    }
+    let mut pts: Vec<CurvePoint> = Vec::new();
+    let mut stopped = None;
     'values: for (i, &v) in values.iter().enumerate() {
         // on failure, halve the step towards v (at most 5 times) before giving up
         let mut target = v;
         let mut halvings = 0;
         loop {
-            let g = along.set(gear, target)?;
-            let (xg, lg) = predict(&pts, target);
+            let g = sys.with_param(along, target)?;
+            let (xg, lg) = predict(&pts, (x0, free0), target);
             // a solution far from the prediction has jumped to another curve: treat it as a failure
-            let res = locate_augmented(&g, spec, kind, free, xg, lg, opts).and_then(|p| {
+            let res = locate_augmented_with(method, &g, spec, kind, free, xg, lg, opts).map(|p| {
                 let far_x = (p.x[0] - xg[0]).abs() > 0.5
                     || (p.x[1] - xg[1]).abs() > 0.5 + 0.2 * xg[1].abs();
                 if pts.len() >= 2 && ((p.free - lg).abs() > 0.1 * lg.abs().max(1e-2) || far_x) {
-                    Err(Error::Continuation(format!(
-                        "solution {} = {} is far from the prediction {lg} (another curve?)",
-                        free.name(),
-                        p.free
-                    )))
+                    Err(CurveStop::Jumped {
+                        at: target,
+                        free: p.free,
+                        predicted: lg,
+                    })
                 } else {
                     Ok(p)
                 }
             });
+            let res = match res {
+                Ok(r) => r,
+                Err(e) if pts.is_empty() => return Err(e),
+                Err(e) => Err(CurveStop::NotConverged {
+                    at: target,
+                    error: e.to_string(),
+                }),
+            };
             match res {
                 Ok(mut p) => {
                     p.along = target;
@@ -262,12 +374,10 @@ pub fn follow(
                     target = v;
                     halvings = 0;
                 }
-                Err(e) => {
-                    let Some(last) = pts.last().map(|p| p.along) else {
-                        return Err(e);
-                    };
+                Err(stop) => {
+                    let last = pts.last().map(|p| p.along).unwrap_or(target);
                     if i == 0 || halvings >= 5 {
-                        stopped = Some(format!("at {} = {target}: {e}", along.name()));
+                        stopped = Some(stop);
                         break 'values;
                     }
                     target = 0.5 * (last + target);
@@ -304,7 +414,7 @@ pub fn lock_loss_boundary(
     base: &Gear,
     step_deg: f64,
     opts: &ShootingOptions,
-) -> Result<Vec<(String, Curve)>> {
+) -> Result<Vec<(String, Curve<Gear>)>> {
     if !(step_deg > 0.0 && step_deg.is_finite()) {
         return Err(Error::InvalidInput("step must be > 0".into()));
     }
@@ -316,14 +426,14 @@ pub fn lock_loss_boundary(
         .to_degrees();
     let mut out = Vec::new();
     for (p, from) in [(1, 0.0), (-1, th_rev)] {
-        let g = Param::ThetaDeg.set(base, from)?;
+        let g = base.with_param(GearParam::ThetaDeg, from)?;
         let vals = grid(0.0, th_rev, step_deg, p < 0);
         let c = follow(
             &g.with_f(fc)?,
             &OrbitSpec::symmetric(p),
             SpecialKind::Fold,
-            Param::F,
-            Param::ThetaDeg,
+            GearParam::F,
+            GearParam::ThetaDeg,
             [FRAC_PI_2, p as f64 * TAU * fc],
             fc,
             &vals,

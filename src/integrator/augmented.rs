@@ -17,6 +17,29 @@ pub(super) const NMAX: usize = 2 + 2 * (2 + MAX_PARAMS);
 /// A fixed-size augmented state (no heap traffic in the inner loop).
 pub(super) type V = [f64; NMAX];
 
+/// Index in y of β (the state's first component).
+pub(super) const BETA: usize = 0;
+/// Index in y of ω.
+pub(super) const OMEGA: usize = 1;
+/// Column of Z holding ∂/∂β₀.
+pub(super) const COL_BETA0: usize = 0;
+/// Column of Z holding ∂/∂ω₀.
+pub(super) const COL_OMEGA0: usize = 1;
+/// Column of Z holding ∂/∂p_k: parameter columns follow the two state columns.
+pub(super) const fn param_col(k: usize) -> usize {
+    2 + k
+}
+/// Index in y of Z's β row in column c: ∂β/∂(column c).
+#[inline(always)]
+pub(super) const fn z_beta(c: usize) -> usize {
+    2 + 2 * c
+}
+/// Index in y of Z's ω row in column c: ∂ω/∂(column c).
+#[inline(always)]
+pub(super) const fn z_omega(c: usize) -> usize {
+    3 + 2 * c
+}
+
 /// Which Jacobian columns an integration carries.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Layout {
@@ -45,11 +68,11 @@ impl Layout {
     /// Writes the initial augmented state: x₀ and Z = [I | 0].
     pub fn init(&self, x0: [f64; 2], y: &mut [f64]) {
         y[..self.dim()].fill(0.0);
-        y[0] = x0[0];
-        y[1] = x0[1];
+        y[BETA] = x0[0];
+        y[OMEGA] = x0[1];
         if self.ncols > 0 {
-            y[2] = 1.0; // ∂β/∂β₀
-            y[5] = 1.0; // ∂ω/∂ω₀
+            y[z_beta(COL_BETA0)] = 1.0;
+            y[z_omega(COL_OMEGA0)] = 1.0;
         }
     }
 
@@ -58,13 +81,18 @@ impl Layout {
         if self.ncols == 0 {
             return (None, None);
         }
-        let jx = Matrix2::new(y[2], y[4], y[3], y[5]);
+        let jx = Matrix2::new(
+            y[z_beta(COL_BETA0)],
+            y[z_beta(COL_OMEGA0)],
+            y[z_omega(COL_BETA0)],
+            y[z_omega(COL_OMEGA0)],
+        );
         let jp = self.with_params.then(|| {
             let np = self.ncols - 2;
             let mut m = Matrix2xX::zeros(np);
             for c in 0..np {
-                m[(0, c)] = y[2 + 2 * (c + 2)];
-                m[(1, c)] = y[3 + 2 * (c + 2)];
+                m[(0, c)] = y[z_beta(param_col(c))];
+                m[(1, c)] = y[z_omega(param_col(c))];
             }
             m
         });
@@ -95,14 +123,15 @@ pub(super) fn augmented_rhs_law<S: DrivenOscillator + ?Sized>(
     let db = j.a_beta - phi * j.r_beta;
     let dw = j.a_omega - phi * j.r_omega - dphi * j.r;
     for c in 0..layout.ncols {
-        let zb = y[2 + 2 * c];
-        let zw = y[3 + 2 * c];
-        out[2 + 2 * c] = zw;
+        let zb = y[z_beta(c)];
+        let zw = y[z_omega(c)];
+        out[z_beta(c)] = zw;
         let mut v = db * zb + dw * zw;
-        if c >= 2 {
-            v += j.a_p[c - 2] - phi * j.r_p[c - 2];
+        if c >= param_col(0) {
+            let k = c - param_col(0);
+            v += j.a_p[k] - phi * j.r_p[k];
         }
-        out[3 + 2 * c] = v;
+        out[z_omega(c)] = v;
     }
 }
 

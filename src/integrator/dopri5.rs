@@ -6,10 +6,11 @@
 //! (β, ω). At each event the saltation matrix S = I + (F₊ − F₋)∇hᵀ/(∇h·F₋) multiplies Z:
 //! diag(1, a₊/a₋) at a crossing, diag(1, 0) at stick entry, I at a release (numerics.md).
 
-use super::augmented::{augmented_rhs, Layout, NMAX, V};
+use super::augmented::{augmented_rhs, param_col, z_beta, z_omega, Layout, NMAX, V};
 use super::{check_interval, Event, EventKind, Flow, FlowMethod, FlowOptions, Mode, Sample, Stats};
 use crate::error::{Error, Result};
 use crate::model::{release_function, DrivenOscillator};
+use crate::numerics::Illinois;
 
 // Dormand–Prince 5(4) coefficients (Dormand & Prince 1980; dense output of Hairer, Nørsett & Wanner).
 const C2: f64 = 1.0 / 5.0;
@@ -382,46 +383,26 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                 th_prev = th;
             }
 
-            if let Some((mut lo, mut hi)) = root {
+            if let Some((lo, hi)) = root {
                 // bracket: e(lo) > 0 (or lo = 0, the start), e(hi) ≤ 0; refine by Illinois regula falsi
                 let mut flo = if lo == 0.0 { s * y[1] } else { e(lo) };
-                let mut fhi = if hi == 1.0 { s * yn[1] } else { e(hi) };
+                let fhi = if hi == 1.0 { s * yn[1] } else { e(hi) };
                 if flo <= 0.0 {
                     // starts on Σ (just after an event) and the sign is wrong at once: bisect the
                     // interior for a positive point to bracket with; if none, the root is at the start
                     flo = 0.0;
                 }
-                let mut side_flag = 0i32;
+                let mut root = Illinois::new(lo, flo, hi, fhi, 0.0);
                 for _ in 0..200 {
-                    if hi - lo <= 4.0 * f64::EPSILON * hi.max(1e-300) {
+                    if root.hi() - root.lo() <= 4.0 * f64::EPSILON * root.hi().max(1e-300) {
                         break;
                     }
-                    let mut mid = if flo > 0.0 && fhi < 0.0 {
-                        (lo * fhi - hi * flo) / (fhi - flo)
-                    } else {
-                        0.5 * (lo + hi)
+                    let Some(mid) = root.next_point() else {
+                        break;
                     };
-                    if !(mid > lo && mid < hi) {
-                        mid = 0.5 * (lo + hi);
-                    }
-                    let fm = e(mid);
-                    if fm > 0.0 {
-                        lo = mid;
-                        flo = fm;
-                        if side_flag == 1 {
-                            fhi *= 0.5;
-                        }
-                        side_flag = 1;
-                    } else {
-                        hi = mid;
-                        fhi = fm;
-                        if side_flag == -1 {
-                            flo *= 0.5;
-                        }
-                        side_flag = -1;
-                    }
+                    root.update(mid, e(mid));
                 }
-                let thc = hi;
+                let thc = root.hi();
                 let tc = t + thc * hs;
                 // samples strictly before the event from the dense output
                 self.samples_dense(t, hs, tc, &dense, false);
@@ -520,7 +501,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         let a_after = f.a - new_side * f.r;
         let ratio = a_after / a_before;
         for c in 0..self.layout.ncols {
-            y[3 + 2 * c] *= ratio;
+            y[z_omega(c)] *= ratio;
         }
         self.record_event(
             tc,
@@ -536,7 +517,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
     /// Stick entry: S = diag(1, 0) (the sliding field vanishes).
     fn stick_saltation(&self, y: &mut V) {
         for c in 0..self.layout.ncols {
-            y[3 + 2 * c] = 0.0;
+            y[z_omega(c)] = 0.0;
         }
     }
 
@@ -557,14 +538,15 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         }
         let jet = sys.forces_jet(tr, beta, 0.0, self.layout.with_params);
         for c in 0..self.layout.ncols {
-            let mut gz = gb * y[2 + 2 * c];
-            if c >= 2 {
+            let mut gz = gb * y[z_beta(c)];
+            if c >= param_col(0) {
                 // ∂G/∂p = sgn(a) ∂a/∂p − ∂r_s/∂p, taking ∂r_s/∂p = ∂r/∂p
-                gz += s * jet.a_p[c - 2] - jet.r_p[c - 2];
+                let k = c - param_col(0);
+                gz += s * jet.a_p[k] - jet.r_p[k];
             }
             let dt = -gz / gt;
             // F₊ − F₋ = (0, jump)
-            y[3 + 2 * c] -= jump * dt;
+            y[z_omega(c)] -= jump * dt;
         }
     }
 }

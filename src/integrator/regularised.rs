@@ -22,7 +22,7 @@
 //! `max_step_fraction · T` before every step (the first step too), which keeps the solver from stepping
 //! over the forcing when the right-hand side vanishes at the start (dependencies.md).
 
-use super::augmented::{augmented_rhs_law, Layout, NMAX, V};
+use super::augmented::{augmented_rhs_law, z_beta, z_omega, Layout, NMAX, V};
 use super::{check_interval, Flow, FlowMethod, FlowOptions, Mode, Sample, Stats};
 use crate::error::{positive, Error, Result};
 use crate::model::DrivenOscillator;
@@ -120,8 +120,8 @@ fn reg_jac<S: DrivenOscillator + ?Sized>(
         return;
     }
     for c in 0..ncols {
-        out[2 + 2 * c] = v[3 + 2 * c];
-        out[3 + 2 * c] = db * v[2 + 2 * c] + dw * v[3 + 2 * c];
+        out[z_beta(c)] = v[z_omega(c)];
+        out[z_omega(c)] = db * v[z_beta(c)] + dw * v[z_omega(c)];
     }
     let dn = v[0].abs().max(v[1].abs());
     if dn > 0.0 {
@@ -141,7 +141,7 @@ fn reg_jac<S: DrivenOscillator + ?Sized>(
         reg_rhs(sys, ncols, with_params, eps, t, &ym[..n], &mut fm[..n]);
         evals.set(evals.get() + 2);
         for c in 0..ncols {
-            let i = 3 + 2 * c;
+            let i = z_omega(c);
             out[i] += (fp[i] - fm[i]) / (2.0 * h);
         }
     }

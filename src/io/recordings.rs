@@ -5,7 +5,7 @@
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 /// The `[gear]` table: the set-up as measured (nominal values and tolerances).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -173,7 +173,7 @@ fn rec_err(file: &str, line: Option<usize>, what: impl Into<String>) -> Error {
     }
 }
 
-fn line_of_offset(text: &str, offset: usize) -> usize {
+pub(crate) fn line_of_offset(text: &str, offset: usize) -> usize {
     text[..offset.min(text.len())]
         .bytes()
         .filter(|&b| b == b'\n')
@@ -237,6 +237,18 @@ pub fn parse_experiment(text: &str, file: &str) -> Result<(GearSetup, Vec<RunSpe
                 file,
                 gl,
                 format!("[gear]: {name} = {v} is not finite"),
+            ));
+        }
+    }
+    for (name, v) in [("theta_deg", gear.theta_deg), ("phi_deg", gear.phi_deg)] {
+        if v.abs() > 360.0 {
+            return Err(rec_err(
+                file,
+                gl,
+                format!(
+                    "[gear]: {name} = {} must be an angle in [-360, 360] degrees",
+                    crate::error::show(v)
+                ),
             ));
         }
     }
@@ -325,6 +337,16 @@ pub fn parse_experiment(text: &str, file: &str) -> Result<(GearSetup, Vec<RunSpe
             .ok_or_else(|| rec_err(file, line, "`file` must be a string"))?;
         if f.is_empty() {
             return Err(rec_err(file, line, "`file` is empty"));
+        }
+        let inside = Path::new(f)
+            .components()
+            .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
+        if !inside {
+            return Err(rec_err(
+                file,
+                line,
+                format!("`file` = `{f}` must be a relative path inside the set's folder"),
+            ));
         }
         specs.push(RunSpec {
             kind,
@@ -460,6 +482,13 @@ pub fn read_set(dir: impl AsRef<Path>) -> Result<RecordingSet> {
     for s in specs {
         let p = dir.join(&s.file);
         let pn = p.display().to_string();
+        if p.exists() && !p.is_file() {
+            return Err(rec_err(
+                &exp_name,
+                s.line,
+                format!("run file `{}` is not a regular file", s.file),
+            ));
+        }
         let ct = std::fs::read_to_string(&p).map_err(|e| {
             rec_err(
                 &exp_name,

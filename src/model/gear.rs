@@ -13,6 +13,7 @@
 //! [`Convention::Paper`] integrates the printed equation, so results can be compared with the paper's
 //! figures; every bifurcation frequency is the same in both conventions, angles differ by 180°.
 
+use super::params::{Column, Parameter, Parametrised};
 use super::{DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry};
 use crate::error::{finite, non_negative, positive, Error, Result};
 use nalgebra::Complex;
@@ -249,7 +250,7 @@ pub fn cogging_free_parallel_angles() -> (f64, f64, f64) {
 
 /// The gear as a driven dynamical system: the reduced parameters of eq. `modeldyn`.
 ///
-/// Parameter columns of Jacobians are, in order, [`Gear::PARAM_NAMES`] = (f, g, ζ, η, Δ).
+/// Parameter columns of Jacobians are, in order, [`GearParam::COLUMNS`] = (f, g, ζ, η, Δ).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Gear {
     /// g = c/I, s⁻².
@@ -268,20 +269,133 @@ pub struct Gear {
     pub convention: Convention,
 }
 
-impl Gear {
-    /// Names of the parameter columns, in order.
-    pub const PARAM_NAMES: [&'static str; 5] = ["f", "g", "zeta", "eta", "delta"];
-    /// Index of f in the parameter columns.
-    pub const P_F: usize = 0;
-    /// Index of g.
-    pub const P_G: usize = 1;
-    /// Index of ζ.
-    pub const P_ZETA: usize = 2;
-    /// Index of η.
-    pub const P_ETA: usize = 3;
-    /// Index of Δ.
-    pub const P_DELTA: usize = 4;
+/// The gear's parameters (its [`Parametrised`] lens). The first five are the Jacobian columns in
+/// this order; Θ is derived: parallel shafts Θ = Φ in degrees, Δ = cos²Θ − 2 sin²Θ = 1 − 3 sin²Θ.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GearParam {
+    /// Drive frequency f, Hz.
+    F,
+    /// Coupling g, s⁻².
+    G,
+    /// Viscous damping ζ, s⁻¹.
+    Zeta,
+    /// Dry friction η, s⁻².
+    Eta,
+    /// Shaft index Δ.
+    Delta,
+    /// Parallel shaft angle Θ = Φ in degrees, Θ ∈ [0°, 90°] (read back from Δ = 1 − 3 sin²Θ).
+    #[serde(rename = "theta")]
+    ThetaDeg,
+}
 
+impl Parameter for GearParam {
+    const ALL: &'static [Self] = &[
+        GearParam::F,
+        GearParam::G,
+        GearParam::Zeta,
+        GearParam::Eta,
+        GearParam::Delta,
+        GearParam::ThetaDeg,
+    ];
+    fn name(self) -> &'static str {
+        match self {
+            GearParam::F => "f",
+            GearParam::G => "g",
+            GearParam::Zeta => "zeta",
+            GearParam::Eta => "eta",
+            GearParam::Delta => "delta",
+            GearParam::ThetaDeg => "theta",
+        }
+    }
+    fn unit(self) -> &'static str {
+        match self {
+            GearParam::F => "Hz",
+            GearParam::G | GearParam::Eta => "1/s²",
+            GearParam::Zeta => "1/s",
+            GearParam::Delta => "",
+            GearParam::ThetaDeg => "deg",
+        }
+    }
+}
+
+impl GearParam {
+    /// The parameters with a Jacobian column, in column order (f, g, ζ, η, Δ).
+    pub const COLUMNS: [GearParam; 5] = [
+        GearParam::F,
+        GearParam::G,
+        GearParam::Zeta,
+        GearParam::Eta,
+        GearParam::Delta,
+    ];
+}
+
+impl Parametrised for Gear {
+    type Param = GearParam;
+
+    fn param(&self, p: GearParam) -> f64 {
+        match p {
+            GearParam::F => self.f,
+            GearParam::G => self.g,
+            GearParam::Zeta => self.zeta,
+            GearParam::Eta => self.eta,
+            GearParam::Delta => self.delta,
+            // Θ from Δ = 1 − 3 sin²Θ, Θ ∈ [0°, 90°]
+            GearParam::ThetaDeg => ((1.0 - self.delta) / 3.0)
+                .clamp(0.0, 1.0)
+                .sqrt()
+                .asin()
+                .to_degrees(),
+        }
+    }
+
+    fn with_param(&self, p: GearParam, value: f64) -> Result<Self> {
+        let mut g = *self;
+        match p {
+            GearParam::F => g.f = positive("f", value)?,
+            GearParam::G => g.g = non_negative("g", value)?,
+            GearParam::Zeta => g.zeta = non_negative("zeta", value)?,
+            GearParam::Eta => g.eta = non_negative("eta", value)?,
+            GearParam::Delta => g.delta = finite("delta", value)?,
+            GearParam::ThetaDeg => {
+                // Δ is even in Θ and symmetric about 90°: [0°, 90°] covers every Δ, and there
+                // the lens reads back the value it set
+                if !(0.0..=90.0).contains(&value) {
+                    return Err(Error::InvalidParameter {
+                        name: "theta",
+                        value,
+                        reason: "the parallel shaft angle of the lens must lie in [0°, 90°]",
+                    });
+                }
+                let t = value.to_radians();
+                g.delta = shaft_index(t, t);
+            }
+        }
+        Ok(g)
+    }
+
+    fn column(&self, p: GearParam) -> Option<Column> {
+        Some(match p {
+            GearParam::ThetaDeg => {
+                // dΔ/dΘ = −3 sin 2Θ, per degree
+                let th = self.param(GearParam::ThetaDeg).to_radians();
+                Column {
+                    index: COL_DELTA,
+                    factor: -3.0 * (2.0 * th).sin() * PI / 180.0,
+                }
+            }
+            p => Column::primary(p as usize),
+        })
+    }
+}
+
+const COL_F: usize = GearParam::F as usize;
+const COL_G: usize = GearParam::G as usize;
+const COL_ZETA: usize = GearParam::Zeta as usize;
+const COL_ETA: usize = GearParam::Eta as usize;
+const COL_DELTA: usize = GearParam::Delta as usize;
+
+impl Gear {
     /// A gear with reduced parameters; validates: all finite, g ≥ 0, ζ ≥ 0, η ≥ 0, f > 0.
     pub fn new(g: f64, delta: f64, zeta: f64, eta: f64, f: f64) -> Result<Self> {
         non_negative("g", g)?;
@@ -324,40 +438,6 @@ impl Gear {
         Ok(self)
     }
 
-    /// Sets parameter `k` (index into [`Gear::PARAM_NAMES`]) to `value`, validating it.
-    pub fn with_param(mut self, k: usize, value: f64) -> Result<Self> {
-        match k {
-            Self::P_F => self.f = positive("f", value)?,
-            Self::P_G => self.g = non_negative("g", value)?,
-            Self::P_ZETA => self.zeta = non_negative("zeta", value)?,
-            Self::P_ETA => self.eta = non_negative("eta", value)?,
-            Self::P_DELTA => self.delta = finite("delta", value)?,
-            _ => {
-                return Err(Error::InvalidInput(format!(
-                    "parameter index {k} out of range (0..5)"
-                )))
-            }
-        }
-        Ok(self)
-    }
-
-    /// Value of parameter `k`.
-    pub fn param(&self, k: usize) -> f64 {
-        match k {
-            Self::P_F => self.f,
-            Self::P_G => self.g,
-            Self::P_ZETA => self.zeta,
-            Self::P_ETA => self.eta,
-            Self::P_DELTA => self.delta,
-            _ => f64::NAN,
-        }
-    }
-
-    /// Index of a parameter by name (`f`, `g`, `zeta`, `eta`, `delta`).
-    pub fn param_index(name: &str) -> Option<usize> {
-        Self::PARAM_NAMES.iter().position(|&n| n == name)
-    }
-
     /// Drive angle α(t) = α₀ + 2π f t.
     #[inline]
     pub fn alpha(&self, t: f64) -> f64 {
@@ -386,11 +466,11 @@ impl DrivenOscillator for Gear {
     }
 
     fn param_name(&self, k: usize) -> &'static str {
-        Self::PARAM_NAMES.get(k).copied().unwrap_or("?")
+        GearParam::COLUMNS.get(k).map(|p| p.name()).unwrap_or("?")
     }
 
     fn period_derivative(&self, k: usize) -> f64 {
-        if k == Self::P_F {
+        if k == COL_F {
             -1.0 / (self.f * self.f)
         } else {
             0.0
@@ -420,11 +500,11 @@ impl DrivenOscillator for Gear {
         jet.a_omega = -self.zeta;
         if params {
             let tau_a = -ca * cb - self.delta * sa * sb;
-            jet.a_p[Self::P_F] = sg * self.g * tau_a * TAU * t;
-            jet.a_p[Self::P_G] = sg * tau;
-            jet.a_p[Self::P_ZETA] = -omega;
-            jet.a_p[Self::P_DELTA] = sg * self.g * ca * sb;
-            jet.r_p[Self::P_ETA] = 1.0;
+            jet.a_p[COL_F] = sg * self.g * tau_a * TAU * t;
+            jet.a_p[COL_G] = sg * tau;
+            jet.a_p[COL_ZETA] = -omega;
+            jet.a_p[COL_DELTA] = sg * self.g * ca * sb;
+            jet.r_p[COL_ETA] = 1.0;
         }
         jet
     }

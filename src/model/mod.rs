@@ -18,9 +18,11 @@
 
 pub mod gear;
 pub mod oscillators;
+pub mod params;
 
-pub use gear::{Convention, Gear, GearParams, LockBranch, LockPoint};
-pub use oscillators::{CoulombOscillator, ForcedPendulum};
+pub use gear::{Convention, Gear, GearParam, GearParams, LockBranch, LockPoint};
+pub use oscillators::{CoulombOscillator, CoulombParam, ForcedPendulum, PendulumParam};
+pub use params::{param_derivative, Column, Parameter, Parametrised};
 
 /// Maximum number of parameters whose derivative columns a system can expose.
 pub const MAX_PARAMS: usize = 8;
@@ -170,19 +172,11 @@ pub fn default_next_release<S: DrivenOscillator + ?Sized>(
         let gb = release_function(sys, tb, beta);
         if gb >= 0.0 {
             // bisection to machine precision on [ta, tb]
-            let (mut lo, mut hi) = (ta, tb);
-            for _ in 0..200 {
-                let mid = 0.5 * (lo + hi);
-                if mid <= lo || mid >= hi {
-                    break;
-                }
-                if release_function(sys, mid, beta) >= 0.0 {
-                    hi = mid;
-                } else {
-                    lo = mid;
-                }
+            let mut bracket = crate::numerics::Bisection::new(ta, tb);
+            while let Some(mid) = bracket.next_point() {
+                bracket.update(mid, release_function(sys, mid, beta) >= 0.0);
             }
-            return Some(hi);
+            return Some(bracket.hi());
         }
         ta = tb;
     }

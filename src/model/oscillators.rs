@@ -1,6 +1,7 @@
 //! Other periodically driven oscillators with dry friction, with known answers; they run through the
 //! same integrator, maps and orbit solvers as the gear and serve as test problems.
 
+use super::params::{Column, Parameter, Parametrised};
 use super::{DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry};
 use crate::error::{finite, non_negative, positive, Result};
 use serde::{Deserialize, Serialize};
@@ -40,6 +41,59 @@ impl CoulombOscillator {
     }
 }
 
+/// Parameters of [`CoulombOscillator`], in Jacobian column order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CoulombParam {
+    /// Forcing frequency f, Hz.
+    F,
+    /// Natural angular frequency ω₀, rad/s.
+    Omega0,
+    /// Damping ratio ξ.
+    Xi,
+    /// Coulomb friction μ.
+    Mu,
+    /// Forcing amplitude F.
+    Force,
+}
+
+impl Parameter for CoulombParam {
+    const ALL: &'static [Self] = &[Self::F, Self::Omega0, Self::Xi, Self::Mu, Self::Force];
+    fn name(self) -> &'static str {
+        ["f", "omega0", "xi", "mu", "force"][self as usize]
+    }
+    fn unit(self) -> &'static str {
+        ["Hz", "rad/s", "", "m/s²", "m/s²"][self as usize]
+    }
+}
+
+impl Parametrised for CoulombOscillator {
+    type Param = CoulombParam;
+    fn param(&self, p: CoulombParam) -> f64 {
+        match p {
+            CoulombParam::F => self.f,
+            CoulombParam::Omega0 => self.omega0,
+            CoulombParam::Xi => self.xi,
+            CoulombParam::Mu => self.mu,
+            CoulombParam::Force => self.force,
+        }
+    }
+    fn with_param(&self, p: CoulombParam, v: f64) -> Result<Self> {
+        let mut s = *self;
+        match p {
+            CoulombParam::F => s.f = positive("f", v)?,
+            CoulombParam::Omega0 => s.omega0 = positive("omega0", v)?,
+            CoulombParam::Xi => s.xi = non_negative("xi", v)?,
+            CoulombParam::Mu => s.mu = non_negative("mu", v)?,
+            CoulombParam::Force => s.force = finite("force", v)?,
+        }
+        Ok(s)
+    }
+    fn column(&self, p: CoulombParam) -> Option<Column> {
+        Some(Column::primary(p as usize))
+    }
+}
+
 impl DrivenOscillator for CoulombOscillator {
     fn period(&self) -> f64 {
         1.0 / self.f
@@ -48,10 +102,7 @@ impl DrivenOscillator for CoulombOscillator {
         5
     }
     fn param_name(&self, k: usize) -> &'static str {
-        ["f", "omega0", "xi", "mu", "force"]
-            .get(k)
-            .copied()
-            .unwrap_or("?")
+        CoulombParam::ALL.get(k).map(|p| p.name()).unwrap_or("?")
     }
     fn period_derivative(&self, k: usize) -> f64 {
         if k == 0 {
@@ -127,6 +178,65 @@ impl ForcedPendulum {
     }
 }
 
+/// Parameters of [`ForcedPendulum`], in Jacobian column order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PendulumParam {
+    /// Forcing frequency f, Hz.
+    F,
+    /// Small-amplitude angular frequency ω₀, rad/s.
+    Omega0,
+    /// Viscous damping γ, s⁻¹.
+    Gamma,
+    /// Dry friction μ, s⁻².
+    Mu,
+    /// Forcing amplitude A, s⁻².
+    Amplitude,
+}
+
+impl Parameter for PendulumParam {
+    const ALL: &'static [Self] = &[
+        Self::F,
+        Self::Omega0,
+        Self::Gamma,
+        Self::Mu,
+        Self::Amplitude,
+    ];
+    fn name(self) -> &'static str {
+        ["f", "omega0", "gamma", "mu", "amplitude"][self as usize]
+    }
+    fn unit(self) -> &'static str {
+        ["Hz", "rad/s", "1/s", "1/s²", "1/s²"][self as usize]
+    }
+}
+
+impl Parametrised for ForcedPendulum {
+    type Param = PendulumParam;
+    fn param(&self, p: PendulumParam) -> f64 {
+        match p {
+            PendulumParam::F => self.f,
+            PendulumParam::Omega0 => self.omega0,
+            PendulumParam::Gamma => self.gamma,
+            PendulumParam::Mu => self.mu,
+            PendulumParam::Amplitude => self.amplitude,
+        }
+    }
+    fn with_param(&self, p: PendulumParam, v: f64) -> Result<Self> {
+        let mut s = *self;
+        match p {
+            PendulumParam::F => s.f = positive("f", v)?,
+            PendulumParam::Omega0 => s.omega0 = positive("omega0", v)?,
+            PendulumParam::Gamma => s.gamma = non_negative("gamma", v)?,
+            PendulumParam::Mu => s.mu = non_negative("mu", v)?,
+            PendulumParam::Amplitude => s.amplitude = finite("amplitude", v)?,
+        }
+        Ok(s)
+    }
+    fn column(&self, p: PendulumParam) -> Option<Column> {
+        Some(Column::primary(p as usize))
+    }
+}
+
 impl DrivenOscillator for ForcedPendulum {
     fn period(&self) -> f64 {
         1.0 / self.f
@@ -135,10 +245,7 @@ impl DrivenOscillator for ForcedPendulum {
         5
     }
     fn param_name(&self, k: usize) -> &'static str {
-        ["f", "omega0", "gamma", "mu", "amplitude"]
-            .get(k)
-            .copied()
-            .unwrap_or("?")
+        PendulumParam::ALL.get(k).map(|p| p.name()).unwrap_or("?")
     }
     fn period_derivative(&self, k: usize) -> f64 {
         if k == 0 {

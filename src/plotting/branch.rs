@@ -6,6 +6,7 @@ use super::{plot_err, Figure};
 use crate::continuation::two_param::Curve;
 use crate::continuation::{Branch, SpecialKind};
 use crate::error::Result;
+use crate::model::{Gear, Parameter, Parametrised};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -20,13 +21,13 @@ pub enum Quantity {
     Omega,
 }
 
-/// A branch diagram of one or more branches.
-#[derive(Debug, Clone, Default)]
-pub struct BranchDiagram {
+/// A branch diagram of one or more branches of any system.
+#[derive(Debug, Clone)]
+pub struct BranchDiagram<S: Parametrised = Gear> {
     /// Title.
     pub title: String,
     /// The branches (same continuation parameter).
-    pub branches: Vec<Branch>,
+    pub branches: Vec<Branch<S>>,
     /// The y quantity.
     pub quantity: Quantity,
     /// Show angles in the paper's convention (β + 180°).
@@ -43,7 +44,18 @@ fn kind_color(k: SpecialKind) -> RGBColor {
     }
 }
 
-impl BranchDiagram {
+impl<S: Parametrised> Default for BranchDiagram<S> {
+    fn default() -> Self {
+        Self {
+            title: String::new(),
+            branches: Vec::new(),
+            quantity: Quantity::default(),
+            paper_convention: false,
+        }
+    }
+}
+
+impl<S: Parametrised> BranchDiagram<S> {
     fn y(&self, x: [f64; 2]) -> f64 {
         match self.quantity {
             Quantity::BetaDeg => {
@@ -68,7 +80,7 @@ fn range(v: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - d, hi + d)
 }
 
-impl Figure for BranchDiagram {
+impl<S: Parametrised> Figure for BranchDiagram<S> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         root.fill(&WHITE).map_err(plot_err)?;
         let pts = || self.branches.iter().flat_map(|b| b.points.iter());
@@ -77,8 +89,8 @@ impl Figure for BranchDiagram {
         let pname = self
             .branches
             .first()
-            .map(|b| b.param.name())
-            .unwrap_or("parameter");
+            .map(|b| b.param.label())
+            .unwrap_or_else(|| "parameter".into());
         let ylabel = match self.quantity {
             Quantity::BetaDeg => "β at α = 0 [deg]",
             Quantity::Omega => "ω at α = 0 [rad/s]",
@@ -167,15 +179,24 @@ impl Figure for BranchDiagram {
 }
 
 /// Multipliers of every point of a branch in the complex plane, with the unit circle.
-#[derive(Debug, Clone, Default)]
-pub struct MultiplierPlot {
+#[derive(Debug, Clone)]
+pub struct MultiplierPlot<S: Parametrised = Gear> {
     /// Title.
     pub title: String,
     /// The branch.
-    pub branch: Option<Branch>,
+    pub branch: Option<Branch<S>>,
 }
 
-impl Figure for MultiplierPlot {
+impl<S: Parametrised> Default for MultiplierPlot<S> {
+    fn default() -> Self {
+        Self {
+            title: String::new(),
+            branch: None,
+        }
+    }
+}
+
+impl<S: Parametrised> Figure for MultiplierPlot<S> {
     fn size(&self) -> (u32, u32) {
         (700, 700)
     }
@@ -230,17 +251,27 @@ impl Figure for MultiplierPlot {
 }
 
 /// Two-parameter curves (e.g. the lock-loss boundary f_c(Θ)).
-#[derive(Debug, Clone, Default)]
-pub struct BoundaryPlot {
+#[derive(Debug, Clone)]
+pub struct BoundaryPlot<S: Parametrised = Gear> {
     /// Title.
     pub title: String,
     /// The curves.
-    pub curves: Vec<(String, Curve)>,
+    pub curves: Vec<(String, Curve<S>)>,
     /// Extra reference points (label, x, y), e.g. analytic values.
     pub marks: Vec<(String, f64, f64)>,
 }
 
-impl Figure for BoundaryPlot {
+impl<S: Parametrised> Default for BoundaryPlot<S> {
+    fn default() -> Self {
+        Self {
+            title: String::new(),
+            curves: Vec::new(),
+            marks: Vec::new(),
+        }
+    }
+}
+
+impl<S: Parametrised> Figure for BoundaryPlot<S> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         root.fill(&WHITE).map_err(plot_err)?;
         let all = || self.curves.iter().flat_map(|c| c.1.points.iter());
@@ -249,8 +280,8 @@ impl Figure for BoundaryPlot {
         let (xl, yl) = self
             .curves
             .first()
-            .map(|c| (c.1.along.name(), c.1.free.name()))
-            .unwrap_or(("", ""));
+            .map(|c| (c.1.along.label(), c.1.free.label()))
+            .unwrap_or_default();
         let mut chart = ChartBuilder::on(root)
             .caption(&self.title, ("sans-serif", 22))
             .margin(15)
@@ -260,8 +291,8 @@ impl Figure for BoundaryPlot {
             .map_err(plot_err)?;
         chart
             .configure_mesh()
-            .x_desc(if xl == "theta" { "Θ [deg]" } else { xl })
-            .y_desc(if yl == "f" { "f [Hz]" } else { yl })
+            .x_desc(xl)
+            .y_desc(yl)
             .draw()
             .map_err(plot_err)?;
         for (i, (label, c)) in self.curves.iter().enumerate() {

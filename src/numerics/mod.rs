@@ -1,0 +1,9 @@
+//! The numerical building blocks shared by the integrator, the models, the orbit solvers and the
+//! continuation: one bracketing root finder ([`roots`]: Illinois regula falsi and bisection) and one
+//! Newton iteration ([`newton`]).
+
+pub mod newton;
+pub mod roots;
+
+pub use newton::{newton, Linearisation, NewtonOptions, NewtonSolution};
+pub use roots::{Bisection, Illinois, Side};

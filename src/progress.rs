@@ -1,0 +1,82 @@
+//! One observer mechanism for every long computation — continuation, sweeps, diagnosis: the
+//! computation reports [`Event`]s to an [`Observer`], and progress bars, logs or checkpoint
+//! messages live in observers, outside the numerics (argmin's observers).
+//!
+//! Observers take `&self` and are `Sync`, because sweeps report from worker threads; any
+//! `Fn(&Event) + Sync` closure is an observer.
+//!
+//! ```
+//! use gearbif::progress::{Event, Observer};
+//! use std::sync::atomic::{AtomicUsize, Ordering};
+//! let points = AtomicUsize::new(0);
+//! let count = |e: &Event| {
+//!     if let Event::BranchPoint { .. } = e {
+//!         points.fetch_add(1, Ordering::Relaxed);
+//!     }
+//! };
+//! count.observe(&Event::BranchPoint { index: 1, param: 2.0, stable: true, ds: 0.1 });
+//! assert_eq!(points.load(Ordering::Relaxed), 1);
+//! ```
+
+use std::path::Path;
+
+/// Something a long computation reports.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum Event<'a> {
+    /// The computation starts: `total` units of work if known, `done` of them already finished
+    /// (e.g. loaded from checkpoints).
+    Started {
+        /// Units of work in all.
+        total: Option<usize>,
+        /// Units already done.
+        done: usize,
+    },
+    /// A named stage begins.
+    Stage(&'a str),
+    /// A continuation accepted a point.
+    BranchPoint {
+        /// Index of the point on the branch.
+        index: usize,
+        /// Its parameter value.
+        param: f64,
+        /// Whether the orbit is stable.
+        stable: bool,
+        /// The next arclength step.
+        ds: f64,
+    },
+    /// A sweep point finished.
+    SweepPoint {
+        /// Row index.
+        row: usize,
+        /// Column index.
+        col: usize,
+    },
+    /// A sweep row finished and was checkpointed (to `path`, if checkpointing).
+    RowDone {
+        /// Row index.
+        row: usize,
+        /// The checkpoint file.
+        path: Option<&'a Path>,
+    },
+}
+
+/// Receives the [`Event`]s of a computation.
+pub trait Observer: Sync {
+    /// Called for each event, possibly from several threads.
+    fn observe(&self, event: &Event<'_>);
+}
+
+impl<F: Fn(&Event<'_>) + Sync> Observer for F {
+    fn observe(&self, event: &Event<'_>) {
+        self(event)
+    }
+}
+
+/// An observer that ignores everything.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+
+impl Observer for Silent {
+    fn observe(&self, _: &Event<'_>) {}
+}

@@ -1,0 +1,386 @@
+//! Bad input for every command of the binary: exit code 2, a message naming the problem, and no
+//! file left behind. Each case runs in an empty working folder (so default output folders such as
+//! `sweep-out` or `figures` would show up there) and must fail before any heavy work.
+#![cfg(feature = "cli")]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Fixtures shared by the cases: an existing file, an existing folder, config files and recording
+/// sets with one defect each. Referenced in the table as `{name}`.
+struct Fixtures {
+    root: PathBuf,
+}
+
+impl Fixtures {
+    fn new() -> Self {
+        let root = std::env::temp_dir().join(format!("gearbif-badin-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        std::fs::create_dir_all(root.join("dir")).unwrap();
+        let w = |p: &str, s: &str| {
+            let p = root.join(p);
+            std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+            std::fs::write(p, s).unwrap();
+        };
+        w("file", "an ordinary file\n");
+        w("angle.toml", "[gear]\ntheta_deg = 1e308\n");
+        w("syntax.toml", "[gear]\nm1 = = 3\n");
+        w("unknown.toml", "[gear]\nmass = 3\n");
+        w("nan.toml", "[gear]\neta = nan\n");
+        let gear = "[gear]\nm1 = 3.51\nm2 = 3.51\nr = 0.04\ntheta_deg = 31.0\nphi_deg = 31.0\n";
+        let run = "\n[[run]]\nkind = \"driven\"\nf_hz = 1.0\nfile = \"a.csv\"\n";
+        w("set-nan/experiment.toml", &format!("{gear}{run}"));
+        w("set-nan/a.csv", "t,alpha,beta\n0,0,0\n0.1,0,NaN\n");
+        w("set-back/experiment.toml", &format!("{gear}{run}"));
+        w("set-back/a.csv", "t,alpha,beta\n0,0,0\n0.2,0,0\n0.1,0,0\n");
+        w(
+            "set-kind/experiment.toml",
+            &format!("{gear}{}", run.replace("driven", "spin")),
+        );
+        w(
+            "set-abs/experiment.toml",
+            &format!("{gear}{}", run.replace("a.csv", "/dev/zero")),
+        );
+        w(
+            "set-angle/experiment.toml",
+            &format!("{}{run}", gear.replace("31.0\nphi", "1e308\nphi")),
+        );
+        w("set-nofile/experiment.toml", &format!("{gear}{run}"));
+        w("set-empty/experiment.toml", &format!("{gear}{run}"));
+        w("set-empty/a.csv", "");
+        Self { root }
+    }
+
+    fn expand(&self, arg: &str) -> String {
+        let mut s = arg.to_string();
+        while let (Some(a), Some(b)) = (s.find('{'), s.find('}')) {
+            if b < a {
+                break;
+            }
+            let name = s[a + 1..b].to_string();
+            s.replace_range(a..=b, self.root.join(name).to_str().unwrap());
+        }
+        s
+    }
+
+    /// Every file under the fixtures, to check that no case writes into them.
+    fn listing(&self) -> Vec<PathBuf> {
+        listing(&self.root)
+    }
+}
+
+fn listing(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            out.push(e.path());
+            if e.path().is_dir() {
+                out.extend(listing(&e.path()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// (arguments, text the message must contain).
+const CASES: &[(&str, &str)] = &[
+    // no command, unknown command, unknown flag (clap's own errors)
+    ("", "Usage"),
+    ("frobnicate", "unrecognized subcommand"),
+    ("info --bogus", "unexpected argument"),
+    // info
+    ("info --theta-deg 1e308", "theta_deg"),
+    ("info --phi-deg -361", "phi_deg"),
+    ("info --f 0", "`f`"),
+    ("info --f nan", "`f` = NaN"),
+    ("info --m1 -1", "m1"),
+    ("info --m2 0", "m2"),
+    ("info --inertia inf", "inertia"),
+    ("info --r 1e-300", "`g`"),
+    ("info --zeta -0.1", "zeta"),
+    ("info --eta nan", "eta"),
+    ("info --convention sideways", "invalid value"),
+    ("info --config {missing.toml}", "cannot read"),
+    ("info --config {angle.toml}", "angle.toml:2"),
+    ("info --config {syntax.toml}", "syntax.toml:2"),
+    ("info --config {unknown.toml}", "mass"),
+    ("info --config {nan.toml}", "nan.toml:2"),
+    ("info --config {dir}", "cannot read"),
+    // simulate
+    ("simulate --theta-deg 1e308", "theta_deg"),
+    ("simulate --f -1", "`f`"),
+    ("simulate --f 1e5", "[1e-3, 1e4]"),
+    ("simulate --tol 1", "tol"),
+    ("simulate --tol 0", "tol"),
+    ("simulate --periods 1e12", "periods"),
+    ("simulate --periods 0", "periods"),
+    ("simulate --samples-per-period 0", "samples-per-period"),
+    ("simulate --x0-deg 1e308,0", "x0"),
+    ("simulate --x0-deg 0,1e7", "omega"),
+    ("simulate --x0-deg abc", "x0"),
+    ("simulate --method euler", "invalid value"),
+    ("simulate --method fixed --steps 0", "steps"),
+    ("simulate --method regularised --epsilon 2", "epsilon"),
+    ("simulate --out {file}/x.csv", "not a folder"),
+    ("simulate --out {dir}", "is a folder"),
+    ("simulate --events {file}/e.csv --out t.csv", "not a folder"),
+    // map
+    ("map --iterations 0", "iterations"),
+    ("map --iterations 2000000", "iterations"),
+    ("map --inertia=-1", "inertia"),
+    ("map --section diagonal", "invalid value"),
+    ("map --f inf", "`f`"),
+    // continue
+    ("continue --f 1.3", "--range"),
+    ("continue --f 1.3 --range 2:1", "lo < hi"),
+    ("continue --f 1.3 --range 0:nan", "lo < hi"),
+    ("continue --f 1.3 --range 0:x", "not a number"),
+    ("continue --f 1.3 --range 0:inf", "lo < hi"),
+    ("continue --f 0 --range 0:2", "`f`"),
+    ("continue --f 1.3 --range 0:2 --ds 0", "--ds"),
+    ("continue --f 1.3 --range 0:2 --ds 1 --ds-max 0.1", "--ds"),
+    ("continue --f 1.3 --range 0:2 --ds-max=-1", "ds-max"),
+    ("continue --f 1.3 --range 0:2 --max-steps 0", "max-steps"),
+    ("continue --f 1.3 --range 0:2 --tol 0", "tol"),
+    (
+        "continue --f 1.3 --range 0:2 --max-multiplier 0.5",
+        "max-multiplier",
+    ),
+    (
+        "continue --f 1.3 --range 0:2 --lock sideways",
+        "stable or unstable",
+    ),
+    (
+        "continue --f 1.3 --range 0:2 --state-rad 1e9,0 --winding 1",
+        "beta",
+    ),
+    ("continue --f 1.3 --range 0:2 --winding 5000", "winding"),
+    ("continue --f 1.3 --range 0:2 --period 0", "period"),
+    (
+        "continue --f 1.3 --range 0:2 --direction left",
+        "up or down",
+    ),
+    ("continue --f 1.3 --range 0:2 --param mass", "mass"),
+    (
+        "continue --f 1.3 --range 0:2 --section twisted",
+        "sym or strob",
+    ),
+    (
+        "continue --f 1.3 --range 0:2 --plot branch.jpg",
+        ".svg or .png",
+    ),
+    ("continue --f 1.3 --range 0:2 --out {dir}", "is a folder"),
+    ("continue --f 1.3 --range 0:2 --theta-deg 400", "theta_deg"),
+    // locate
+    ("locate --f 1.3 --kind cusp --state-rad 0,0", "kind"),
+    ("locate --f 1.3 --kind fold --state-rad nan,0", "state"),
+    ("locate --f 1.3 --kind fold --state-rad 0,0 --tol 2", "tol"),
+    (
+        "locate --f 1.3 --kind fold --state-rad 0,0 --period 0",
+        "period",
+    ),
+    (
+        "locate --f 1.3 --kind fold --state-rad 0,0 --winding 99999",
+        "winding",
+    ),
+    (
+        "locate --f 1.3 --kind fold --state-rad 0,0 --param mass",
+        "mass",
+    ),
+    (
+        "locate --f 1.3 --kind fold --state-rad 0,0 --section x",
+        "sym or strob",
+    ),
+    ("locate --f=-2 --kind fold --state-rad 0,0", "`f`"),
+    ("locate --f 1.3 --kind fold", "--state-rad"),
+    // boundary
+    ("boundary --step 0", "--step"),
+    ("boundary --step 1e-9", "--step"),
+    ("boundary --step nan", "--step"),
+    ("boundary --range 5:1", "lo < hi"),
+    ("boundary --tol 0", "tol"),
+    ("boundary --kind cusp", "kind"),
+    ("boundary --free mass", "mass"),
+    ("boundary --winding 5000", "winding"),
+    ("boundary --start-state-rad 0,0", "--start-free"),
+    ("boundary --start-state-rad 0,1e9 --start-free 1", "omega"),
+    ("boundary --plot b.gif", ".svg or .png"),
+    ("boundary --out {file}/b.json", "not a folder"),
+    // classify
+    ("classify --f 1.3 --settle 2000000", "settle"),
+    ("classify --f 1.3 --record 0", "record"),
+    ("classify --f 1.3 --analysis 1", "analysis"),
+    ("classify --f 1.3 --alpha0-deg 1e308", "alpha0_deg"),
+    ("classify --f 1.3 --beta0-deg inf", "beta0_deg"),
+    ("classify --f 1.3 --tol 0", "tol"),
+    ("classify --f nan", "`f`"),
+    ("classify --f 1.3 --eta -1", "eta"),
+    // sweep
+    ("sweep --quiet --rows theta:0:1e308:1e307", "theta_deg"),
+    ("sweep --quiet --cols f:0:3:1", "`f`"),
+    ("sweep --quiet --cols f:1:1e5:1e4", "`f`"),
+    ("sweep --quiet --rows theta:0:50:-10", "step"),
+    ("sweep --quiet --rows theta:0:50:0", "step"),
+    ("sweep --quiet --rows mass:0:1:1", "mass"),
+    (
+        "sweep --quiet --rows theta:0:10:5 --cols theta:0:10:5",
+        "different parameters",
+    ),
+    ("sweep --quiet --rows theta:0:1:x", "not a number"),
+    ("sweep --quiet --cols zeta:-1:1:1", "zeta"),
+    ("sweep --quiet --cols inertia:0:1e-4:5e-5", "inertia"),
+    ("sweep --quiet --tol 1", "tol"),
+    ("sweep --quiet --settle-tol 0", "settle_tol"),
+    ("sweep --quiet --record 0", "record"),
+    ("sweep --quiet --analysis 1", "analysis"),
+    ("sweep --quiet --settle 9999999", "settle"),
+    ("sweep --quiet --alpha0-deg 1e308", "alpha0_deg"),
+    ("sweep --quiet --f 0", "`f`"),
+    ("sweep --quiet --out {file}", "not a folder"),
+    ("sweep --quiet --theta-deg nan", "theta_deg"),
+    // figure
+    ("figure fig5 --quiet --theta-deg 1e308", "theta_deg"),
+    ("figure fig5 --quiet --out {file}", "not a folder"),
+    ("figure fig99", "invalid value"),
+    ("figure fig7 --quiet --config {angle.toml}", "angle.toml:2"),
+    // report
+    ("report --quiet --eta -1", "eta"),
+    ("report --quiet --r 0", "`r`"),
+    ("report --quiet --out {file}", "not a folder"),
+    // synth
+    ("synth --effect nope --out o", "unknown effect"),
+    ("synth --effect none", "--out"),
+    ("synth --effect none --out o --f-min 3 --f-max 1", "--f-min"),
+    ("synth --effect none --out o --f-min 0", "f_min"),
+    (
+        "synth --effect none --out o --ringdowns 0 --driven 0",
+        "nothing to record",
+    ),
+    ("synth --effect none --out o --ringdowns 5000", "ringdowns"),
+    ("synth --effect none --out o --outliers 1", "outliers"),
+    ("synth --effect none --out o --gaps=-0.5", "gaps"),
+    ("synth --effect none --out o --turns 0", "turns"),
+    ("synth --effect none --out o --noise-deg=-1", "noise_deg"),
+    ("synth --effect none --out o --fps 0", "fps"),
+    (
+        "synth --effect none --out o --samples-per-turn 2",
+        "samples-per-turn",
+    ),
+    ("synth --effect none --out o --latency nan", "latency"),
+    ("synth --effect none --out o --size inf", "size"),
+    ("synth --effect none --out {file}", "not a folder"),
+    // fit
+    ("fit {missing}", "experiment.toml"),
+    ("fit {set-nan}", "a.csv:3"),
+    ("fit {set-back}", "a.csv:4"),
+    ("fit {set-kind}", "unknown kind `spin`"),
+    ("fit {set-abs}", "relative path"),
+    ("fit {set-angle}", "theta_deg"),
+    ("fit {set-nofile}", "a.csv"),
+    ("fit {set-empty}", "empty file"),
+    ("fit {file}", "experiment.toml"),
+    // diagnose
+    ("diagnose {missing} --out o", "experiment.toml"),
+    ("diagnose {set-nan} --out o", "a.csv:3"),
+    ("diagnose {set-kind} --out o", "experiment.toml:8"),
+    ("diagnose {set-nan} --out {file}", "not a folder"),
+    ("diagnose {set-nan}", "--out"),
+    // bench-integrators
+    ("bench-integrators --event-tols 0", "tol"),
+    ("bench-integrators --event-tols 1.5", "tol"),
+    ("bench-integrators --event-tols x", "invalid value"),
+    ("bench-integrators --fixed-steps 0", "fixed-steps"),
+    ("bench-integrators --reg-eps 5", "epsilon"),
+    ("bench-integrators --reg-tols nan", "tol"),
+    ("bench-integrators --reference-tol 0", "reference-tol"),
+    ("bench-integrators --min-time 100", "min-time"),
+    ("bench-integrators --periods 1e9", "periods"),
+    ("bench-integrators --f 1e300", "`f`"),
+    ("bench-integrators --x0-deg 0,inf", "x0"),
+    ("bench-integrators --figure wp.jpg", ".svg or .png"),
+    ("bench-integrators --csv {dir}", "is a folder"),
+];
+
+#[test]
+fn every_command_refuses_bad_input_with_exit_2_and_no_output() {
+    let fx = Fixtures::new();
+    let before = fx.listing();
+    let mut failures = Vec::new();
+    for (i, (args, needle)) in CASES.iter().enumerate() {
+        let cwd = fx.root.join(format!("cwd-{i}"));
+        std::fs::create_dir_all(&cwd).unwrap();
+        let argv: Vec<String> = args.split_whitespace().map(|a| fx.expand(a)).collect();
+        let t = std::time::Instant::now();
+        let out = Command::new(env!("CARGO_BIN_EXE_gearbif"))
+            .args(&argv)
+            .current_dir(&cwd)
+            .output()
+            .expect("the binary runs");
+        let secs = t.elapsed().as_secs_f64();
+        let err = String::from_utf8_lossy(&out.stderr);
+        let left = listing(&cwd);
+        let mut why = Vec::new();
+        if out.status.code() != Some(2) {
+            why.push(format!("exit {:?}", out.status.code()));
+        }
+        if !err.to_lowercase().contains(&needle.to_lowercase()) {
+            why.push(format!("message lacks `{needle}`"));
+        }
+        if err.contains("panicked") {
+            why.push("panic".into());
+        }
+        if !left.is_empty() {
+            why.push(format!("left behind {left:?}"));
+        }
+        if secs > 5.0 {
+            why.push(format!(
+                "took {secs:.1} s: the check comes after heavy work"
+            ));
+        }
+        if !why.is_empty() {
+            failures.push(format!(
+                "`gearbif {args}`: {}\n    stderr: {}",
+                why.join(", "),
+                err.trim()
+            ));
+        }
+        std::fs::remove_dir_all(&cwd).ok();
+    }
+    assert_eq!(fx.listing(), before, "a case wrote into the fixtures");
+    std::fs::remove_dir_all(&fx.root).ok();
+    assert!(
+        failures.is_empty(),
+        "{} of {} cases failed:\n{}",
+        failures.len(),
+        CASES.len(),
+        failures.join("\n")
+    );
+}
+
+/// The table covers every command the binary lists in `--help`.
+#[test]
+fn every_command_has_a_bad_input_case() {
+    let out = Command::new(env!("CARGO_BIN_EXE_gearbif"))
+        .arg("--help")
+        .output()
+        .unwrap();
+    let help = String::from_utf8_lossy(&out.stdout);
+    let commands: Vec<&str> = help
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .collect();
+    assert!(commands.len() >= 14, "{commands:?}");
+    for c in commands {
+        assert!(
+            CASES
+                .iter()
+                .any(|(a, _)| a.split_whitespace().next() == Some(c)),
+            "no bad-input case for `{c}`"
+        );
+    }
+}
