@@ -17,6 +17,7 @@
 
 pub mod analysis;
 pub mod bench;
+pub mod campaign;
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod continuation;

@@ -19,6 +19,9 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+mod shard;
+pub use shard::{merge_shards, spec_hash, Shard, ShardStatus};
+
 /// A swept parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -521,6 +524,7 @@ pub struct SweepRunner<'a> {
     checkpoint: Option<PathBuf>,
     max_new_rows: Option<usize>,
     observer: &'a dyn SweepObserver,
+    shard: Option<Shard>,
 }
 
 impl<'a> SweepRunner<'a> {
@@ -531,6 +535,7 @@ impl<'a> SweepRunner<'a> {
             checkpoint: None,
             max_new_rows: None,
             observer: &Silent,
+            shard: None,
         }
     }
     /// Checkpoints rows into `dir` (`spec.json` and `rows/row-NNNNN.json`) and resumes from them.
@@ -551,6 +556,11 @@ impl<'a> SweepRunner<'a> {
 
     fn row_path(dir: &Path, row: usize) -> PathBuf {
         dir.join("rows").join(format!("row-{row:05}.json"))
+    }
+
+    /// Whether row `i` is computed by this runner (all rows, or those of its shard).
+    fn owns(&self, i: usize) -> bool {
+        self.shard.is_none_or(|s| s.contains(i))
     }
 
     /// Loads finished rows from the checkpoint (checking that it belongs to the same spec). A
@@ -580,6 +590,9 @@ impl<'a> SweepRunner<'a> {
             }
             crate::io::remove_stale_temporaries(&dir.join("rows"));
             for (i, slot) in rows.iter_mut().enumerate() {
+                if !self.owns(i) {
+                    continue;
+                }
                 let p = Self::row_path(dir, i);
                 if p.is_file() {
                     let bytes = std::fs::read(&p)
@@ -592,17 +605,68 @@ impl<'a> SweepRunner<'a> {
         } else {
             crate::io::write_json_atomic(&spec_path, &self.spec)?;
         }
+        if let Some(shard) = self.shard {
+            shard::check_or_write_manifest(dir, &self.spec, shard)?;
+        }
         Ok(rows)
     }
 
     /// Runs (or resumes) the sweep.
     pub fn run(&self) -> Result<SweepOutcome> {
+        if self.shard.is_some() {
+            return Err(Error::InvalidInput(
+                "a sharded runner is run with `run_shard`".into(),
+            ));
+        }
+        let rows = self.run_rows()?;
+        let rows_done = rows.iter().filter(|r| r.is_some()).count();
+        if rows_done < rows.len() {
+            return Ok(SweepOutcome::Stopped {
+                rows_done,
+                rows_total: rows.len(),
+            });
+        }
+        Ok(SweepOutcome::Complete(Box::new(SweepResult {
+            spec: self.spec.clone(),
+            rows: rows.into_iter().flatten().collect(),
+        })))
+    }
+
+    /// Runs (or resumes) one shard of the sweep into the checkpoint directory (required); the
+    /// shards are combined by [`merge_shards`].
+    pub fn run_shard(mut self, shard: Shard) -> Result<ShardStatus> {
+        if self.checkpoint.is_none() {
+            return Err(Error::InvalidInput(
+                "a shard needs a checkpoint directory".into(),
+            ));
+        }
+        shard.check_rows(self.spec.rows.values.len())?;
+        self.shard = Some(shard);
+        let rows = self.run_rows()?;
+        let rows_total = shard.rows(rows.len()).count();
+        let rows_done = shard
+            .rows(rows.len())
+            .filter(|&i| rows[i].is_some())
+            .count();
+        Ok(ShardStatus {
+            shard,
+            rows_done,
+            rows_total,
+        })
+    }
+
+    /// Loads the finished rows, computes the missing rows this runner owns (up to the row limit),
+    /// checkpoints each, and returns every row slot.
+    fn run_rows(&self) -> Result<Vec<Option<RowResult>>> {
         self.spec.validate()?;
         let mut rows = self.load()?;
         let ncols = self.spec.cols.values.len();
         let done = rows.iter().filter(|r| r.is_some()).count();
-        self.observer.started(self.spec.len(), done * ncols);
-        let pending: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].is_none()).collect();
+        let owned = (0..rows.len()).filter(|&i| self.owns(i)).count();
+        self.observer.started(owned * ncols, done * ncols);
+        let pending: Vec<usize> = (0..rows.len())
+            .filter(|&i| rows[i].is_none() && self.owns(i))
+            .collect();
         let started = AtomicUsize::new(0);
         let limit = self.max_new_rows.unwrap_or(usize::MAX);
         let work = |i: usize| -> Result<Option<RowResult>> {
@@ -634,17 +698,7 @@ impl<'a> SweepRunner<'a> {
                 rows[i] = Some(row);
             }
         }
-        let rows_done = rows.iter().filter(|r| r.is_some()).count();
-        if rows_done < rows.len() {
-            return Ok(SweepOutcome::Stopped {
-                rows_done,
-                rows_total: rows.len(),
-            });
-        }
-        Ok(SweepOutcome::Complete(Box::new(SweepResult {
-            spec: self.spec.clone(),
-            rows: rows.into_iter().flatten().collect(),
-        })))
+        Ok(rows)
     }
 }
 

@@ -7,6 +7,7 @@
 
 mod bench;
 mod boundary;
+mod campaign;
 mod classify;
 mod common;
 mod continue_;
@@ -60,6 +61,9 @@ pub enum Command {
     Diagnose(diagnose::Args),
     /// Make a synthetic recording set with a chosen effect at a chosen size.
     Synth(synth::Args),
+    /// Measure the diagnosis on sets from an independent generator: false positives, power per
+    /// effect against size, confusion matrix, σ coverage (campaign.json, campaign.md, figure).
+    Campaign(campaign::Args),
     /// Classify one point: the paper's flowchart (harmonic fit, RMS, THD) and the rigorous class.
     Classify(classify::Args),
     /// Two-parameter atlas (Θ × f, …), parallel, resumable; CSV/JSON and an RMS_δ map.
@@ -83,6 +87,7 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Fit(a) => fit::run(a),
         Command::Diagnose(a) => diagnose::run(a),
         Command::Synth(a) => synth::run(a),
+        Command::Campaign(a) => campaign::run(a),
         Command::Classify(a) => classify::run(a),
         Command::Sweep(a) => sweep::run(a),
         Command::Report(a) => report::run(a),

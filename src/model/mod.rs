@@ -16,6 +16,7 @@
 //! pendulum or a Coulomb-damped linear oscillator ([`oscillators`]) run through the same code as the
 //! gear ([`gear`]).
 
+pub mod den_hartog;
 pub mod gear;
 pub mod oscillators;
 pub mod params;

@@ -6,6 +6,7 @@
 
 pub mod atlas;
 pub mod branch;
+pub mod campaign;
 pub mod diagnosis;
 
 use crate::error::{Error, Result};

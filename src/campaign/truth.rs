@@ -1,0 +1,252 @@
+//! The campaign's truth model: the gear's equation of motion with composable extra terms in forms
+//! the diagnosis catalog does not contain. Per unit output inertia (all terms in s⁻²):
+//!
+//! β̈ = g B(α_m, β) + Σ_k A_k sin(k β − φ_k) − ζ β̇ − c |β̇|^p sgn β̇ − sgn(β̇) R(α_m, β, β̇),
+//!
+//! - B(α, β) = −sin α cos β + Δ cos α sin β, Δ = cos Θ cos Φ − 2 sin Θ sin Φ (eq. `tauax`, with
+//!   the true shaft angles, which may be non-parallel);
+//! - α_m, the input magnet's angle: the drive angle α_d, or with a compliant input the root of
+//!   α_m = α_d + L (−cos α_m sin β + Δ sin α_m cos β) (the magnet turned by its own magnetic
+//!   torque against a torsional spring; L = c/k, the lag at the peak coupling torque);
+//! - R = η [(1 − λ) + λ |P(W + F(α_m, β))| / |W|] (1 + ε cos 2β) + Δη_s exp(−(β̇/w)²): Coulomb
+//!   friction with a fraction λ proportional to the radial bearing load (weight W plus the
+//!   dipole–dipole force F on the output magnet, added as vectors, projected perpendicular to the
+//!   output shaft by P), modulated by angle (ε), and a Stribeck breakaway excess Δη_s of width w.
+//!   At rest the friction bound is R(α_m, β, 0) (Filippov stick rule |smooth part| ≤ R).
+
+use std::f64::consts::PI;
+
+/// Standard gravity, m/s².
+const G0: f64 = 9.806_65;
+
+/// Vector bearing load: a fraction of the Coulomb friction proportional to |P(W + F)|.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VectorLoad {
+    /// Fraction λ of the friction that is load-dependent, in [0, 1].
+    pub fraction: f64,
+    /// |W| / F₀ with F₀ = 3 μ0 m1 m2 / (4π r⁴), the scale of the dipole force.
+    pub weight_over_force: f64,
+}
+
+/// Stribeck breakaway: extra friction Δη_s exp(−(β̇/w)²).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stribeck {
+    /// Breakaway excess Δη_s, s⁻².
+    pub excess: f64,
+    /// Decay width w, rad/s.
+    pub width: f64,
+}
+
+/// Power-law drag c |β̇|^p sgn β̇.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PowerDrag {
+    /// Coefficient c, rad^(1−p) s^(p−2).
+    pub coef: f64,
+    /// Exponent p.
+    pub exponent: f64,
+}
+
+/// The truth: base parameters and the extra terms (all off by default).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TruthModel {
+    /// g = c/I, s⁻².
+    pub g: f64,
+    /// True input shaft angle Θ, rad.
+    pub theta: f64,
+    /// True output shaft angle Φ, rad.
+    pub phi: f64,
+    /// Viscous damping ζ, s⁻¹.
+    pub zeta: f64,
+    /// Coulomb friction η, s⁻².
+    pub eta: f64,
+    /// Lab-fixed torques (k, A_k in s⁻², φ_k in rad): Σ A_k sin(k β − φ_k).
+    pub harmonics: Vec<(u32, f64, f64)>,
+    /// Power-law drag.
+    pub power_drag: Option<PowerDrag>,
+    /// Load-dependent friction.
+    pub load: Option<VectorLoad>,
+    /// Stribeck breakaway.
+    pub stribeck: Option<Stribeck>,
+    /// Angle modulation ε of the Coulomb friction.
+    pub angle_modulation: f64,
+    /// Input compliance: lag L at the peak coupling torque, rad (0 = rigid input).
+    pub compliance: f64,
+}
+
+/// The input: held at α₀ (rate 0) or turned at a constant rate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Drive {
+    /// Drive angle at t = 0, rad.
+    pub alpha0: f64,
+    /// Drive rate α̇, rad/s.
+    pub rate: f64,
+}
+
+impl Drive {
+    /// α_d(t).
+    pub fn angle(&self, t: f64) -> f64 {
+        self.alpha0 + self.rate * t
+    }
+}
+
+impl TruthModel {
+    /// The base model (no extra terms).
+    pub fn base(g: f64, theta: f64, phi: f64, zeta: f64, eta: f64) -> Self {
+        Self {
+            g,
+            theta,
+            phi,
+            zeta,
+            eta,
+            harmonics: Vec::new(),
+            power_drag: None,
+            load: None,
+            stribeck: None,
+            angle_modulation: 0.0,
+            compliance: 0.0,
+        }
+    }
+
+    /// Δ = cos Θ cos Φ − 2 sin Θ sin Φ.
+    pub fn delta(&self) -> f64 {
+        self.theta.cos() * self.phi.cos() - 2.0 * self.theta.sin() * self.phi.sin()
+    }
+
+    /// The magnet angle α_m for drive angle `alpha_d` (Newton on the compliance equation).
+    pub fn magnet_angle(&self, alpha_d: f64, beta: f64) -> f64 {
+        if self.compliance == 0.0 {
+            return alpha_d;
+        }
+        let (sb, cb) = beta.sin_cos();
+        let d = self.delta();
+        let mut x = alpha_d;
+        for _ in 0..30 {
+            let (sx, cx) = x.sin_cos();
+            let f = x - alpha_d - self.compliance * (-cx * sb + d * sx * cb);
+            let fp = 1.0 - self.compliance * (sx * sb + d * cx * cb);
+            let dx = f / fp;
+            x -= dx;
+            if dx.abs() < 1e-15 {
+                break;
+            }
+        }
+        x
+    }
+
+    /// The smooth part of β̈ (everything except the friction R): s⁻².
+    pub fn smooth(&self, alpha_m: f64, beta: f64, omega: f64) -> f64 {
+        let (sa, ca) = alpha_m.sin_cos();
+        let (sb, cb) = beta.sin_cos();
+        let mut a = self.g * (-sa * cb + self.delta() * ca * sb) - self.zeta * omega;
+        for &(k, amp, ph) in &self.harmonics {
+            a += amp * (k as f64 * beta - ph).sin();
+        }
+        if let Some(pd) = self.power_drag {
+            a -= pd.coef * omega.abs().powf(pd.exponent) * omega.signum();
+        }
+        a
+    }
+
+    /// Friction magnitude R(α_m, β, β̇) ≥ 0, s⁻²; R(α_m, β, 0) is the static bound.
+    pub fn friction(&self, alpha_m: f64, beta: f64, omega: f64) -> f64 {
+        let mut coulomb = self.eta;
+        if let Some(l) = self.load {
+            let ratio = self.radial_load(alpha_m, beta, l.weight_over_force) / l.weight_over_force;
+            coulomb *= (1.0 - l.fraction) + l.fraction * ratio;
+        }
+        coulomb *= 1.0 + self.angle_modulation * (2.0 * beta).cos();
+        if let Some(s) = self.stribeck {
+            coulomb += s.excess * (-(omega / s.width).powi(2)).exp();
+        }
+        coulomb.max(0.0)
+    }
+
+    /// The dipole–dipole force on the output magnet in units of F₀ = 3 μ0 m1 m2 / (4π r⁴), x̂
+    /// along the centre line from the input to the output magnet:
+    /// F/F₀ = (m̂1·x̂) m̂2 + (m̂2·x̂) m̂1 + (m̂1·m̂2) x̂ − 5 (m̂1·x̂)(m̂2·x̂) x̂.
+    pub fn dipole_force(&self, alpha_m: f64, beta: f64) -> [f64; 3] {
+        let (st, ct) = self.theta.sin_cos();
+        let (sp, cp) = self.phi.sin_cos();
+        let (sa, ca) = alpha_m.sin_cos();
+        let (sb, cb) = beta.sin_cos();
+        let m1 = [-ca * st, ca * ct, sa];
+        let m2 = [-cb * sp, cb * cp, sb];
+        let (m1x, m2x) = (m1[0], m2[0]);
+        let m12 = m1[0] * m2[0] + m1[1] * m2[1] + m1[2] * m2[2];
+        let mut f = [0.0; 3];
+        for i in 0..3 {
+            f[i] = m1x * m2[i] + m2x * m1[i];
+        }
+        f[0] += m12 - 5.0 * m1x * m2x;
+        f
+    }
+
+    /// |P(W + F)| / F₀: the radial bearing load in units of the dipole force scale, shafts in the
+    /// horizontal x-y plane, weight along −ẑ, P the projection perpendicular to the output shaft
+    /// axis e = (cos Φ, sin Φ, 0).
+    pub fn radial_load(&self, alpha_m: f64, beta: f64, weight_over_force: f64) -> f64 {
+        let mut l = self.dipole_force(alpha_m, beta);
+        l[2] -= weight_over_force;
+        let (sp, cp) = self.phi.sin_cos();
+        let le = l[0] * cp + l[1] * sp;
+        let p = [l[0] - le * cp, l[1] - le * sp, l[2]];
+        (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()
+    }
+
+    /// The equilibrium of the coupling alone at a locked magnet angle α: the minimum of the
+    /// field energy, tan β = tan α / Δ on the stable branch.
+    pub fn coupling_equilibrium(&self, alpha: f64) -> f64 {
+        let d = self.delta();
+        // U ∝ sin α sin β + Δ cos α cos β = ρ cos(β − ψ); minimum at β = ψ + π
+        alpha.sin().atan2(d * alpha.cos()) + PI
+    }
+}
+
+/// |W| / F₀ for a shaft of mass `mass` (kg) and dipoles m1, m2 (A m²) at distance r (m).
+pub fn weight_over_force(mass: f64, m1: f64, m2: f64, r: f64) -> f64 {
+    let f0 = 3.0 * crate::model::gear::MU0_OVER_4PI * m1 * m2 / r.powi(4);
+    mass * G0 / f0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The force formula against −∇(−m2·B1) by central differences, B1 the dipole field
+    /// (μ0/4π)(3(m1·r̂)r̂ − m1)/r³; and the coupling torque against −∂U/∂β.
+    #[test]
+    fn dipole_force_and_torque_are_gradients_of_the_energy() {
+        let m = TruthModel::base(300.0, 0.4, -0.7, 1.0, 20.0);
+        let (a, b): (f64, f64) = (0.9, -2.1);
+        let (st, ct) = m.theta.sin_cos();
+        let (sp, cp) = m.phi.sin_cos();
+        let m1 = [-a.cos() * st, a.cos() * ct, a.sin()];
+        let m2 = |b: f64| [-b.cos() * sp, b.cos() * cp, b.sin()];
+        // energy of m2 at position r in the field of m1 (units μ0/4π = 1, |m| = 1)
+        let energy = |r: [f64; 3], mm2: [f64; 3]| {
+            let rn = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+            let u = [r[0] / rn, r[1] / rn, r[2] / rn];
+            let m1u = m1[0] * u[0] + m1[1] * u[1] + m1[2] * u[2];
+            let bf: Vec<f64> = (0..3)
+                .map(|i| (3.0 * m1u * u[i] - m1[i]) / rn.powi(3))
+                .collect();
+            -(mm2[0] * bf[0] + mm2[1] * bf[1] + mm2[2] * bf[2])
+        };
+        let f = m.dipole_force(a, b);
+        let h = 1e-5;
+        for i in 0..3 {
+            let mut rp = [1.0, 0.0, 0.0];
+            let mut rm = [1.0, 0.0, 0.0];
+            rp[i] += h;
+            rm[i] -= h;
+            // F = −∂U/∂r; F₀ = 3 at r = 1
+            let fd = -(energy(rp, m2(b)) - energy(rm, m2(b))) / (2.0 * h) / 3.0;
+            assert!((fd - f[i]).abs() < 1e-8, "component {i}: {fd} vs {}", f[i]);
+        }
+        // torque: −∂U/∂β with U = −m2·B1 at r = x̂ equals c (−sin α cos β + Δ cos α sin β), c = 1
+        let dudb =
+            (energy([1.0, 0.0, 0.0], m2(b + h)) - energy([1.0, 0.0, 0.0], m2(b - h))) / (2.0 * h);
+        let tau = -a.sin() * b.cos() + m.delta() * a.cos() * b.sin();
+        assert!((-dudb - tau).abs() < 1e-8, "{} vs {tau}", -dudb);
+    }
+}
