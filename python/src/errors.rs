@@ -86,7 +86,7 @@ pub fn to_py(e: Error) -> PyErr {
         Error::Integration { .. } => IntegrationError::new_err(msg),
         Error::NewtonFailed { .. } => NewtonError::new_err(msg),
         Error::Continuation(_) => ContinuationError::new_err(msg),
-        Error::Io(_) => GearbifIOError::new_err(msg),
+        Error::Io(_) | Error::File { .. } | Error::Format { .. } => GearbifIOError::new_err(msg),
         Error::Unsupported(_) => UnsupportedError::new_err(msg),
         Error::Recording { file, line, .. } => {
             let err = RecordingError::new_err(msg);
