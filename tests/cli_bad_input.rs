@@ -172,6 +172,17 @@ const CASES: &[(&str, &str)] = &[
     ),
     ("continue --f 1.3 --range 0:2 --out {dir}", "is a folder"),
     ("continue --f 1.3 --range 0:2 --theta-deg 400", "theta_deg"),
+    // diagram
+    ("diagram", "--range"),
+    ("diagram --range 3:1", "lo < hi"),
+    ("diagram --range 1.5:3 --grid 0", "grid"),
+    ("diagram --range 1.5:3 --max-period 0", "max-period"),
+    ("diagram --range 1.5:3 --tol 0", "tol"),
+    ("diagram --range 1.5:3 --ds 1 --ds-max 0.1", "--ds"),
+    ("diagram --range 1.5:3 --param mass", "mass"),
+    ("diagram --range 1.5:3 --plot d.jpg", ".svg or .png"),
+    ("diagram --range 1.5:3 --out {dir}", "is a folder"),
+    ("diagram --range 0:3", "`f`"),
     // locate
     ("locate --f 1.3 --kind cusp --state-rad 0,0", "kind"),
     ("locate --f 1.3 --kind fold --state-rad nan,0", "state"),
