@@ -250,6 +250,13 @@ const CASES: &[(&str, &str)] = &[
     ("sweep --quiet --f 0", "`f`"),
     ("sweep --quiet --out {file}", "not a folder"),
     ("sweep --quiet --theta-deg nan", "theta_deg"),
+    ("sweep --quiet --shard x", "--shard"),
+    ("sweep --quiet --shard 2/2", "shard"),
+    ("sweep --quiet --shard 0/0", "shard"),
+    ("sweep --quiet --shard 7/8", "empty"),
+    ("sweep merge", "dirs"),
+    ("sweep merge {dir}", "not a shard checkpoint"),
+    ("sweep merge {missing}", "not a shard checkpoint"),
     // figure
     ("figure fig5 --quiet --theta-deg 1e308", "theta_deg"),
     ("figure fig5 --quiet --out {file}", "not a folder"),
