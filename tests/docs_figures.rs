@@ -57,7 +57,10 @@ fn manifest() -> BTreeMap<PathBuf, String> {
         if cells.len() == 4 && cells[1].starts_with('`') && cells[2].starts_with('`') {
             let img = cells[1].trim_matches('`');
             let cmd = cells[2].trim_matches('`');
-            let prev = m.insert(Path::new("docs/figures").join(img), cmd.to_string());
+            let prev = m.insert(
+                normalize(&Path::new("docs/figures").join(img)),
+                cmd.to_string(),
+            );
             assert!(prev.is_none(), "{img} is listed twice");
         }
     }
@@ -134,7 +137,17 @@ fn check_command(img: &Path, cmd: &str) -> Result<(), String> {
             }
             src_has(&file, stem)
         }
-        _ => Err("not a `cargo run --release` command".into()),
+        ["python", script, "--out", out, ..] => {
+            if !root().join(script).is_file() {
+                return Err(format!("no script {script}"));
+            }
+            if Path::new(out) == img {
+                Ok(())
+            } else {
+                Err(format!("the script writes {out}"))
+            }
+        }
+        _ => Err("not a `cargo run --release` or `python` command".into()),
     }
 }
 
@@ -230,6 +243,7 @@ fn the_checks_catch_wrong_commands() {
     )
     .is_err());
     assert!(check_command(img, "python make.py").is_err());
+    assert!(check_command(img, "python docs/none.py --out docs/figures/fig9-avg.png").is_err());
     assert_eq!(
         image_refs("a ![x](figures/a.png) b ![](../c.svg)"),
         ["figures/a.png", "../c.svg"]
