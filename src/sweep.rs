@@ -4,7 +4,10 @@
 //! file, and a restarted sweep loads the finished rows and computes only the missing ones. Each
 //! row depends only on the spec, so a resumed sweep ends bit-identical to an uninterrupted one.
 //!
-//! Progress and checkpoint reporting are observers ([`SweepObserver`]), outside the numerics.
+//! Progress and checkpoint reporting are observers ([`crate::progress::Observer`]), outside the
+//! numerics. The row computation is generic ([`sweep_row`], [`sweep_grid`]: any system with a
+//! parameter lens, any integrator); [`SweepSpec`] and [`SweepRunner`] are the gear's instance,
+//! with the paper's protocols and checkpoints.
 //!
 //! Protocols:
 //! - [`Protocol::Fresh`] (Fig. 7b): every point starts from the same initial state.
@@ -13,8 +16,10 @@
 
 use crate::analysis::classify::{classify_point, ClassifyOptions, Dynamics, PointResult};
 use crate::error::{Error, Result};
-use crate::integrator::{EventDriven, EventDriven853, FixedStep};
+use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod};
 use crate::model::{Convention, Gear, GearParams};
+use crate::model::{DrivenOscillator, Parametrised};
+pub use crate::progress::{Event, Observer, Silent};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -297,41 +302,142 @@ impl SweepSpec {
     }
 
     /// Computes one row (sequential along the columns).
-    pub fn compute_row(&self, row: usize, observer: &dyn SweepObserver) -> Result<RowResult> {
+    pub fn compute_row(&self, row: usize, observer: &dyn Observer) -> Result<RowResult> {
         let rv = *self
             .rows
             .values
             .get(row)
             .ok_or_else(|| Error::InvalidInput(format!("row {row} out of range")))?;
         let x_start = [self.beta0_deg.to_radians(), 0.0];
-        let mut x = x_start;
-        let mut points = Vec::with_capacity(self.cols.values.len());
         let fixed_opts = ClassifyOptions {
             rigorous: false,
             ..self.classify.clone()
         };
-        for (col, &cv) in self.cols.values.iter().enumerate() {
-            let gear = self.gear_at(rv, cv)?;
-            if self.protocol == Protocol::Fresh {
-                x = x_start;
-            }
-            let res = match self.method {
-                Method::EventDriven => classify_point(&gear, x, &EventDriven, &self.classify)?,
-                Method::EventDriven853 => {
-                    classify_point(&gear, x, &EventDriven853, &self.classify)?
-                }
-                Method::FixedStep => classify_point(&gear, x, &FixedStep::default(), &fixed_opts)?,
-            };
-            x = res.end_state;
-            points.push(PointRecord::new(row, col, rv, cv, &gear, &res));
-            observer.point_done(row, col);
-        }
+        let at = |cv: f64| self.gear_at(rv, cv);
+        let cols = &self.cols.values;
+        let results = match self.method {
+            Method::EventDriven => sweep_row(
+                &EventDriven,
+                at,
+                cols,
+                x_start,
+                self.protocol,
+                &self.classify,
+                row,
+                observer,
+            )?,
+            Method::EventDriven853 => sweep_row(
+                &EventDriven853,
+                at,
+                cols,
+                x_start,
+                self.protocol,
+                &self.classify,
+                row,
+                observer,
+            )?,
+            Method::FixedStep => sweep_row(
+                &FixedStep::default(),
+                at,
+                cols,
+                x_start,
+                self.protocol,
+                &fixed_opts,
+                row,
+                observer,
+            )?,
+        };
+        let points = results
+            .iter()
+            .zip(cols)
+            .enumerate()
+            .map(|(col, ((gear, res), &cv))| PointRecord::new(row, col, rv, cv, gear, res))
+            .collect();
         Ok(RowResult {
             row,
             row_value: rv,
             points,
         })
     }
+}
+
+/// One row of a sweep of any system: classifies the attractor at each value of `cols` (in order)
+/// with [`classify_point`], the system built by `system_at`; with [`Protocol::SemiStatic`] the end
+/// state of one point starts the next, with [`Protocol::Fresh`] every point starts at `x_start`.
+/// Reports [`Event::SweepPoint`] { row, col } after each point.
+#[allow(clippy::too_many_arguments)]
+pub fn sweep_row<S, M, F>(
+    method: &M,
+    system_at: F,
+    cols: &[f64],
+    x_start: [f64; 2],
+    protocol: Protocol,
+    opts: &ClassifyOptions,
+    row: usize,
+    observer: &dyn Observer,
+) -> Result<Vec<(S, PointResult)>>
+where
+    S: DrivenOscillator,
+    M: FlowMethod<S> + ?Sized,
+    F: Fn(f64) -> Result<S>,
+{
+    let mut x = x_start;
+    let mut out = Vec::with_capacity(cols.len());
+    for (col, &cv) in cols.iter().enumerate() {
+        let sys = system_at(cv)?;
+        if protocol == Protocol::Fresh {
+            x = x_start;
+        }
+        let res = classify_point(&sys, x, method, opts)?;
+        x = res.end_state;
+        out.push((sys, res));
+        observer.observe(&Event::SweepPoint { row, col });
+    }
+    Ok(out)
+}
+
+/// A two-parameter sweep of any [`Parametrised`] system: `rows.0` takes the values `rows.1`, and
+/// along each row (one task per row with the `parallel` feature) `cols.0` takes the values
+/// `cols.1` ([`sweep_row`]). Returns the results row by row. The gear's resumable, checkpointed
+/// sweep is [`SweepRunner`].
+#[allow(clippy::too_many_arguments)]
+pub fn sweep_grid<S, M>(
+    method: &M,
+    base: &S,
+    rows: (S::Param, &[f64]),
+    cols: (S::Param, &[f64]),
+    x_start: [f64; 2],
+    protocol: Protocol,
+    opts: &ClassifyOptions,
+    observer: &dyn Observer,
+) -> Result<Vec<Vec<(S, PointResult)>>>
+where
+    S: Parametrised,
+    M: FlowMethod<S> + ?Sized,
+{
+    opts.validate()?;
+    if rows.0 == cols.0 {
+        return Err(Error::InvalidInput(
+            "the two sweep axes must be different parameters".into(),
+        ));
+    }
+    observer.observe(&Event::Started {
+        total: Some(rows.1.len() * cols.1.len()),
+        done: 0,
+    });
+    let row = |i: usize| -> Result<Vec<(S, PointResult)>> {
+        let sys = base.with_param(rows.0, rows.1[i])?;
+        let at = |v: f64| sys.with_param(cols.0, v);
+        sweep_row(method, at, cols.1, x_start, protocol, opts, i, observer)
+    };
+    #[cfg(feature = "parallel")]
+    let out: Vec<Result<Vec<(S, PointResult)>>> = {
+        use rayon::prelude::*;
+        (0..rows.1.len()).into_par_iter().map(row).collect()
+    };
+    #[cfg(not(feature = "parallel"))]
+    let out: Vec<Result<Vec<(S, PointResult)>>> = (0..rows.1.len()).map(row).collect();
+    out.into_iter().collect()
 }
 
 /// One point of a sweep, flat (one CSV line).
@@ -440,27 +546,6 @@ pub struct RowResult {
     pub points: Vec<PointRecord>,
 }
 
-/// Observes a running sweep (progress bars, logging). Called from worker threads.
-pub trait SweepObserver: Sync {
-    /// The sweep starts: `total` points, `done` of them already finished (loaded from checkpoints).
-    fn started(&self, total: usize, done: usize) {
-        let _ = (total, done);
-    }
-    /// A point finished.
-    fn point_done(&self, row: usize, col: usize) {
-        let _ = (row, col);
-    }
-    /// A row finished and was checkpointed (to `path`, if checkpointing).
-    fn row_done(&self, row: usize, path: Option<&Path>) {
-        let _ = (row, path);
-    }
-}
-
-/// An observer that does nothing.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Silent;
-impl SweepObserver for Silent {}
-
 /// The result of a complete sweep: the spec and every row.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SweepResult {
@@ -522,7 +607,7 @@ pub struct SweepRunner<'a> {
     spec: SweepSpec,
     checkpoint: Option<PathBuf>,
     max_new_rows: Option<usize>,
-    observer: &'a dyn SweepObserver,
+    observer: &'a dyn Observer,
     shard: Option<Shard>,
 }
 
@@ -548,7 +633,7 @@ impl<'a> SweepRunner<'a> {
         self
     }
     /// Sets the observer.
-    pub fn observer(mut self, o: &'a dyn SweepObserver) -> Self {
+    pub fn observer(mut self, o: &'a dyn Observer) -> Self {
         self.observer = o;
         self
     }
@@ -662,7 +747,10 @@ impl<'a> SweepRunner<'a> {
         let ncols = self.spec.cols.values.len();
         let done = rows.iter().filter(|r| r.is_some()).count();
         let owned = (0..rows.len()).filter(|&i| self.owns(i)).count();
-        self.observer.started(owned * ncols, done * ncols);
+        self.observer.observe(&Event::Started {
+            total: Some(owned * ncols),
+            done: done * ncols,
+        });
         let pending: Vec<usize> = (0..rows.len())
             .filter(|&i| rows[i].is_none() && self.owns(i))
             .collect();
@@ -681,7 +769,10 @@ impl<'a> SweepRunner<'a> {
                 }
                 None => None,
             };
-            self.observer.row_done(i, path.as_deref());
+            self.observer.observe(&Event::RowDone {
+                row: i,
+                path: path.as_deref(),
+            });
             Ok(Some(r))
         };
         #[cfg(feature = "parallel")]
@@ -721,7 +812,7 @@ pub fn hysteresis(
     beta0_deg: f64,
     convention: Convention,
     opts: &ClassifyOptions,
-    observer: &dyn SweepObserver,
+    observer: &dyn Observer,
 ) -> Result<Hysteresis> {
     if f_values.is_empty() || f_values.windows(2).any(|w| w[1] <= w[0] || w[1].is_nan()) {
         return Err(Error::InvalidInput(
@@ -739,7 +830,7 @@ pub fn hysteresis(
             let r = classify_point(&g, x, &EventDriven, opts)?;
             x = r.end_state;
             out.push(PointRecord::new(0, i, gear.theta.to_degrees(), f, &g, &r));
-            observer.point_done(0, i);
+            observer.observe(&Event::SweepPoint { row: 0, col: i });
         }
         Ok(out)
     };

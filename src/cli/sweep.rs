@@ -5,8 +5,8 @@
 use super::common::{angle_deg, count, frequency, limits, output_dir, tolerance, GearArgs};
 use crate::analysis::ClassifyOptions;
 use crate::sweep::{
-    merge_shards, spec_hash, Axis, Method, Protocol, Shard, SweepObserver, SweepOutcome,
-    SweepParam, SweepResult, SweepRunner, SweepSpec,
+    merge_shards, spec_hash, Axis, Method, Protocol, Shard, SweepOutcome, SweepParam, SweepResult,
+    SweepRunner, SweepSpec,
 };
 use crate::Result;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -135,17 +135,23 @@ impl Progress {
     }
 }
 
-impl SweepObserver for Progress {
-    fn started(&self, total: usize, done: usize) {
-        self.bar.set_length(total as u64);
-        self.bar.set_position(done as u64);
-        self.bar.reset_eta();
-    }
-    fn point_done(&self, _row: usize, _col: usize) {
-        self.bar.inc(1);
-    }
-    fn row_done(&self, row: usize, _path: Option<&Path>) {
-        self.bar.set_message(format!("(row {row} checkpointed)"));
+impl crate::progress::Observer for Progress {
+    fn observe(&self, event: &crate::progress::Event<'_>) {
+        use crate::progress::Event;
+        match *event {
+            Event::Started { total, done } => {
+                if let Some(total) = total {
+                    self.bar.set_length(total as u64);
+                }
+                self.bar.set_position(done as u64);
+                self.bar.reset_eta();
+            }
+            Event::SweepPoint { .. } => self.bar.inc(1),
+            Event::RowDone { row, .. } => {
+                self.bar.set_message(format!("(row {row} checkpointed)"));
+            }
+            _ => {}
+        }
     }
 }
 
