@@ -546,6 +546,9 @@ pub struct RowResult {
     pub points: Vec<PointRecord>,
 }
 
+/// Schema id of `sweep.json` (docs/formats.md).
+pub const SCHEMA: &str = "gearbif.sweep/1";
+
 /// The result of a complete sweep: the spec and every row.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SweepResult {
@@ -565,10 +568,13 @@ impl SweepResult {
     pub fn to_csv(&self) -> Result<String> {
         let mut w = csv::Writer::from_writer(Vec::new());
         for p in self.points() {
-            w.serialize(p).map_err(|e| Error::Io(e.to_string()))?;
+            w.serialize(p)
+                .map_err(|e| Error::format("CSV", "sweep table", e))?;
         }
-        let bytes = w.into_inner().map_err(|e| Error::Io(e.to_string()))?;
-        let mut s = String::from_utf8(bytes).map_err(|e| Error::Io(e.to_string()))?;
+        let bytes = w
+            .into_inner()
+            .map_err(|e| Error::format("CSV", "sweep table", e.into_error()))?;
+        let mut s = String::from_utf8(bytes).map_err(|e| Error::format("CSV", "sweep table", e))?;
         let header = format!(
             "# rows = {}, cols = {}, protocol = {:?}, method = {:?}\n",
             self.spec.rows.param.name(),
@@ -584,7 +590,10 @@ impl SweepResult {
     pub fn write(&self, dir: impl AsRef<Path>) -> Result<()> {
         let dir = dir.as_ref();
         crate::io::write_atomic(dir.join("points.csv"), self.to_csv()?.as_bytes())?;
-        crate::io::write_json_atomic(dir.join("sweep.json"), self)
+        crate::io::write_json_atomic(
+            dir.join("sweep.json"),
+            &crate::io::with_schema(SCHEMA, self),
+        )
     }
 }
 
@@ -659,8 +668,8 @@ impl<'a> SweepRunner<'a> {
         };
         let spec_path = dir.join("spec.json");
         if spec_path.exists() {
-            let bytes = std::fs::read(&spec_path)
-                .map_err(|e| Error::Io(format!("{}: {e}", spec_path.display())))?;
+            let bytes =
+                std::fs::read(&spec_path).map_err(|e| Error::file("read", &spec_path, e))?;
             let old: SweepSpec = serde_json::from_slice(&bytes).map_err(|e| Error::Recording {
                 file: spec_path.display().to_string(),
                 line: (e.line() > 0).then_some(e.line()),
@@ -679,8 +688,7 @@ impl<'a> SweepRunner<'a> {
                 }
                 let p = Self::row_path(dir, i);
                 if p.is_file() {
-                    let bytes = std::fs::read(&p)
-                        .map_err(|e| Error::Io(format!("{}: {e}", p.display())))?;
+                    let bytes = std::fs::read(&p).map_err(|e| Error::file("read", &p, e))?;
                     *slot = serde_json::from_slice::<RowResult>(&bytes)
                         .ok()
                         .filter(|r| self.spec.row_matches(i, r));

@@ -3,10 +3,12 @@
 use super::common::{
     check_frequency, count, limits, output_file, start_state, tolerance, within, GearArgs, Output,
 };
-use crate::continuation::{switch_branch, Branch, Continuation, ContinuationOptions};
+use crate::continuation::multiple_shooting::{continue_branch, MultipleShootingOptions};
+use crate::continuation::pinned::switch_at;
+use crate::continuation::{Branch, Continuation, ContinuationOptions};
 use crate::error::{Error, Result};
 use crate::maps::Section;
-use crate::model::{Gear, GearParam, Parameter};
+use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};
 
 /// Arguments of `gearbif continue`.
@@ -17,19 +19,25 @@ pub struct Args {
     /// Drive frequency f [Hz] of the start orbit, in [1e-3, 1e4].
     #[arg(long)]
     f: f64,
-    /// Continuation parameter: f, theta (parallel shafts, deg), delta, zeta, eta or g.
+    /// Continuation parameter: f [Hz], theta (parallel shafts) [deg], delta [1], zeta [1/s],
+    /// eta [1/s²] or g [1/s²].
     #[arg(long, default_value = "f")]
     param: String,
-    /// Parameter range `lo:hi` (finite, lo < hi); the continuation stops on its bounds.
+    /// Parameter range `lo:hi` in the parameter's unit (finite, lo < hi); the continuation stops
+    /// on its bounds.
     #[arg(long, allow_hyphen_values = true)]
     range: String,
     /// Initial direction: up or down in the parameter.
     #[arg(long, default_value = "up")]
     direction: String,
-    /// Start state `beta,omega` (rad, rad/s, physical convention; |beta| <= 2π, |omega| <= 1e6);
-    /// default: from a simulation
-    /// (relaxed, period and winding detected), or the analytic lock with --lock.
-    #[arg(long, allow_hyphen_values = true)]
+    /// Start state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention; |β| <= 2π,
+    /// |ω| <= 1e6), as in the `x` of the JSON outputs; default: from a simulation (relaxed, period
+    /// and winding detected), or the analytic lock with --lock.
+    #[arg(
+        long = "state-rad",
+        value_name = "BETA_RAD,OMEGA",
+        allow_hyphen_values = true
+    )]
     state: Option<String>,
     /// Start from the analytic lock branch (Δ = ±1 only): stable or unstable.
     #[arg(long)]
@@ -56,11 +64,15 @@ pub struct Args {
     /// Integrator tolerance, in (0, 1).
     #[arg(long, default_value_t = 1e-11)]
     tol: f64,
-    /// Stop when a multiplier modulus exceeds this (finite, > 1).
+    /// Single shooting is trusted up to this multiplier modulus (finite, > 1); beyond it the branch
+    /// is continued by multiple shooting (or stops, with --no-multiple-shooting).
     #[arg(long, default_value_t = 1e4)]
     max_multiplier: f64,
+    /// Stop at --max-multiplier instead of switching to multiple shooting.
+    #[arg(long)]
+    no_multiple_shooting: bool,
     /// After the continuation, switch at special point number N (flip or symmetry-breaking) and
-    /// continue the new branch too.
+    /// continue the new branch too, on the side of the point where it exists (away from the point).
     #[arg(long)]
     switch_at: Option<usize>,
     /// Write the branch (JSON) to this file.
@@ -76,6 +88,9 @@ pub struct Args {
     #[arg(long)]
     json: bool,
 }
+
+/// Schema id of the branch document written by `--json` and `--out`.
+pub const BRANCHES_SCHEMA: &str = "gearbif.branches/1";
 
 /// Parses `lo:hi`.
 pub(crate) fn parse_range(s: &str) -> Result<(f64, f64)> {
@@ -102,10 +117,10 @@ pub(crate) fn parse_state(s: &str) -> Result<[f64; 2]> {
         .split(',')
         .map(|x| x.trim().parse::<f64>())
         .collect::<std::result::Result<_, _>>()
-        .map_err(|_| Error::InvalidInput(format!("state `{s}` must be beta,omega")))?;
+        .map_err(|_| Error::InvalidInput(format!("state `{s}` must be BETA_RAD,OMEGA")))?;
     if v.len() != 2 || !v.iter().all(|x| x.is_finite()) {
         return Err(Error::InvalidInput(format!(
-            "state `{s}` must be two finite numbers"
+            "state `{s}` must be two finite numbers (β [rad], ω [rad/s])"
         )));
     }
     start_state("state", v[0], v[1], false)?;
@@ -150,7 +165,7 @@ fn start_orbit(
         let x = parse_state(s)?;
         let p = a
             .winding
-            .ok_or_else(|| Error::InvalidInput("--state needs --winding".into()))?;
+            .ok_or_else(|| Error::InvalidInput("--state-rad needs --winding".into()))?;
         return shoot(gear, &mk_spec(p), x, shooting);
     }
     let o = orbit_from_simulation(
@@ -178,6 +193,13 @@ fn summary(b: &Branch) -> String {
         b.map_evaluations,
         b.stop
     ));
+    if let Some(i) = b.multiple_shooting_from {
+        s.push_str(&format!(
+            "  multiple shooting from point {i} ({} = {:.6}) on\n",
+            b.param.name(),
+            b.points.get(i).map(|p| p.param).unwrap_or(f64::NAN)
+        ));
+    }
     for (i, sp) in b.specials.iter().enumerate() {
         let mu = sp.floquet.multipliers;
         s.push_str(&format!(
@@ -233,7 +255,13 @@ pub fn run(a: Args) -> Result<()> {
         shooting,
         ..Default::default()
     };
-    let branch = Continuation::from_orbit(gear, param, &orbit, opts)?.run(None)?;
+    let ms = (!a.no_multiple_shooting).then(MultipleShootingOptions::default);
+    let branch = continue_branch(
+        Continuation::from_orbit(gear, param, &orbit, opts)?,
+        &opts,
+        ms.as_ref(),
+        None,
+    )?;
     let mut branches = vec![branch];
     if let Some(n) = a.switch_at {
         let b0 = &branches[0];
@@ -243,21 +271,27 @@ pub fn run(a: Args) -> Result<()> {
                 b0.specials.len()
             ))
         })?;
-        let sw = switch_branch(b0, sp, -sign * 1e-3 * sp.param.abs().max(1.0), &shooting)?;
-        let b1 = Continuation::from_orbit(
-            sw.system,
-            param,
-            &sw.orbit,
-            ContinuationOptions {
-                ds: sign * 0.25 * a.ds.abs(),
-                ..opts
-            },
-        )?
-        .run(None)?;
+        // pinned switching: the new orbit is found at a fixed distance from the bifurcating one,
+        // with the parameter free, so it lands on the side where the new branch exists; the new
+        // branch is continued away from the point
+        let (sys1, orbit1) = switch_at(b0, sp, 1e-2, &shooting)?;
+        let side = (sys1.param(param) - sp.param).signum();
+        let o1 = ContinuationOptions {
+            ds: side * 0.25 * a.ds.abs(),
+            ..opts
+        };
+        let b1 = continue_branch(
+            Continuation::from_orbit(sys1, param, &orbit1, o1)?,
+            &o1,
+            ms.as_ref(),
+            None,
+        )?;
         branches.push(b1);
     }
+    // one document for --out and --json: {"schema": "gearbif.branches/1", "branches": [...]}
+    let tagged = serde_json::json!({ "schema": BRANCHES_SCHEMA, "branches": &branches });
     if let Some(p) = &a.out {
-        crate::io::write_json_atomic(p, &branches)?;
+        crate::io::write_json_atomic(p, &tagged)?;
     }
     if let Some(p) = &a.plot {
         let fig = crate::plotting::branch::BranchDiagram {
@@ -275,7 +309,7 @@ pub fn run(a: Args) -> Result<()> {
         };
         crate::plotting::save(&fig, p)?;
     }
-    Output { json: a.json }.emit(&branches, || {
+    Output { json: a.json }.emit(&tagged, || {
         branches.iter().map(summary).collect::<Vec<_>>().join("")
     })
 }

@@ -27,6 +27,7 @@ pub fn run(a: Args) -> Result<()> {
     };
     let d = diagnose(&set, &opts, &|s| eprintln!("[fit] {s}"))?;
     let v = serde_json::json!({
+        "schema": "gearbif.fit/1",
         "baseline": d.report.baseline,
         "ringdowns": d.ringdowns,
         "kappa_alpha0": d.kappa,
@@ -34,7 +35,7 @@ pub fn run(a: Args) -> Result<()> {
     if a.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&v).map_err(|e| crate::Error::Io(e.to_string()))?
+            serde_json::to_string_pretty(&v).map_err(|e| crate::Error::format("JSON", "fit", e))?
         );
         return Ok(());
     }
