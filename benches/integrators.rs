@@ -3,10 +3,17 @@
 //! method at rtol 1e-6, 1e-9, 1e-12 (fixed step: 50, 800, 12800 steps per period), and the cost of
 //! the right-hand side alone (as many `forces_jet` calls as the event-driven run makes).
 //!
+//! `per_period_1e-8`: DP5 and DOP853 at tol 1e-8 with friction, P_T from (0.5, 2) with and without
+//! the state Jacobian, and 1000 periods from rest with a strobe sample at every period (no
+//! Jacobian; the time divided by 1000 is the cost per period).
+//!
 //! Run briefly: `cargo bench --bench integrators -- --warm-up-time 1 --measurement-time 3`
+//! (only the 1e-8 group: append `per_period`)
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use gearbif::integrator::{EventDriven, FixedStep, FlowMethod, FlowOptions, Sensitivity};
+use gearbif::integrator::{
+    EventDriven, EventDriven853, FixedStep, FlowMethod, FlowOptions, Sensitivity,
+};
 use gearbif::model::{DrivenOscillator, Gear};
 use std::hint::black_box;
 
@@ -71,10 +78,45 @@ fn bench_methods(c: &mut Criterion) {
     }
 }
 
+fn bench_per_period(c: &mut Criterion) {
+    let gear = Gear::paper(25.0, 2.7).unwrap();
+    let t1 = gear.period();
+    let mut group = c.benchmark_group("per_period_1e-8");
+    let methods: [(&str, &dyn FlowMethod<Gear>); 2] =
+        [("dp5", &EventDriven), ("dop853", &EventDriven853)];
+    for (name, m) in methods {
+        for (label, sens) in [("pt", Sensitivity::None), ("pt_jac", Sensitivity::State)] {
+            let o = FlowOptions::with_tol(1e-8).sensitivity(sens);
+            group.bench_function(format!("{label}/{name}"), |b| {
+                b.iter(|| m.flow(&gear, 0.0, black_box(X0), t1, &o).unwrap())
+            });
+        }
+        // 1000 periods from rest (β = π, the paper's start), a strobe sample at every period
+        let n = 1000;
+        let strobe: Vec<f64> = (0..=n).map(|i| i as f64 * t1).collect();
+        let o = FlowOptions::with_tol(1e-8).samples(strobe);
+        group.sample_size(10);
+        group.bench_function(format!("1000_periods_strobe/{name}"), |b| {
+            b.iter(|| {
+                m.flow(
+                    &gear,
+                    0.0,
+                    black_box([std::f64::consts::PI, 0.0]),
+                    n as f64 * t1,
+                    &o,
+                )
+                .unwrap()
+            })
+        });
+        group.sample_size(100);
+    }
+    group.finish();
+}
+
 // no plots: criterion's plotters backend needs a system font, which a fresh machine may lack
 criterion_group! {
     name = benches;
     config = Criterion::default().without_plots();
-    targets = bench_methods
+    targets = bench_methods, bench_per_period
 }
 criterion_main!(benches);

@@ -18,7 +18,7 @@
 //! ```
 
 use crate::error::{finite, non_negative, positive, Error, Result};
-use crate::integrator::{EventDriven, Flow, FlowMethod, FlowOptions, Sensitivity};
+use crate::integrator::{EventDriven853, Flow, FlowMethod, FlowOptions, Sensitivity};
 use crate::model::DrivenOscillator;
 use serde::{Deserialize, Serialize};
 use std::hint::black_box;
@@ -54,7 +54,7 @@ pub struct WorkPrecisionSetup {
     pub periods: f64,
     /// Jacobians to propagate (and compare).
     pub sensitivity: Sensitivity,
-    /// Tolerance of the event-driven reference.
+    /// Tolerance of the event-driven reference (DOP853).
     pub reference_tol: f64,
     /// Each point is timed in batches of calls until this much wall time has passed, s; the fastest
     /// batch counts (0: a single call).
@@ -113,7 +113,7 @@ pub fn reference<S: DrivenOscillator + ?Sized>(
     setup.validate()?;
     let t1 = setup.periods * sys.period();
     let opts = FlowOptions::with_tol(setup.reference_tol).sensitivity(setup.sensitivity);
-    EventDriven.flow(sys, 0.0, setup.x0, t1, &opts)
+    EventDriven853.flow(sys, 0.0, setup.x0, t1, &opts)
 }
 
 /// Runs every candidate on the setup and measures it against the event-driven reference.

@@ -324,6 +324,15 @@ where
     Ok((r, img))
 }
 
+/// The winding number of an advance `d` of β: round(d/2π) for an angle, 0 for a displacement.
+fn winding_of<S: DrivenOscillator + ?Sized>(sys: &S, d: f64) -> f64 {
+    if sys.angular() {
+        (d / TAU).round()
+    } else {
+        0.0
+    }
+}
+
 fn check_state(x: [f64; 2]) -> Result<()> {
     if x[0].is_finite() && x[1].is_finite() {
         Ok(())
@@ -462,12 +471,12 @@ where
     if relax_periods > 0 {
         x = poincare_map(method, sys, Section::Stroboscopic, x, relax_periods, &o)?.x;
     }
-    x[0] = x[0].rem_euclid(TAU);
+    x[0] = sys.reduce_angle(x[0]);
     let mut y = x;
     let mut best = f64::INFINITY;
     for k in 1..=max_period {
         y = poincare_map(method, sys, Section::Stroboscopic, y, 1, &o)?.x;
-        let p = ((y[0] - x[0]) / TAU).round();
+        let p = winding_of(sys, y[0] - x[0]);
         let err = (y[0] - x[0] - TAU * p).hypot(y[1] - x[1]);
         best = best.min(err);
         if err < closing_tol {
@@ -596,9 +605,9 @@ where
     for &v in values {
         let sys = make(v)?;
         x = poincare_map(method, &sys, Section::Stroboscopic, x, relax_periods, &o)?.x;
-        x[0] = x[0].rem_euclid(TAU);
+        x[0] = sys.reduce_angle(x[0]);
         let y = poincare_map(method, &sys, Section::Stroboscopic, x, 1, &o)?.x;
-        let p = ((y[0] - x[0]) / TAU).round();
+        let p = winding_of(&sys, y[0] - x[0]);
         let closing = (y[0] - x[0] - TAU * p).hypot(y[1] - x[1]);
         let asymmetry = match sys.half_period_symmetry() {
             Some(_) => {

@@ -21,8 +21,8 @@ use crate::model::gear::cogging_free_parallel_angles;
 use crate::model::{Convention, Gear, GearParam, GearParams, Parametrised};
 use crate::orbits::{orbit_from_simulation, OrbitSpec, ShootingOptions};
 use crate::sweep::{
-    hysteresis, Axis, Hysteresis, Method, PointRecord, Protocol, SweepObserver, SweepOutcome,
-    SweepParam, SweepResult, SweepRunner, SweepSpec,
+    hysteresis, Axis, Hysteresis, Method, PointRecord, Protocol, SweepOutcome, SweepParam,
+    SweepResult, SweepRunner, SweepSpec,
 };
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -999,7 +999,7 @@ pub fn build_report(
     gear: &GearParams,
     opts: &ReportOptions,
     dir: impl AsRef<Path>,
-    observer: &dyn SweepObserver,
+    observer: &dyn crate::progress::Observer,
 ) -> Result<Report> {
     gear.validate()?;
     let dir = dir.as_ref();

@@ -4,7 +4,10 @@
 //! file, and a restarted sweep loads the finished rows and computes only the missing ones. Each
 //! row depends only on the spec, so a resumed sweep ends bit-identical to an uninterrupted one.
 //!
-//! Progress and checkpoint reporting are observers ([`SweepObserver`]), outside the numerics.
+//! Progress and checkpoint reporting are observers ([`crate::progress::Observer`]), outside the
+//! numerics. The row computation is generic ([`sweep_row`], [`sweep_grid`]: any system with a
+//! parameter lens, any integrator); [`SweepSpec`] and [`SweepRunner`] are the gear's instance,
+//! with the paper's protocols and checkpoints.
 //!
 //! Protocols:
 //! - [`Protocol::Fresh`] (Fig. 7b): every point starts from the same initial state.
@@ -13,11 +16,16 @@
 
 use crate::analysis::classify::{classify_point, ClassifyOptions, Dynamics, PointResult};
 use crate::error::{Error, Result};
-use crate::integrator::{EventDriven, FixedStep};
+use crate::integrator::{EventDriven, FixedStep, FlowMethod};
 use crate::model::{Convention, Gear, GearParams};
+use crate::model::{DrivenOscillator, Parametrised};
+pub use crate::progress::{Event, Observer, Silent};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
+
+mod shard;
+pub use shard::{merge_shards, spec_hash, Shard, ShardStatus};
 
 /// A swept parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -292,38 +300,132 @@ impl SweepSpec {
     }
 
     /// Computes one row (sequential along the columns).
-    pub fn compute_row(&self, row: usize, observer: &dyn SweepObserver) -> Result<RowResult> {
+    pub fn compute_row(&self, row: usize, observer: &dyn Observer) -> Result<RowResult> {
         let rv = *self
             .rows
             .values
             .get(row)
             .ok_or_else(|| Error::InvalidInput(format!("row {row} out of range")))?;
         let x_start = [self.beta0_deg.to_radians(), 0.0];
-        let mut x = x_start;
-        let mut points = Vec::with_capacity(self.cols.values.len());
         let fixed_opts = ClassifyOptions {
             rigorous: false,
             ..self.classify.clone()
         };
-        for (col, &cv) in self.cols.values.iter().enumerate() {
-            let gear = self.gear_at(rv, cv)?;
-            if self.protocol == Protocol::Fresh {
-                x = x_start;
-            }
-            let res = match self.method {
-                Method::EventDriven => classify_point(&gear, x, &EventDriven, &self.classify)?,
-                Method::FixedStep => classify_point(&gear, x, &FixedStep::default(), &fixed_opts)?,
-            };
-            x = res.end_state;
-            points.push(PointRecord::new(row, col, rv, cv, &gear, &res));
-            observer.point_done(row, col);
-        }
+        let at = |cv: f64| self.gear_at(rv, cv);
+        let cols = &self.cols.values;
+        let results = match self.method {
+            Method::EventDriven => sweep_row(
+                &EventDriven,
+                at,
+                cols,
+                x_start,
+                self.protocol,
+                &self.classify,
+                row,
+                observer,
+            )?,
+            Method::FixedStep => sweep_row(
+                &FixedStep::default(),
+                at,
+                cols,
+                x_start,
+                self.protocol,
+                &fixed_opts,
+                row,
+                observer,
+            )?,
+        };
+        let points = results
+            .iter()
+            .zip(cols)
+            .enumerate()
+            .map(|(col, ((gear, res), &cv))| PointRecord::new(row, col, rv, cv, gear, res))
+            .collect();
         Ok(RowResult {
             row,
             row_value: rv,
             points,
         })
     }
+}
+
+/// One row of a sweep of any system: classifies the attractor at each value of `cols` (in order)
+/// with [`classify_point`], the system built by `system_at`; with [`Protocol::SemiStatic`] the end
+/// state of one point starts the next, with [`Protocol::Fresh`] every point starts at `x_start`.
+/// Reports [`Event::SweepPoint`] { row, col } after each point.
+#[allow(clippy::too_many_arguments)]
+pub fn sweep_row<S, M, F>(
+    method: &M,
+    system_at: F,
+    cols: &[f64],
+    x_start: [f64; 2],
+    protocol: Protocol,
+    opts: &ClassifyOptions,
+    row: usize,
+    observer: &dyn Observer,
+) -> Result<Vec<(S, PointResult)>>
+where
+    S: DrivenOscillator,
+    M: FlowMethod<S> + ?Sized,
+    F: Fn(f64) -> Result<S>,
+{
+    let mut x = x_start;
+    let mut out = Vec::with_capacity(cols.len());
+    for (col, &cv) in cols.iter().enumerate() {
+        let sys = system_at(cv)?;
+        if protocol == Protocol::Fresh {
+            x = x_start;
+        }
+        let res = classify_point(&sys, x, method, opts)?;
+        x = res.end_state;
+        out.push((sys, res));
+        observer.observe(&Event::SweepPoint { row, col });
+    }
+    Ok(out)
+}
+
+/// A two-parameter sweep of any [`Parametrised`] system: `rows.0` takes the values `rows.1`, and
+/// along each row (one task per row with the `parallel` feature) `cols.0` takes the values
+/// `cols.1` ([`sweep_row`]). Returns the results row by row. The gear's resumable, checkpointed
+/// sweep is [`SweepRunner`].
+#[allow(clippy::too_many_arguments)]
+pub fn sweep_grid<S, M>(
+    method: &M,
+    base: &S,
+    rows: (S::Param, &[f64]),
+    cols: (S::Param, &[f64]),
+    x_start: [f64; 2],
+    protocol: Protocol,
+    opts: &ClassifyOptions,
+    observer: &dyn Observer,
+) -> Result<Vec<Vec<(S, PointResult)>>>
+where
+    S: Parametrised,
+    M: FlowMethod<S> + ?Sized,
+{
+    opts.validate()?;
+    if rows.0 == cols.0 {
+        return Err(Error::InvalidInput(
+            "the two sweep axes must be different parameters".into(),
+        ));
+    }
+    observer.observe(&Event::Started {
+        total: Some(rows.1.len() * cols.1.len()),
+        done: 0,
+    });
+    let row = |i: usize| -> Result<Vec<(S, PointResult)>> {
+        let sys = base.with_param(rows.0, rows.1[i])?;
+        let at = |v: f64| sys.with_param(cols.0, v);
+        sweep_row(method, at, cols.1, x_start, protocol, opts, i, observer)
+    };
+    #[cfg(feature = "parallel")]
+    let out: Vec<Result<Vec<(S, PointResult)>>> = {
+        use rayon::prelude::*;
+        (0..rows.1.len()).into_par_iter().map(row).collect()
+    };
+    #[cfg(not(feature = "parallel"))]
+    let out: Vec<Result<Vec<(S, PointResult)>>> = (0..rows.1.len()).map(row).collect();
+    out.into_iter().collect()
 }
 
 /// One point of a sweep, flat (one CSV line).
@@ -432,27 +534,6 @@ pub struct RowResult {
     pub points: Vec<PointRecord>,
 }
 
-/// Observes a running sweep (progress bars, logging). Called from worker threads.
-pub trait SweepObserver: Sync {
-    /// The sweep starts: `total` points, `done` of them already finished (loaded from checkpoints).
-    fn started(&self, total: usize, done: usize) {
-        let _ = (total, done);
-    }
-    /// A point finished.
-    fn point_done(&self, row: usize, col: usize) {
-        let _ = (row, col);
-    }
-    /// A row finished and was checkpointed (to `path`, if checkpointing).
-    fn row_done(&self, row: usize, path: Option<&Path>) {
-        let _ = (row, path);
-    }
-}
-
-/// An observer that does nothing.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Silent;
-impl SweepObserver for Silent {}
-
 /// The result of a complete sweep: the spec and every row.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SweepResult {
@@ -514,7 +595,8 @@ pub struct SweepRunner<'a> {
     spec: SweepSpec,
     checkpoint: Option<PathBuf>,
     max_new_rows: Option<usize>,
-    observer: &'a dyn SweepObserver,
+    observer: &'a dyn Observer,
+    shard: Option<Shard>,
 }
 
 impl<'a> SweepRunner<'a> {
@@ -525,6 +607,7 @@ impl<'a> SweepRunner<'a> {
             checkpoint: None,
             max_new_rows: None,
             observer: &Silent,
+            shard: None,
         }
     }
     /// Checkpoints rows into `dir` (`spec.json` and `rows/row-NNNNN.json`) and resumes from them.
@@ -538,13 +621,18 @@ impl<'a> SweepRunner<'a> {
         self
     }
     /// Sets the observer.
-    pub fn observer(mut self, o: &'a dyn SweepObserver) -> Self {
+    pub fn observer(mut self, o: &'a dyn Observer) -> Self {
         self.observer = o;
         self
     }
 
     fn row_path(dir: &Path, row: usize) -> PathBuf {
         dir.join("rows").join(format!("row-{row:05}.json"))
+    }
+
+    /// Whether row `i` is computed by this runner (all rows, or those of its shard).
+    fn owns(&self, i: usize) -> bool {
+        self.shard.is_none_or(|s| s.contains(i))
     }
 
     /// Loads finished rows from the checkpoint (checking that it belongs to the same spec). A
@@ -574,6 +662,9 @@ impl<'a> SweepRunner<'a> {
             }
             crate::io::remove_stale_temporaries(&dir.join("rows"));
             for (i, slot) in rows.iter_mut().enumerate() {
+                if !self.owns(i) {
+                    continue;
+                }
                 let p = Self::row_path(dir, i);
                 if p.is_file() {
                     let bytes = std::fs::read(&p)
@@ -586,17 +677,71 @@ impl<'a> SweepRunner<'a> {
         } else {
             crate::io::write_json_atomic(&spec_path, &self.spec)?;
         }
+        if let Some(shard) = self.shard {
+            shard::check_or_write_manifest(dir, &self.spec, shard)?;
+        }
         Ok(rows)
     }
 
     /// Runs (or resumes) the sweep.
     pub fn run(&self) -> Result<SweepOutcome> {
+        if self.shard.is_some() {
+            return Err(Error::InvalidInput(
+                "a sharded runner is run with `run_shard`".into(),
+            ));
+        }
+        let rows = self.run_rows()?;
+        let rows_done = rows.iter().filter(|r| r.is_some()).count();
+        if rows_done < rows.len() {
+            return Ok(SweepOutcome::Stopped {
+                rows_done,
+                rows_total: rows.len(),
+            });
+        }
+        Ok(SweepOutcome::Complete(Box::new(SweepResult {
+            spec: self.spec.clone(),
+            rows: rows.into_iter().flatten().collect(),
+        })))
+    }
+
+    /// Runs (or resumes) one shard of the sweep into the checkpoint directory (required); the
+    /// shards are combined by [`merge_shards`].
+    pub fn run_shard(mut self, shard: Shard) -> Result<ShardStatus> {
+        if self.checkpoint.is_none() {
+            return Err(Error::InvalidInput(
+                "a shard needs a checkpoint directory".into(),
+            ));
+        }
+        shard.check_rows(self.spec.rows.values.len())?;
+        self.shard = Some(shard);
+        let rows = self.run_rows()?;
+        let rows_total = shard.rows(rows.len()).count();
+        let rows_done = shard
+            .rows(rows.len())
+            .filter(|&i| rows[i].is_some())
+            .count();
+        Ok(ShardStatus {
+            shard,
+            rows_done,
+            rows_total,
+        })
+    }
+
+    /// Loads the finished rows, computes the missing rows this runner owns (up to the row limit),
+    /// checkpoints each, and returns every row slot.
+    fn run_rows(&self) -> Result<Vec<Option<RowResult>>> {
         self.spec.validate()?;
         let mut rows = self.load()?;
         let ncols = self.spec.cols.values.len();
         let done = rows.iter().filter(|r| r.is_some()).count();
-        self.observer.started(self.spec.len(), done * ncols);
-        let pending: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].is_none()).collect();
+        let owned = (0..rows.len()).filter(|&i| self.owns(i)).count();
+        self.observer.observe(&Event::Started {
+            total: Some(owned * ncols),
+            done: done * ncols,
+        });
+        let pending: Vec<usize> = (0..rows.len())
+            .filter(|&i| rows[i].is_none() && self.owns(i))
+            .collect();
         let started = AtomicUsize::new(0);
         let limit = self.max_new_rows.unwrap_or(usize::MAX);
         let work = |i: usize| -> Result<Option<RowResult>> {
@@ -612,7 +757,10 @@ impl<'a> SweepRunner<'a> {
                 }
                 None => None,
             };
-            self.observer.row_done(i, path.as_deref());
+            self.observer.observe(&Event::RowDone {
+                row: i,
+                path: path.as_deref(),
+            });
             Ok(Some(r))
         };
         #[cfg(feature = "parallel")]
@@ -628,17 +776,7 @@ impl<'a> SweepRunner<'a> {
                 rows[i] = Some(row);
             }
         }
-        let rows_done = rows.iter().filter(|r| r.is_some()).count();
-        if rows_done < rows.len() {
-            return Ok(SweepOutcome::Stopped {
-                rows_done,
-                rows_total: rows.len(),
-            });
-        }
-        Ok(SweepOutcome::Complete(Box::new(SweepResult {
-            spec: self.spec.clone(),
-            rows: rows.into_iter().flatten().collect(),
-        })))
+        Ok(rows)
     }
 }
 
@@ -662,7 +800,7 @@ pub fn hysteresis(
     beta0_deg: f64,
     convention: Convention,
     opts: &ClassifyOptions,
-    observer: &dyn SweepObserver,
+    observer: &dyn Observer,
 ) -> Result<Hysteresis> {
     if f_values.is_empty() || f_values.windows(2).any(|w| w[1] <= w[0] || w[1].is_nan()) {
         return Err(Error::InvalidInput(
@@ -680,7 +818,7 @@ pub fn hysteresis(
             let r = classify_point(&g, x, &EventDriven, opts)?;
             x = r.end_state;
             out.push(PointRecord::new(0, i, gear.theta.to_degrees(), f, &g, &r));
-            observer.point_done(0, i);
+            observer.observe(&Event::SweepPoint { row: 0, col: i });
         }
         Ok(out)
     };

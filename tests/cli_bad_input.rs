@@ -286,6 +286,23 @@ const CASES: &[(&str, &str)] = &[
     ("diagnose {set-kind} --out o", "experiment.toml:8"),
     ("diagnose {set-nan} --out {file}", "not a folder"),
     ("diagnose {set-nan}", "--out"),
+    // campaign
+    ("campaign", "--out"),
+    ("campaign --out o --seeds 0", "seeds"),
+    ("campaign --out o --seeds 1000000", "seeds"),
+    ("campaign --out o --null-seeds 0", "null-seeds"),
+    ("campaign --out o --effects nope", "nope"),
+    ("campaign --out o --sizes=-1", "level"),
+    ("campaign --out o --sizes nan", "level"),
+    ("campaign --out o --set huge", "unknown set size"),
+    ("campaign --out o --step 0", "step"),
+    ("campaign --out o --step 1", "step"),
+    ("campaign --out o --turns nan", "turns"),
+    (
+        "campaign --out o --ringdowns 0 --driven 0",
+        "at least one run",
+    ),
+    ("campaign --out {file}", "not a folder"),
     // bench-integrators
     ("bench-integrators --event-tols 0", "tol"),
     ("bench-integrators --event-tols 1.5", "tol"),

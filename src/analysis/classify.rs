@@ -183,11 +183,7 @@ pub struct PointResult {
 /// The sense s of δ = β − sα: +1 for Δ ≥ 0 (the output turns with the input), −1 for Δ < 0
 /// (the reversed mode beyond Θ = 35.26°). The paper defines δ = β − α only for the first.
 pub fn delta_sense(gear: &Gear) -> f64 {
-    if gear.delta >= 0.0 {
-        1.0
-    } else {
-        -1.0
-    }
+    gear.co_rotation()
 }
 
 /// Do a paper class and a rigorous class agree?
@@ -223,15 +219,21 @@ pub fn period_label(k: usize) -> String {
     }
 }
 
-/// Classifies the attractor of `gear` reached from `x0` (β, ω at t = 0, α = α₀), simulating the
-/// paper's window with `method` and (if `opts.rigorous`) the rigorous analysis with the exact
-/// event-driven integrator.
-pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
-    gear: &Gear,
+/// Classifies the attractor of `sys` reached from `x0` (β, ω at t = 0), simulating the paper's
+/// window with `method` and (if `opts.rigorous`) the rigorous analysis with the exact event-driven
+/// integrator. The paper's metrics fit δ = β − s·α over the drive phase α
+/// ([`DrivenOscillator::drive_phase`], s = [`DrivenOscillator::co_rotation`]; δ = β for an
+/// oscillator).
+pub fn classify_point<S, M>(
+    gear: &S,
     x0: [f64; 2],
     method: &M,
     opts: &ClassifyOptions,
-) -> Result<PointResult> {
+) -> Result<PointResult>
+where
+    S: DrivenOscillator + ?Sized,
+    M: FlowMethod<S> + ?Sized,
+{
     opts.validate()?;
     if !x0[0].is_finite() || !x0[1].is_finite() {
         return Err(Error::InvalidInput(format!(
@@ -260,8 +262,8 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
             reason: format!("expected {n} samples, got {}", win.samples.len()),
         });
     }
-    let s = delta_sense(gear);
-    let alpha: Vec<f64> = win.samples.iter().map(|p| gear.alpha(p.t)).collect();
+    let s = gear.co_rotation();
+    let alpha: Vec<f64> = win.samples.iter().map(|p| gear.drive_phase(p.t)).collect();
     let mut delta: Vec<f64> = win
         .samples
         .iter()
@@ -292,7 +294,7 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
         let (rc, x_end, z) = rigorous_classify_with_section(gear, end, opts)?;
         end = x_end;
         if opts.keep_samples {
-            section = Some(z.iter().map(|v| [v[0].rem_euclid(TAU), v[1]]).collect());
+            section = Some(z.iter().map(|v| [gear.reduce_angle(v[0]), v[1]]).collect());
         }
         Some(rc)
     } else {
@@ -316,7 +318,7 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
         rigorous,
         agree,
         net_rotation_hz,
-        end_state: [end[0].rem_euclid(TAU), end[1]],
+        end_state: [gear.reduce_angle(end[0]), end[1]],
         section,
         samples,
     })
@@ -324,8 +326,8 @@ pub fn classify_point<M: FlowMethod<Gear> + ?Sized>(
 
 /// Settles turn by turn; stops early when the states repeat with a period m ≤ 8 turns (to `eps`,
 /// over two consecutive cycles) and returns the state the full settling reaches on that cycle.
-fn settle_early<M: FlowMethod<Gear> + ?Sized>(
-    gear: &Gear,
+fn settle_early<S: DrivenOscillator + ?Sized, M: FlowMethod<S> + ?Sized>(
+    gear: &S,
     x0: [f64; 2],
     method: &M,
     turns: usize,

@@ -4,7 +4,7 @@ use super::common::{count, limits, output_file, tolerance, within, GearArgs, Out
 use super::methods::{parse_x0, DriveArgs};
 use crate::bench::{rhs_only_time, to_csv, work_precision, Candidate, WorkPrecisionSetup};
 use crate::error::{positive, Result};
-use crate::integrator::{EventDriven, FixedStep, FlowMethod, Sensitivity};
+use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod, Sensitivity};
 use crate::model::Gear;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -35,6 +35,13 @@ pub struct Args {
         default_value = "1e-4,1e-6,1e-8,1e-10,1e-12"
     )]
     event_tols: Vec<f64>,
+    /// Tolerances of the event-driven DOP853 [dimensionless], comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1e-4,1e-6,1e-8,1e-10,1e-12"
+    )]
+    dop853_tols: Vec<f64>,
     /// Steps per period of the fixed-step RK4 [1], each 1 to 1000000, comma-separated (the paper
     /// uses 50).
     #[arg(
@@ -51,7 +58,7 @@ pub struct Args {
     /// comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "1e-2,1e-3,1e-4,1e-5")]
     reg_eps: Vec<f64>,
-    /// Tolerance of the event-driven reference [dimensionless], in (0, 1).
+    /// Tolerance of the event-driven reference (DOP853) [dimensionless], in (0, 1).
     #[arg(long, default_value_t = 1e-13)]
     reference_tol: f64,
     /// Minimum wall time spent timing each point [s], in [0, 60].
@@ -109,7 +116,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     tolerance("reference-tol", a.reference_tol)?;
     within("min-time", a.min_time, 0.0, 60.0, "must be in [0, 60] s")?;
-    for &t in a.event_tols.iter().chain(&a.reg_tols) {
+    for &t in a.event_tols.iter().chain(&a.reg_tols).chain(&a.dop853_tols) {
         tolerance("tol", t)?;
     }
     for &n in &a.fixed_steps {
@@ -131,6 +138,9 @@ pub fn run(a: Args) -> Result<()> {
     let mut cands: Vec<Candidate<'_, Gear>> = Vec::new();
     for &t in &a.event_tols {
         cands.push(Candidate::new(&EventDriven, t, "event-driven DP5"));
+    }
+    for &t in &a.dop853_tols {
+        cands.push(Candidate::new(&EventDriven853, t, "event-driven DOP853"));
     }
     for m in &fixed {
         cands.push(Candidate::new(

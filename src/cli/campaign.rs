@@ -28,10 +28,11 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_value = "all")]
     effects: Vec<String>,
     /// Number of seeds (labs and noise realisations) per effect and size, counted from
-    /// `--first-seed`.
+    /// `--first-seed`; 1 to 100000.
     #[arg(long, default_value_t = 10)]
     seeds: u64,
-    /// Number of seeds of each control (expected verdict `none`), counted from `--first-seed`.
+    /// Number of seeds of each control (expected verdict `none`), counted from `--first-seed`;
+    /// 1 to 100000.
     #[arg(long, default_value_t = 20)]
     null_seeds: u64,
     /// First seed.
@@ -85,6 +86,9 @@ fn spec_of(a: &Args) -> Result<CampaignSpec> {
             "--seeds and --null-seeds must be ≥ 1".into(),
         ));
     }
+    for (flag, n) in [("seeds", a.seeds), ("null-seeds", a.null_seeds)] {
+        super::common::count(flag, n as usize, 1, 100_000)?;
+    }
     let effects = if a.effects.iter().any(|e| e == "all") {
         EFFECTS.iter().map(|e| e.id.to_string()).collect()
     } else {
@@ -123,6 +127,7 @@ pub fn run(a: Args) -> Result<()> {
         .out
         .clone()
         .ok_or_else(|| Error::InvalidInput("--out is required".into()))?;
+    super::common::output_dir("--out", &out)?;
     let t0 = Instant::now();
     let doc = run_campaign(&spec, &out, &|s| {
         eprintln!("[{:7.1} s] {s}", t0.elapsed().as_secs_f64())

@@ -12,9 +12,9 @@ use crate::plotting::atlas::{
     RmsMap,
 };
 use crate::plotting::{save, Figure, LinePlot, Series};
+use crate::progress::Observer;
 use crate::sweep::{
-    hysteresis, Axis, Hysteresis, PointRecord, SweepObserver, SweepOutcome, SweepParam,
-    SweepRunner, SweepSpec,
+    hysteresis, Axis, Hysteresis, PointRecord, SweepOutcome, SweepParam, SweepRunner, SweepSpec,
 };
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -302,7 +302,7 @@ pub fn make(
                 if let Some(l) = r.rigorous.as_ref().and_then(|c| c.lyapunov.per_period) {
                     lyap.push((f, l));
                 }
-                progress.point_done(0, i);
+                progress.observe(&crate::progress::Event::SweepPoint { row: 0, col: i });
             }
             if name == Name::Orbit {
                 let fig = orbit_diagram(

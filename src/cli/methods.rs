@@ -3,7 +3,7 @@
 
 use super::common::{check_frequency, count, limits, start_state, tolerance, within, GearArgs};
 use crate::error::{finite, Error, Result};
-use crate::integrator::{EventDriven, FixedStep, FlowMethod};
+use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod};
 use crate::model::Gear;
 use clap::Args;
 
@@ -13,6 +13,8 @@ pub enum MethodArg {
     /// Exact event-driven Filippov integration (adaptive Dormand–Prince 5(4), saltation matrices).
     #[default]
     Event,
+    /// The same event-driven integration with Dormand–Prince 8(5,3) (fewer, longer steps).
+    Dop853,
     /// The paper's fixed-step RK4 with a naive sgn(ω) (`--steps` per period).
     Fixed,
     /// Friction η tanh(ω/ε) as a stiff ODE solved by diffsol ESDIRK3(4) (feature `diffsol-check`).
@@ -43,6 +45,7 @@ impl MethodArgs {
         tolerance("tol", self.tol)?;
         match self.method {
             MethodArg::Event => Ok(Box::new(EventDriven)),
+            MethodArg::Dop853 => Ok(Box::new(EventDriven853)),
             MethodArg::Fixed => {
                 count("steps", self.steps, 1, limits::TURNS_MAX)?;
                 Ok(Box::new(FixedStep {

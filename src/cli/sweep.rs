@@ -1,10 +1,12 @@
 //! `gearbif sweep`: a two-parameter atlas with the paper's protocols, in parallel over rows, with
-//! a progress bar and resumable checkpoints in the output directory.
+//! a progress bar and resumable checkpoints in the output directory; `--shard i/N` runs one part of
+//! the rows (a cluster job-array task) and `gearbif sweep merge` combines the parts.
 
 use super::common::{angle_deg, count, frequency, limits, output_dir, tolerance, GearArgs};
 use crate::analysis::ClassifyOptions;
 use crate::sweep::{
-    Axis, Method, Protocol, SweepObserver, SweepOutcome, SweepParam, SweepRunner, SweepSpec,
+    merge_shards, spec_hash, Axis, Method, Protocol, Shard, SweepOutcome, SweepParam, SweepResult,
+    SweepRunner, SweepSpec,
 };
 use crate::Result;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -12,7 +14,10 @@ use std::path::{Path, PathBuf};
 
 /// Arguments of `gearbif sweep`.
 #[derive(Debug, clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
 pub struct Args {
+    #[command(subcommand)]
+    command: Option<SweepCommand>,
     #[command(flatten)]
     gear: GearArgs,
     /// Row axis (parallel): param:start:stop:step or param:start:stop:n:log
@@ -65,6 +70,29 @@ pub struct Args {
     /// (e.g. 1e-8; in (0, 1)); default: integrate every settling turn as the paper did.
     #[arg(long)]
     settle_tol: Option<f64>,
+    /// Compute only shard i of N (0 <= i < N; rows r with r mod N = i), e.g. `--shard
+    /// $SLURM_ARRAY_TASK_ID/8`; combine the shards' --out directories with `gearbif sweep merge`.
+    #[arg(long, value_name = "i/N")]
+    shard: Option<String>,
+}
+
+/// Subcommands of `gearbif sweep`.
+#[derive(Debug, clap::Subcommand)]
+pub enum SweepCommand {
+    /// Combine the --out directories of all shards of one sweep into the sweep's outputs; refuses
+    /// if the shards belong to different specs (hash), a shard is missing or incomplete.
+    Merge(MergeArgs),
+}
+
+/// Arguments of `gearbif sweep merge`.
+#[derive(Debug, clap::Args)]
+pub struct MergeArgs {
+    /// The shards' --out directories (or their checkpoint directories).
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Output directory of the merged sweep.
+    #[arg(long, default_value = "sweep-out")]
+    out: PathBuf,
 }
 
 /// `--protocol` values.
@@ -104,17 +132,23 @@ impl Progress {
     }
 }
 
-impl SweepObserver for Progress {
-    fn started(&self, total: usize, done: usize) {
-        self.bar.set_length(total as u64);
-        self.bar.set_position(done as u64);
-        self.bar.reset_eta();
-    }
-    fn point_done(&self, _row: usize, _col: usize) {
-        self.bar.inc(1);
-    }
-    fn row_done(&self, row: usize, _path: Option<&Path>) {
-        self.bar.set_message(format!("(row {row} checkpointed)"));
+impl crate::progress::Observer for Progress {
+    fn observe(&self, event: &crate::progress::Event<'_>) {
+        use crate::progress::Event;
+        match *event {
+            Event::Started { total, done } => {
+                if let Some(total) = total {
+                    self.bar.set_length(total as u64);
+                }
+                self.bar.set_position(done as u64);
+                self.bar.reset_eta();
+            }
+            Event::SweepPoint { .. } => self.bar.inc(1),
+            Event::RowDone { row, .. } => {
+                self.bar.set_message(format!("(row {row} checkpointed)"));
+            }
+            _ => {}
+        }
     }
 }
 
@@ -164,9 +198,56 @@ pub fn spec(a: &Args) -> Result<SweepSpec> {
     Ok(s)
 }
 
+/// Writes the outputs of a complete sweep (points.csv, sweep.json, the RMS map).
+fn write_outputs(res: &SweepResult, out: &Path, seconds: f64) -> Result<()> {
+    res.write(out)?;
+    #[cfg(feature = "plot")]
+    {
+        let fig = crate::plotting::atlas::RmsMap::from_sweep(res);
+        crate::plotting::save(&fig, out.join("rms_map.svg"))?;
+        crate::plotting::save(&fig, out.join("rms_map.png"))?;
+    }
+    let n = res.points().count();
+    let dis = res.points().filter(|p| p.agree == Some(false)).count();
+    eprintln!(
+        "done: {n} points in {seconds:.1} s; wrote {}/points.csv, sweep.json, rms_map.svg/png; paper and rigorous classes disagree at {dis} points",
+        out.display()
+    );
+    Ok(())
+}
+
+/// Runs `gearbif sweep merge`.
+fn merge(a: MergeArgs) -> Result<()> {
+    output_dir("--out", &a.out)?;
+    let t = std::time::Instant::now();
+    let dirs: Vec<PathBuf> = a
+        .dirs
+        .iter()
+        .map(|d| {
+            let c = d.join("checkpoint");
+            if c.is_dir() {
+                c
+            } else {
+                d.clone()
+            }
+        })
+        .collect();
+    let res = merge_shards(&dirs)?;
+    eprintln!(
+        "merged {} shards of sweep {}",
+        dirs.len(),
+        spec_hash(&res.spec)?
+    );
+    write_outputs(&res, &a.out, t.elapsed().as_secs_f64())
+}
+
 /// Runs `gearbif sweep`.
 pub fn run(a: Args) -> Result<()> {
+    if let Some(SweepCommand::Merge(m)) = a.command {
+        return merge(m);
+    }
     let spec = spec(&a)?;
+    let shard = a.shard.as_deref().map(Shard::parse).transpose()?;
     let progress = Progress::new(a.quiet);
     let mut runner = SweepRunner::new(spec)
         .checkpoint(a.out.join("checkpoint"))
@@ -175,24 +256,29 @@ pub fn run(a: Args) -> Result<()> {
         runner = runner.max_new_rows(n);
     }
     let t = std::time::Instant::now();
+    if let Some(shard) = shard {
+        let st = runner.run_shard(shard)?;
+        progress.finish();
+        eprintln!(
+            "shard {}/{}: {}/{} rows done in {:.1} s ({}); merge with `gearbif sweep merge DIR...`",
+            shard.index,
+            shard.count,
+            st.rows_done,
+            st.rows_total,
+            t.elapsed().as_secs_f64(),
+            if st.complete() {
+                "complete"
+            } else {
+                "rerun the same command to resume"
+            }
+        );
+        return Ok(());
+    }
     let outcome = runner.run()?;
     progress.finish();
     match outcome {
         SweepOutcome::Complete(res) => {
-            res.write(&a.out)?;
-            #[cfg(feature = "plot")]
-            {
-                let fig = crate::plotting::atlas::RmsMap::from_sweep(&res);
-                crate::plotting::save(&fig, a.out.join("rms_map.svg"))?;
-                crate::plotting::save(&fig, a.out.join("rms_map.png"))?;
-            }
-            let n = res.points().count();
-            let dis = res.points().filter(|p| p.agree == Some(false)).count();
-            eprintln!(
-                "done: {n} points in {:.1} s; wrote {}/points.csv, sweep.json, rms_map.svg/png; paper and rigorous classes disagree at {dis} points",
-                t.elapsed().as_secs_f64(),
-                a.out.display()
-            );
+            write_outputs(&res, &a.out, t.elapsed().as_secs_f64())?;
         }
         SweepOutcome::Stopped {
             rows_done,

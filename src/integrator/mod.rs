@@ -8,17 +8,23 @@
 //!   (no integration while stuck), and variational equations with saltation matrices at every event,
 //!   so the Jacobian of the flow with respect to the initial state and the parameters comes out of
 //!   one integration (numerics.md, "Monodromy with saltation matrices").
+//! - [`EventDriven853`]: the same event handling with Dormand–Prince 8(5,3) and its continuous
+//!   extension of order 7 (fewer, longer steps; the Runge–Kutta pairs are data, `tableau.rs`).
 //! - [`FixedStep`]: the paper's scheme — classical RK4 with a fixed step Δt = T/n (n = 50 in the paper)
 //!   and a naive sgn(ω); kept as a comparison method (it chatters around Σ).
 //! - `Regularised` (feature `diffsol-check`): friction η tanh(ω/ε) integrated as a stiff ODE by
 //!   diffsol; an independent cross-check.
 
 mod augmented;
+mod dop853;
 mod dopri5;
+mod event_driven;
 mod fixed_step;
 #[cfg(feature = "diffsol-check")]
 mod regularised;
+mod tableau;
 
+pub use dop853::EventDriven853;
 pub use dopri5::EventDriven;
 pub use fixed_step::FixedStep;
 #[cfg(feature = "diffsol-check")]

@@ -548,6 +548,19 @@ impl DrivenOscillator for Gear {
             shift: PI,
         })
     }
+
+    fn drive_phase(&self, t: f64) -> f64 {
+        self.alpha(t)
+    }
+
+    /// +1 for Δ ≥ 0 (the output turns with the input), −1 for Δ < 0 (the reversed mode).
+    fn co_rotation(&self) -> f64 {
+        if self.delta >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        }
+    }
 }
 
 /// One point of the analytic lock branch at Δ = ±1 (numerics.md, "Validation oracles").

@@ -102,6 +102,107 @@ impl HalfPeriodSymmetry {
 ///
 /// Implementors provide the forces and their derivatives; the integrator handles the switching.
 /// The drive phase is referenced to t = 0: every map starts at t = 0 (stroboscopic section).
+///
+/// # What a system must implement
+///
+/// - [`period`](Self::period): the drive period T;
+/// - [`forces`](Self::forces): the smooth force a(t, β, ω) and the dry-friction magnitude
+///   r(t, β, ω) ≥ 0 (per unit inertia);
+/// - [`forces_jet`](Self::forces_jet): the same with ∂a/∂β, ∂a/∂ω, ∂r/∂β, ∂r/∂ω and, when asked,
+///   the parameter derivatives ∂a/∂p_k, ∂r/∂p_k of its first [`n_params`](Self::n_params)
+///   parameters (the Jacobian columns; the period's dependence goes in
+///   [`period_derivative`](Self::period_derivative));
+/// - optionally: the half-period symmetry (symmetric orbits, the half-period map), a static
+///   friction bound, an analytic release time, whether β is an angle.
+///
+/// To be continued, swept or switched, a system also implements [`Parametrised`] (its parameters).
+/// Every Jacobian can be checked against finite differences of the map (tests/core.rs does so for
+/// the built-in systems). A linear oscillator with Coulomb friction, its periodic orbit shot, and
+/// one continuation step in the forcing frequency:
+///
+/// ```
+/// use gearbif::continuation::{Continuation, ContinuationOptions, StepOutcome};
+/// use gearbif::model::{
+///     Column, DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry, Parameter, Parametrised,
+/// };
+/// use gearbif::orbits::{shoot, OrbitSpec, ShootingOptions};
+/// use serde::{Deserialize, Serialize};
+/// use std::f64::consts::TAU;
+///
+/// /// ẍ + 0.2ẋ + 4π²x + 0.5 sgn ẋ = 3 cos 2πft
+/// #[derive(Clone)]
+/// struct Slider {
+///     f: f64,
+/// }
+///
+/// #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+/// enum P {
+///     F,
+/// }
+///
+/// impl Parameter for P {
+///     const ALL: &'static [Self] = &[P::F];
+///     fn name(self) -> &'static str {
+///         "f"
+///     }
+/// }
+///
+/// impl DrivenOscillator for Slider {
+///     fn period(&self) -> f64 {
+///         1.0 / self.f
+///     }
+///     fn n_params(&self) -> usize {
+///         1
+///     }
+///     fn period_derivative(&self, _k: usize) -> f64 {
+///         -1.0 / (self.f * self.f) // dT/df
+///     }
+///     fn forces(&self, t: f64, x: f64, v: f64) -> Forces {
+///         let a = 3.0 * (TAU * self.f * t).cos() - 0.2 * v - TAU * TAU * x;
+///         Forces { a, r: 0.5 }
+///     }
+///     fn forces_jet(&self, t: f64, x: f64, v: f64, params: bool) -> ForcesJet {
+///         let mut j = ForcesJet::new(self.forces(t, x, v).a, 0.5);
+///         j.a_beta = -TAU * TAU;
+///         j.a_omega = -0.2;
+///         if params {
+///             j.a_p[0] = -3.0 * (TAU * self.f * t).sin() * TAU * t; // ∂a/∂f
+///         }
+///         j
+///     }
+///     fn half_period_symmetry(&self) -> Option<HalfPeriodSymmetry> {
+///         Some(HalfPeriodSymmetry { sign: -1.0, shift: 0.0 }) // x → −x
+///     }
+///     fn angular(&self) -> bool {
+///         false // x is a displacement
+///     }
+/// }
+///
+/// impl Parametrised for Slider {
+///     type Param = P;
+///     fn param(&self, _p: P) -> f64 {
+///         self.f
+///     }
+///     fn with_param(&self, _p: P, v: f64) -> gearbif::Result<Self> {
+///         if v > 0.0 {
+///             Ok(Slider { f: v })
+///         } else {
+///             Err(gearbif::Error::InvalidParameter { name: "f", value: v, reason: "must be > 0" })
+///         }
+///     }
+///     fn column(&self, _p: P) -> Option<Column> {
+///         Some(Column::primary(0))
+///     }
+/// }
+///
+/// let sys = Slider { f: 1.5 };
+/// let orbit = shoot(&sys, &OrbitSpec::symmetric(0), [0.05, 0.0], &ShootingOptions::default())?;
+/// assert!(orbit.floquet.stable && orbit.events.crossings == 1); // one reversal per half period
+/// let mut c = Continuation::from_orbit(sys, P::F, &orbit, ContinuationOptions::default())?;
+/// assert!(matches!(c.step()?, StepOutcome::Point(_)));
+/// assert_eq!(c.branch().points.len(), 2);
+/// # Ok::<(), gearbif::Error>(())
+/// ```
 pub trait DrivenOscillator: Send + Sync {
     /// Drive period T > 0.
     fn period(&self) -> f64;
@@ -147,6 +248,36 @@ pub trait DrivenOscillator: Send + Sync {
     /// The half-period symmetry, if the system has one.
     fn half_period_symmetry(&self) -> Option<HalfPeriodSymmetry> {
         None
+    }
+
+    /// True (default) if β is an angle: states may be reduced modulo 2π and orbits wind; false for
+    /// a displacement (e.g. [`CoulombOscillator`]), which is never reduced and has winding 0.
+    fn angular(&self) -> bool {
+        true
+    }
+
+    /// β reduced to its representative: unchanged for a displacement; for an angle in [−π, π) when
+    /// the half-period symmetry reflects (σ = −1, orbits centred on 0), else in [0, 2π).
+    fn reduce_angle(&self, beta: f64) -> f64 {
+        use std::f64::consts::{PI, TAU};
+        if !self.angular() {
+            beta
+        } else if self.half_period_symmetry().is_some_and(|r| r.sign < 0.0) {
+            (beta + PI).rem_euclid(TAU) - PI
+        } else {
+            beta.rem_euclid(TAU)
+        }
+    }
+
+    /// The drive phase α(t) against which the paper's metrics fit the response (default 2πt/T).
+    fn drive_phase(&self, t: f64) -> f64 {
+        std::f64::consts::TAU * t / self.period()
+    }
+
+    /// The sense s of an output that turns with the drive: the paper's metrics fit δ = β − s·α.
+    /// ±1 for a rotor following the drive (the gear), 0 (default) for an oscillator, where δ = β.
+    fn co_rotation(&self) -> f64 {
+        0.0
     }
 }
 

@@ -98,6 +98,10 @@ impl DrivenOscillator for CoulombOscillator {
     fn period(&self) -> f64 {
         1.0 / self.f
     }
+    /// x is a displacement.
+    fn angular(&self) -> bool {
+        false
+    }
     fn n_params(&self) -> usize {
         5
     }

@@ -1,0 +1,647 @@
+//! Event-driven Filippov integration with an embedded Runge–Kutta pair ([`Tableau`]), its
+//! continuous extension, and saltation matrices — shared by the DP5 and DOP853 methods.
+//!
+//! The augmented state is y = (β, ω, Z) with Z = ∂(β, ω)/∂(β₀, ω₀, p) stored column by column.
+//! On a slip piece of side s, Ż = DF_s Z + [0 | ∂F_s/∂p] (variational equation), integrated with the
+//! same Runge–Kutta stages as the state ("internal differentiation"); the local error is controlled on
+//! (β, ω) and, separately, on Z. Crossings of Σ = {ω = 0} are located on the continuous extension;
+//! at each event the saltation matrix S = I + (F₊ − F₋)∇hᵀ/(∇h·F₋) multiplies Z: diag(1, a₊/a₋) at a
+//! crossing, diag(1, 0) at stick entry, I at a release with r_s = r (numerics.md). Stick phases are
+//! solved directly (the release time is a root of |a(t, β)| − r_s, no integration while stuck).
+
+use super::augmented::{augmented_rhs, param_col, z_beta, z_omega, Layout, NMAX, V};
+use super::tableau::{nested, ErrorEstimate, Tableau, DMAX, SMAX};
+use super::{check_interval, Event, EventKind, Flow, FlowOptions, Mode, Sample, Stats};
+use crate::error::{Error, Result};
+use crate::model::{release_function, DrivenOscillator};
+use crate::numerics::Illinois;
+
+/// Largest number of coefficients r of the continuous extension.
+const RMAX: usize = 4 + DMAX;
+
+/// Integrates `sys` from (t₀, x₀) to t₁ with the pair `tab`, checking `probes` interior points of
+/// the continuous extension per step for a sign change of ω (catches short slips that start and
+/// end inside one step).
+pub(super) fn integrate<S: DrivenOscillator + ?Sized>(
+    tab: &'static Tableau,
+    probes: usize,
+    sys: &S,
+    t0: f64,
+    x0: [f64; 2],
+    t1: f64,
+    opts: &FlowOptions,
+) -> Result<Flow> {
+    check_interval(t0, x0, t1)?;
+    opts.validate()?;
+    Solver::new(sys, opts, tab, probes).run(t0, x0, t1)
+}
+
+/// Coefficients r₀ … r_{m−1} of the continuous extension of component `i` (module doc of
+/// `tableau.rs`); `m` = 4 + rows of d.
+#[inline(always)]
+fn dense_coeffs(tab: &Tableau, i: usize, y: &V, yn: &V, k: &[V; SMAX], hs: f64) -> [f64; RMAX] {
+    let ydiff = yn[i] - y[i];
+    let bspl = hs * k[0][i] - ydiff;
+    let mut r = [0.0; RMAX];
+    r[0] = y[i];
+    r[1] = ydiff;
+    r[2] = bspl;
+    r[3] = ydiff - hs * k[tab.fsal()][i] - bspl;
+    for (row, d) in tab.d.iter().take(tab.dense_rows).enumerate() {
+        let mut acc = 0.0;
+        for (j, &dj) in d.iter().enumerate().take(tab.total()) {
+            if dj != 0.0 {
+                acc += dj * k[j][i];
+            }
+        }
+        r[4 + row] = hs * acc;
+    }
+    r
+}
+
+/// The argument y₀ + h Σⱼ aᵢⱼ kⱼ of stage `i` over the first `n` components.
+#[inline(always)]
+fn stage_argument(tab: &Tableau, i: usize, y: &V, k: &[V; SMAX], hs: f64, n: usize, out: &mut V) {
+    let a = &tab.a[i];
+    for c in 0..n {
+        let mut acc = 0.0;
+        for j in 0..i {
+            if a[j] != 0.0 {
+                acc += a[j] * k[j][c];
+            }
+        }
+        out[c] = y[c] + hs * acc;
+    }
+}
+
+struct Solver<'a, S: ?Sized> {
+    sys: &'a S,
+    opts: &'a FlowOptions,
+    tab: &'static Tableau,
+    probes: usize,
+    /// Which Jacobian columns are propagated.
+    layout: Layout,
+    stats: Stats,
+    events: Vec<Event>,
+    samples: Vec<Sample>,
+    next_sample: usize,
+}
+
+/// Step-size controller state (PI control as in Hairer's DOPRI5/DOP853).
+struct Controller {
+    facold: f64,
+    last_rejected: bool,
+}
+
+impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
+    fn new(sys: &'a S, opts: &'a FlowOptions, tab: &'static Tableau, probes: usize) -> Self {
+        let layout = Layout::new(sys, opts.sensitivity);
+        Self {
+            sys,
+            opts,
+            tab,
+            probes,
+            layout,
+            stats: Stats::default(),
+            events: Vec::new(),
+            samples: Vec::with_capacity(opts.sample_times.len()),
+            next_sample: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn rhs(&mut self, layout: Layout, t: f64, y: &V, s: f64, out: &mut V) {
+        self.stats.rhs_evals += 1;
+        augmented_rhs(self.sys, layout, t, y, s, out);
+    }
+
+    fn record_event(&mut self, t: f64, beta: f64, kind: EventKind) {
+        self.stats.events += 1;
+        if self.opts.record_events {
+            self.events.push(Event { t, beta, kind });
+        }
+    }
+
+    /// Records the samples in (.., t] of a constant state (stick phases).
+    fn samples_constant(&mut self, t: f64, beta: f64) {
+        while let Some(&ts) = self.opts.sample_times.get(self.next_sample) {
+            if ts > t {
+                break;
+            }
+            self.samples.push(Sample {
+                t: ts,
+                beta,
+                omega: 0.0,
+            });
+            self.next_sample += 1;
+        }
+    }
+
+    /// The stages after the first-same-as-last one that only the continuous extension uses,
+    /// over the components of `layout` (the state alone, or everything).
+    fn dense_stages(&mut self, layout: Layout, t: f64, hs: f64, y: &V, s: f64, k: &mut [V; SMAX]) {
+        let tab = self.tab;
+        let n = layout.dim();
+        for i in tab.fsal() + 1..tab.total() {
+            let mut ys = [0.0; NMAX];
+            stage_argument(tab, i, y, k, hs, n, &mut ys);
+            self.rhs(layout, t + tab.c[i] * hs, &ys, s, &mut k[i]);
+        }
+    }
+
+    /// One Runge–Kutta step of size `hs` from (t, y) on side `s`: the main stages, the solution
+    /// y₁ (written to `yn`) and the scaled error norm. Also returns min s·ω over the stage
+    /// arguments and max |ω̇| over the stages, for the test whether the step can reach Σ.
+    fn step(&mut self, t: f64, hs: f64, y: &V, s: f64, k: &mut [V; SMAX], yn: &mut V) -> StepInfo {
+        let tab = self.tab;
+        let layout = self.layout;
+        let n = layout.dim();
+        let mut wmin = s * y[1];
+        let mut dmax = k[0][1].abs();
+        let mut ys = [0.0; NMAX];
+        for i in 1..tab.stages {
+            stage_argument(tab, i, y, k, hs, n, &mut ys);
+            wmin = wmin.min(s * ys[1]);
+            self.rhs(layout, t + tab.c[i] * hs, &ys, s, &mut k[i]);
+            dmax = dmax.max(k[i][1].abs());
+        }
+        if tab.last_stage_is_solution {
+            *yn = ys;
+        } else {
+            for c in 0..n {
+                let mut acc = 0.0;
+                for (kj, &b) in k.iter().zip(&tab.b).take(tab.stages) {
+                    if b != 0.0 {
+                        acc += b * kj[c];
+                    }
+                }
+                yn[c] = y[c] + hs * acc;
+            }
+        }
+        wmin = wmin.min(s * yn[1]);
+        let err = self.error_norm(hs, y, yn, k);
+        StepInfo { err, wmin, dmax }
+    }
+
+    /// Scaled local error: RMS over the state (β, ω) and, separately, over the Jacobian columns;
+    /// the larger counts. Controlling the variational part too matters: on an exactly
+    /// representable orbit (the locked state) the state error vanishes while the variational
+    /// equation oscillates at √g and would be left unresolved.
+    fn error_norm(&self, hs: f64, y: &V, yn: &V, k: &[V; SMAX]) -> f64 {
+        let tab = self.tab;
+        let n = self.layout.dim();
+        let combo = |w: &[f64; SMAX], i: usize| -> f64 {
+            let mut acc = 0.0;
+            for (j, &wj) in w.iter().enumerate().take(tab.fsal() + 1) {
+                if wj != 0.0 {
+                    acc += wj * k[j][i];
+                }
+            }
+            acc
+        };
+        // [state, Jacobian] sums of the main and (DOP853) the 3rd-order estimate
+        let mut e_main = [0.0; 2];
+        let mut e_low = [0.0; 2];
+        for i in 0..n {
+            let scale = if i == 0 {
+                // β lives on the lift: measure its error in radians, not relative to windings
+                self.opts.atol + self.opts.rtol
+            } else {
+                self.opts.atol + self.opts.rtol * y[i].abs().max(yn[i].abs())
+            };
+            let part = usize::from(i >= 2);
+            e_main[part] += (combo(&tab.e, i) / scale).powi(2);
+            if let ErrorEstimate::Dop853 { e3 } = &tab.estimate {
+                e_low[part] += (combo(e3, i) / scale).powi(2);
+            }
+        }
+        let norm = |part: usize, count: f64| -> f64 {
+            match tab.estimate {
+                ErrorEstimate::Single => hs * (e_main[part] / count).sqrt(),
+                ErrorEstimate::Dop853 { .. } => {
+                    let mut deno = e_main[part] + 0.01 * e_low[part];
+                    if deno <= 0.0 {
+                        deno = 1.0;
+                    }
+                    hs * e_main[part] * (1.0 / (deno * count)).sqrt()
+                }
+            }
+        };
+        let mut err = norm(0, 2.0);
+        if n > 2 {
+            err = err.max(norm(1, (n - 2) as f64));
+        }
+        err
+    }
+
+    fn run(mut self, t0: f64, x0: [f64; 2], t1: f64) -> Result<Flow> {
+        let sys = self.sys;
+        let tab = self.tab;
+        let period = sys.period();
+        let hmax = self.opts.max_step_fraction * period;
+        let mut y: V = [0.0; NMAX];
+        self.layout.init(x0, &mut y);
+        // skip samples before t0
+        while self
+            .opts
+            .sample_times
+            .get(self.next_sample)
+            .is_some_and(|&ts| ts < t0)
+        {
+            self.next_sample += 1;
+        }
+        let mut t = t0;
+        let mut mode = super::initial_mode(sys, t0, x0);
+        if mode == Mode::Stick {
+            y[1] = 0.0;
+            self.stick_saltation(&mut y);
+        }
+        let mut h = (period / 100.0)
+            .min(hmax)
+            .min((t1 - t0).max(f64::MIN_POSITIVE));
+        let mut k: [V; SMAX] = [[0.0; NMAX]; SMAX];
+        let mut fsal = false;
+        let mut ctl = Controller {
+            facold: 1e-4,
+            last_rejected: false,
+        };
+        // guard against Zeno-like repetition of events without progress
+        let mut stalled = 0usize;
+        let mut last_event_t = f64::NEG_INFINITY;
+        let tiny = 1e-13 * period.max(1e-300);
+        let state_only = Layout {
+            ncols: 0,
+            with_params: false,
+        };
+
+        while t < t1 {
+            if self.stats.steps + self.stats.rejected > self.opts.max_steps {
+                return Err(Error::Integration {
+                    t,
+                    reason: format!("more than {} steps", self.opts.max_steps),
+                });
+            }
+            if mode == Mode::Stick {
+                match self.stick_phase(t, &mut y, t1, stalled > 8) {
+                    None => {
+                        t = t1;
+                        break;
+                    }
+                    Some((tr, s)) => {
+                        if tr - last_event_t <= tiny {
+                            stalled += 1;
+                        } else {
+                            stalled = 0;
+                        }
+                        if stalled > 16 {
+                            return Err(Error::Integration {
+                                t: tr,
+                                reason: "events repeat without progress (stick/slip chattering at a degenerate point)".into(),
+                            });
+                        }
+                        last_event_t = tr;
+                        t = tr;
+                        mode = Mode::from_side(s);
+                        fsal = false;
+                        continue;
+                    }
+                }
+            }
+
+            let s = mode.side();
+            if !fsal {
+                self.rhs(self.layout, t, &y, s, &mut k[0]);
+                fsal = true;
+            }
+            let hh = h.min(hmax).min(t1 - t);
+            let last = hh >= t1 - t;
+            let tn = if last { t1 } else { t + hh };
+            let hs = tn - t;
+            if hs <= 0.0 || !hs.is_finite() {
+                return Err(Error::Integration {
+                    t,
+                    reason: format!("step size underflow (h = {hs:e})"),
+                });
+            }
+            let mut yn = [0.0; NMAX];
+            let info = self.step(t, hs, &y, s, &mut k, &mut yn);
+            let err = info.err;
+            if !err.is_finite() || !yn[0].is_finite() || !yn[1].is_finite() {
+                if hs < 1e-14 * period {
+                    return Err(Error::Integration {
+                        t,
+                        reason: "non-finite state".into(),
+                    });
+                }
+                h = hs * 0.1;
+                self.stats.rejected += 1;
+                ctl.last_rejected = true;
+                continue;
+            }
+            let Some(hnew) = self.propose(&mut ctl, err, hs) else {
+                h = hs / (tab.pow_expo(err) / 0.9).min(tab.fac_max);
+                self.stats.rejected += 1;
+                if h < 1e-15 * period.max(t.abs()) {
+                    return Err(Error::Integration {
+                        t,
+                        reason: format!("step size underflow (h = {h:e})"),
+                    });
+                }
+                continue;
+            };
+            self.stats.steps += 1;
+            if !tab.last_stage_is_solution {
+                self.rhs(self.layout, tn, &yn, s, &mut k[tab.fsal()]);
+            }
+
+            // Can ω reach 0 inside the step? With the extra dense stages of a high-order pair,
+            // the continuous extension is formed only when s·ω over the stage arguments and the
+            // end points is not larger than g·h·max|ω̇| over the stages, g the largest gap between
+            // the sorted nodes (between two points where s·ω ≥ w, a function with |ω̇| ≤ M stays
+            // above w − M g h/2: the bound with a factor 2 of margin on M), or when a sample
+            // falls inside the step.
+            let sample_inside = self
+                .opts
+                .sample_times
+                .get(self.next_sample)
+                .is_some_and(|&ts| ts <= tn);
+            let near_sigma = info.wmin <= tab.node_gap * hs * info.dmax;
+            if tab.dense_extra > 0 && !near_sigma && !sample_inside {
+                y = yn;
+                k[0] = k[tab.fsal()];
+                t = tn;
+                h = hnew;
+                continue;
+            }
+            if tab.dense_extra > 0 {
+                self.dense_stages(state_only, t, hs, &y, s, &mut k);
+            }
+            let state_coeffs = [
+                dense_coeffs(tab, 0, &y, &yn, &k, hs),
+                dense_coeffs(tab, 1, &y, &yn, &k, hs),
+            ];
+            let m = 4 + tab.dense_rows;
+            let dense_state = |i: usize, th: f64| -> f64 { nested(&state_coeffs[i][..m], th) };
+
+            let root = if near_sigma || tab.dense_extra == 0 {
+                self.find_crossing(s, &y, &yn, &dense_state)
+            } else {
+                None
+            };
+            if let Some(thc) = root {
+                let tc = t + thc * hs;
+                // samples strictly before the event from the continuous extension
+                self.samples_dense(t, hs, tc, &dense_state, false);
+                if tab.dense_extra > 0 && self.layout.ncols > 0 {
+                    self.dense_stages(self.layout, t, hs, &y, s, &mut k);
+                }
+                let mut yc = [0.0; NMAX];
+                yc[0] = dense_state(0, thc);
+                for (i, v) in yc.iter_mut().enumerate().take(self.layout.dim()).skip(2) {
+                    *v = nested(&dense_coeffs(tab, i, &y, &yn, &k, hs)[..m], thc);
+                }
+                yc[1] = 0.0;
+                if tc - last_event_t <= tiny {
+                    stalled += 1;
+                } else {
+                    stalled = 0;
+                }
+                if stalled > 16 {
+                    return Err(Error::Integration {
+                        t: tc,
+                        reason: "events repeat without progress (degenerate contact with ω = 0)"
+                            .into(),
+                    });
+                }
+                last_event_t = tc;
+                mode = self.handle_arrival(tc, &mut yc, s, stalled > 8);
+                y = yc;
+                t = tc;
+                fsal = false;
+                h = hnew.max(hs * 0.5);
+                continue;
+            }
+
+            // no event: accept the whole step
+            self.samples_dense(t, hs, tn, &dense_state, true);
+            y = yn;
+            k[0] = k[tab.fsal()];
+            t = tn;
+            h = hnew;
+        }
+
+        if self.next_sample < self.opts.sample_times.len() && mode == Mode::Stick {
+            self.samples_constant(t, y[0]);
+        }
+        let (jac_x, jac_p) = self.layout.jacobians(&y);
+        Ok(Flow {
+            t,
+            x: [y[0], y[1]],
+            mode,
+            jac_x,
+            jac_p,
+            events: self.events,
+            samples: self.samples,
+            stats: self.stats,
+        })
+    }
+
+    /// Step-size proposal after an error norm `err` for step `hs` (PI control as in Hairer's
+    /// codes): `None` if the step is rejected, else the next step size.
+    fn propose(&self, ctl: &mut Controller, err: f64, hs: f64) -> Option<f64> {
+        let tab = self.tab;
+        if err > 1.0 {
+            ctl.last_rejected = true;
+            return None;
+        }
+        let fac11 = tab.pow_expo(err);
+        let mut fac = if tab.beta == 0.0 {
+            fac11
+        } else {
+            fac11 / ctl.facold.powf(tab.beta)
+        };
+        fac = (fac / 0.9).clamp(tab.fac_min, tab.fac_max);
+        let mut hnew = hs / fac;
+        ctl.facold = err.max(1e-4);
+        if ctl.last_rejected {
+            hnew = hnew.min(hs);
+        }
+        ctl.last_rejected = false;
+        Some(hnew)
+    }
+
+    /// A stick phase from t: records its samples and the release event, applies the release
+    /// saltation, and returns (release time, side) or `None` if stuck until t₁.
+    fn stick_phase(&mut self, t: f64, y: &mut V, t1: f64, nudge: bool) -> Option<(f64, f64)> {
+        let sys = self.sys;
+        let beta = y[0];
+        let from = if nudge { t + 1e-9 * sys.period() } else { t };
+        match sys.next_release(from, beta, t1) {
+            None => {
+                self.samples_constant(t1, beta);
+                None
+            }
+            Some(tr) => {
+                let tr = tr.max(t);
+                self.samples_constant(tr, beta);
+                let f = sys.forces(tr, beta, 0.0);
+                let s = if f.a >= 0.0 { 1.0 } else { -1.0 };
+                // the output leaves with a − s r; zero for r_s = r(t, β, 0) (tangential release)
+                let jump = f.a - s * f.r;
+                if jump != 0.0 && self.layout.ncols > 0 {
+                    self.release_saltation(y, tr, jump, s);
+                }
+                self.record_event(tr, beta, EventKind::Release { to: s as i8 });
+                Some((tr, s))
+            }
+        }
+    }
+
+    /// The first θ ∈ (0, 1] of the step with s·ω(θ) ≤ 0 on the continuous extension: sign test at
+    /// the probes, then Illinois regula falsi on the bracket.
+    fn find_crossing<F: Fn(usize, f64) -> f64>(
+        &self,
+        s: f64,
+        y: &V,
+        yn: &V,
+        dense: &F,
+    ) -> Option<f64> {
+        let e = |th: f64| -> f64 { s * dense(1, th) };
+        let probes = self.probes;
+        let mut root: Option<(f64, f64)> = None;
+        let mut th_prev = 0.0;
+        for j in 1..=probes {
+            let th = j as f64 / probes as f64;
+            let ev = if j == probes { s * yn[1] } else { e(th) };
+            if ev <= 0.0 {
+                root = Some((th_prev, th));
+                break;
+            }
+            th_prev = th;
+        }
+        let (lo, hi) = root?;
+        // bracket: e(lo) > 0 (or lo = 0, the start), e(hi) ≤ 0; refined by Illinois regula falsi
+        let mut flo = if lo == 0.0 { s * y[1] } else { e(lo) };
+        let fhi = if hi == 1.0 { s * yn[1] } else { e(hi) };
+        if flo <= 0.0 {
+            // starts on Σ (just after an event) and the sign is wrong at once
+            flo = 0.0;
+        }
+        let mut root = Illinois::new(lo, flo, hi, fhi, 0.0);
+        for _ in 0..200 {
+            if root.hi() - root.lo() <= 4.0 * f64::EPSILON * root.hi().max(1e-300) {
+                break;
+            }
+            let Some(mid) = root.next_point() else {
+                break;
+            };
+            root.update(mid, e(mid));
+        }
+        Some(root.hi())
+    }
+
+    /// Records the requested samples in (t, t_end) (or (t, t_end] when `inclusive`) from the
+    /// continuous extension.
+    fn samples_dense<F: Fn(usize, f64) -> f64>(
+        &mut self,
+        t: f64,
+        hs: f64,
+        t_end: f64,
+        dense: &F,
+        inclusive: bool,
+    ) {
+        while let Some(&ts) = self.opts.sample_times.get(self.next_sample) {
+            if ts > t_end || (!inclusive && ts >= t_end) {
+                break;
+            }
+            let th = ((ts - t) / hs).clamp(0.0, 1.0);
+            self.samples.push(Sample {
+                t: ts,
+                beta: dense(0, th),
+                omega: dense(1, th),
+            });
+            self.next_sample += 1;
+        }
+    }
+
+    /// Decides what happens when ω reaches 0 from side `s` at time `tc`, applies the saltation
+    /// matrix to the Jacobian columns, records the event, and returns the new mode.
+    fn handle_arrival(&mut self, tc: f64, y: &mut V, s: f64, force_stick: bool) -> Mode {
+        let sys = self.sys;
+        let beta = y[0];
+        let f = sys.forces(tc, beta, 0.0);
+        let rs = sys.static_friction(tc, beta);
+        if f.a.abs() <= rs || force_stick {
+            self.stick_saltation(y);
+            self.record_event(tc, beta, EventKind::StickStart);
+            return Mode::Stick;
+        }
+        let new_side = if f.a > 0.0 { 1.0 } else { -1.0 };
+        if new_side == s {
+            // tangency: the acceleration on side s points away from Σ; no switch, S = I
+            self.record_event(tc, beta, EventKind::Graze { side: s as i8 });
+            return Mode::from_side(s);
+        }
+        let a_before = f.a - s * f.r;
+        let a_after = f.a - new_side * f.r;
+        let ratio = a_after / a_before;
+        for c in 0..self.layout.ncols {
+            y[z_omega(c)] *= ratio;
+        }
+        self.record_event(
+            tc,
+            beta,
+            EventKind::Crossing {
+                from: s as i8,
+                to: new_side as i8,
+            },
+        );
+        Mode::from_side(new_side)
+    }
+
+    /// Stick entry: S = diag(1, 0) (the sliding field vanishes).
+    fn stick_saltation(&self, y: &mut V) {
+        for c in 0..self.layout.ncols {
+            y[z_omega(c)] = 0.0;
+        }
+    }
+
+    /// Release with a jump of the acceleration (static friction above sliding friction):
+    /// Z₊ = Z₋ − F₊ dt_r/dz, with dt_r/dz = −(G_β Z_β + G_p)/G_t from G(t, β) = |a| − r_s = 0.
+    fn release_saltation(&self, y: &mut V, tr: f64, jump: f64, s: f64) {
+        let sys = self.sys;
+        let beta = y[0];
+        let period = sys.period();
+        let ht = 1e-7 * period;
+        let hb = 1e-7;
+        let gt = (release_function(sys, tr + ht, beta) - release_function(sys, tr - ht, beta))
+            / (2.0 * ht);
+        let gb = (release_function(sys, tr, beta + hb) - release_function(sys, tr, beta - hb))
+            / (2.0 * hb);
+        if gt == 0.0 || !gt.is_finite() {
+            return;
+        }
+        let jet = sys.forces_jet(tr, beta, 0.0, self.layout.with_params);
+        for c in 0..self.layout.ncols {
+            let mut gz = gb * y[z_beta(c)];
+            if c >= param_col(0) {
+                // ∂G/∂p = sgn(a) ∂a/∂p − ∂r_s/∂p, taking ∂r_s/∂p = ∂r/∂p
+                let k = c - param_col(0);
+                gz += s * jet.a_p[k] - jet.r_p[k];
+            }
+            let dt = -gz / gt;
+            // F₊ − F₋ = (0, jump)
+            y[z_omega(c)] -= jump * dt;
+        }
+    }
+}
+
+/// What one step reports besides its solution.
+struct StepInfo {
+    /// Scaled local error norm.
+    err: f64,
+    /// Smallest s·ω over the start, the stage arguments and the end.
+    wmin: f64,
+    /// Largest |ω̇| over the stages.
+    dmax: f64,
+}
