@@ -1,6 +1,37 @@
 //! Typed errors: every fallible operation in gearbif returns [`Error`].
 
+use std::sync::Arc;
 use thiserror::Error;
+
+/// The underlying error (io, JSON, TOML, CSV) kept as the source of an [`Error`]; shared, so that
+/// errors stay cheap to clone. Two sources compare equal when their messages do.
+#[derive(Debug, Clone)]
+pub struct Source(pub Arc<dyn std::error::Error + Send + Sync + 'static>);
+
+impl Source {
+    /// Wraps an error.
+    pub fn new(e: impl std::error::Error + Send + Sync + 'static) -> Self {
+        Self(Arc::new(e))
+    }
+}
+
+impl PartialEq for Source {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.to_string() == other.0.to_string()
+    }
+}
+
+impl std::fmt::Display for Source {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl std::error::Error for Source {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
+    }
+}
 
 /// The error type of gearbif.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -68,9 +99,31 @@ pub enum Error {
     /// A continuation could not proceed.
     #[error("continuation stopped: {0}")]
     Continuation(String),
-    /// Reading or parsing input files failed.
+    /// Reading or parsing input files failed (without an underlying error to carry).
     #[error("{0}")]
     Io(String),
+    /// A file or folder could not be read, written, created or moved into place.
+    #[error("cannot {action} {path}: {source}")]
+    File {
+        /// What was attempted: "read", "write", "create", "move into place".
+        action: &'static str,
+        /// The path.
+        path: String,
+        /// The operating system's error.
+        #[source]
+        source: Source,
+    },
+    /// Data could not be encoded or decoded in a file format.
+    #[error("{format} {what}: {source}")]
+    Format {
+        /// "JSON", "TOML" or "CSV".
+        format: &'static str,
+        /// What was being encoded or decoded (a file, a table).
+        what: String,
+        /// The format library's error.
+        #[source]
+        source: Source,
+    },
     /// The requested operation is not available for this system (e.g. no half-period symmetry).
     #[error("unsupported: {0}")]
     Unsupported(String),
@@ -94,6 +147,34 @@ pub(crate) fn show(v: f64) -> String {
         format!("{v}")
     } else {
         format!("{v:e}")
+    }
+}
+
+impl Error {
+    /// [`Error::File`] for `action` on `path`.
+    pub fn file(
+        action: &'static str,
+        path: &std::path::Path,
+        e: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Error::File {
+            action,
+            path: path.display().to_string(),
+            source: Source::new(e),
+        }
+    }
+
+    /// [`Error::Format`] for `what` in `format`.
+    pub fn format(
+        format: &'static str,
+        what: impl Into<String>,
+        e: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        Error::Format {
+            format,
+            what: what.into(),
+            source: Source::new(e),
+        }
     }
 }
 

@@ -553,10 +553,13 @@ impl SweepResult {
     pub fn to_csv(&self) -> Result<String> {
         let mut w = csv::Writer::from_writer(Vec::new());
         for p in self.points() {
-            w.serialize(p).map_err(|e| Error::Io(e.to_string()))?;
+            w.serialize(p)
+                .map_err(|e| Error::format("CSV", "sweep table", e))?;
         }
-        let bytes = w.into_inner().map_err(|e| Error::Io(e.to_string()))?;
-        let mut s = String::from_utf8(bytes).map_err(|e| Error::Io(e.to_string()))?;
+        let bytes = w
+            .into_inner()
+            .map_err(|e| Error::format("CSV", "sweep table", e.into_error()))?;
+        let mut s = String::from_utf8(bytes).map_err(|e| Error::format("CSV", "sweep table", e))?;
         let header = format!(
             "# rows = {}, cols = {}, protocol = {:?}, method = {:?}\n",
             self.spec.rows.param.name(),
@@ -647,8 +650,8 @@ impl<'a> SweepRunner<'a> {
         };
         let spec_path = dir.join("spec.json");
         if spec_path.exists() {
-            let bytes = std::fs::read(&spec_path)
-                .map_err(|e| Error::Io(format!("{}: {e}", spec_path.display())))?;
+            let bytes =
+                std::fs::read(&spec_path).map_err(|e| Error::file("read", &spec_path, e))?;
             let old: SweepSpec = serde_json::from_slice(&bytes).map_err(|e| Error::Recording {
                 file: spec_path.display().to_string(),
                 line: (e.line() > 0).then_some(e.line()),
@@ -667,8 +670,7 @@ impl<'a> SweepRunner<'a> {
                 }
                 let p = Self::row_path(dir, i);
                 if p.is_file() {
-                    let bytes = std::fs::read(&p)
-                        .map_err(|e| Error::Io(format!("{}: {e}", p.display())))?;
+                    let bytes = std::fs::read(&p).map_err(|e| Error::file("read", &p, e))?;
                     *slot = serde_json::from_slice::<RowResult>(&bytes)
                         .ok()
                         .filter(|r| self.spec.row_matches(i, r));

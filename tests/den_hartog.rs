@@ -99,3 +99,51 @@ fn continuation_in_f_follows_den_hartog_and_locates_the_onset_of_stops() {
     assert!(n >= 10);
     assert!(worst < 1e-8, "{worst}");
 }
+
+#[test]
+fn generic_sweep_classifies_den_hartog_orbits() {
+    // the sweep and the classification of the gear, run on the Coulomb oscillator through its lens
+    use gearbif::analysis::{ClassifyOptions, Dynamics};
+    use gearbif::integrator::EventDriven;
+    use gearbif::progress::Silent;
+    use gearbif::sweep::{sweep_grid, Protocol};
+    let opts = ClassifyOptions {
+        settle_turns: 40,
+        analysis_turns: 20,
+        ..ClassifyOptions::default()
+    };
+    let mus = [0.2, 0.3];
+    let fs = [0.8, 1.5];
+    let grid = sweep_grid(
+        &EventDriven,
+        &oscillator(1.0),
+        (CoulombParam::Mu, &mus[..]),
+        (CoulombParam::F, &fs[..]),
+        [0.05, 0.0],
+        Protocol::SemiStatic,
+        &opts,
+        &Silent,
+    )
+    .unwrap();
+    for row in &grid {
+        for (sys, r) in row {
+            let rig = r.rigorous.as_ref().unwrap();
+            let Dynamics::Periodic {
+                half_periods,
+                symmetric,
+                orbit,
+                ..
+            } = rig.dynamics
+            else {
+                panic!("{:?}", rig.dynamics);
+            };
+            assert_eq!((half_periods, symmetric), (1, true));
+            let dh = non_stop_orbit(sys).unwrap();
+            assert!(dh.is_valid());
+            // the classification's Newton-confirmed orbit point is Den Hartog's state at t = 0
+            let x = dh.state(0.0);
+            assert!((orbit[0] - x[0]).abs() < 1e-8, "{orbit:?} vs {x:?}");
+            assert!((orbit[1] - x[1]).abs() < 1e-7, "{orbit:?} vs {x:?}");
+        }
+    }
+}

@@ -225,7 +225,7 @@ pub fn period_label(k: usize) -> String {
 /// ([`DrivenOscillator::drive_phase`], s = [`DrivenOscillator::co_rotation`]; δ = β for an
 /// oscillator).
 pub fn classify_point<S, M>(
-    gear: &S,
+    sys: &S,
     x0: [f64; 2],
     method: &M,
     opts: &ClassifyOptions,
@@ -241,12 +241,12 @@ where
             x0[0], x0[1]
         )));
     }
-    let period = gear.period();
+    let period = sys.period();
     let fopts = FlowOptions::with_tol(opts.tol);
     let t_settle = opts.settle_turns as f64 * period;
     let settled_x = match opts.settle_tol {
-        None => method.flow(gear, 0.0, x0, t_settle, &fopts)?.x,
-        Some(eps) => settle_early(gear, x0, method, opts.settle_turns, &fopts, eps)?,
+        None => method.flow(sys, 0.0, x0, t_settle, &fopts)?.x,
+        Some(eps) => settle_early(sys, x0, method, opts.settle_turns, &fopts, eps)?,
     };
     // the window
     let n = opts.record_turns * opts.samples_per_turn;
@@ -255,15 +255,15 @@ where
         .collect();
     let t_end = (opts.settle_turns + opts.record_turns) as f64 * period;
     let wopts = FlowOptions::with_tol(opts.tol).samples(times);
-    let win = method.flow(gear, t_settle, settled_x, t_end, &wopts)?;
+    let win = method.flow(sys, t_settle, settled_x, t_end, &wopts)?;
     if win.samples.len() != n {
         return Err(Error::Integration {
             t: t_end,
             reason: format!("expected {n} samples, got {}", win.samples.len()),
         });
     }
-    let s = gear.co_rotation();
-    let alpha: Vec<f64> = win.samples.iter().map(|p| gear.drive_phase(p.t)).collect();
+    let s = sys.co_rotation();
+    let alpha: Vec<f64> = win.samples.iter().map(|p| sys.drive_phase(p.t)).collect();
     let mut delta: Vec<f64> = win
         .samples
         .iter()
@@ -291,10 +291,10 @@ where
     let mut end = win.x;
     let mut section = None;
     let rigorous = if opts.rigorous {
-        let (rc, x_end, z) = rigorous_classify_with_section(gear, end, opts)?;
+        let (rc, x_end, z) = rigorous_classify_with_section(sys, end, opts)?;
         end = x_end;
         if opts.keep_samples {
-            section = Some(z.iter().map(|v| [gear.reduce_angle(v[0]), v[1]]).collect());
+            section = Some(z.iter().map(|v| [sys.reduce_angle(v[0]), v[1]]).collect());
         }
         Some(rc)
     } else {
@@ -318,7 +318,7 @@ where
         rigorous,
         agree,
         net_rotation_hz,
-        end_state: [gear.reduce_angle(end[0]), end[1]],
+        end_state: [sys.reduce_angle(end[0]), end[1]],
         section,
         samples,
     })
@@ -327,7 +327,7 @@ where
 /// Settles turn by turn; stops early when the states repeat with a period m ≤ 8 turns (to `eps`,
 /// over two consecutive cycles) and returns the state the full settling reaches on that cycle.
 fn settle_early<S: DrivenOscillator + ?Sized, M: FlowMethod<S> + ?Sized>(
-    gear: &S,
+    sys: &S,
     x0: [f64; 2],
     method: &M,
     turns: usize,
@@ -335,12 +335,12 @@ fn settle_early<S: DrivenOscillator + ?Sized, M: FlowMethod<S> + ?Sized>(
     eps: f64,
 ) -> Result<[f64; 2]> {
     const M_MAX: usize = 8;
-    let period = gear.period();
+    let period = sys.period();
     let mut hist: Vec<[f64; 2]> = Vec::with_capacity(turns + 1);
     hist.push(x0);
     let mut x = x0;
     for c in 1..=turns {
-        let fl = method.flow(gear, (c - 1) as f64 * period, x, c as f64 * period, fopts)?;
+        let fl = method.flow(sys, (c - 1) as f64 * period, x, c as f64 * period, fopts)?;
         x = fl.x;
         hist.push(x);
         if c < 2 * M_MAX + 1 || c == turns {

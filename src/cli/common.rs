@@ -232,7 +232,8 @@ impl Output {
         text: impl FnOnce() -> String,
     ) -> Result<()> {
         if self.json {
-            let s = serde_json::to_string_pretty(value).map_err(|e| Error::Io(e.to_string()))?;
+            let s = serde_json::to_string_pretty(value)
+                .map_err(|e| Error::format("JSON", "output", e))?;
             println!("{s}");
         } else {
             print!("{}", text());

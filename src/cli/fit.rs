@@ -34,7 +34,7 @@ pub fn run(a: Args) -> Result<()> {
     if a.json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&v).map_err(|e| crate::Error::Io(e.to_string()))?
+            serde_json::to_string_pretty(&v).map_err(|e| crate::Error::format("JSON", "fit", e))?
         );
         return Ok(());
     }

@@ -15,8 +15,7 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
     if !dir.exists() {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| Error::Io(format!("cannot create {}: {e}", dir.display())))?;
+        std::fs::create_dir_all(dir).map_err(|e| Error::file("create", dir, e))?;
     }
     let name = path
         .file_name()
@@ -26,11 +25,10 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
         name.to_string_lossy(),
         std::process::id()
     ));
-    std::fs::write(&tmp, bytes)
-        .map_err(|e| Error::Io(format!("cannot write {}: {e}", tmp.display())))?;
+    std::fs::write(&tmp, bytes).map_err(|e| Error::file("write", &tmp, e))?;
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
-        Error::Io(format!("cannot move into place {}: {e}", path.display()))
+        Error::file("move into place", path, e)
     })
 }
 
@@ -62,7 +60,9 @@ pub fn remove_stale_temporaries(dir: &Path) {
 
 /// Serialises `value` as pretty JSON and writes it atomically.
 pub fn write_json_atomic<T: serde::Serialize>(path: impl AsRef<Path>, value: &T) -> Result<()> {
-    let s = serde_json::to_string_pretty(value).map_err(|e| Error::Io(e.to_string()))?;
+    let path = path.as_ref();
+    let s = serde_json::to_string_pretty(value)
+        .map_err(|e| Error::format("JSON", path.display().to_string(), e))?;
     write_atomic(path, s.as_bytes())
 }
 

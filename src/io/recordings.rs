@@ -517,8 +517,7 @@ pub fn read_set(dir: impl AsRef<Path>) -> Result<RecordingSet> {
 pub fn write_set(set: &RecordingSet, dir: impl AsRef<Path>, wrap: bool) -> Result<()> {
     let dir = dir.as_ref();
     let mut toml_s = String::from("# recording set written by gearbif\n[gear]\n");
-    let gear_s =
-        toml::to_string(&set.gear).map_err(|e| Error::Io(format!("cannot encode gear: {e}")))?;
+    let gear_s = toml::to_string(&set.gear).map_err(|e| Error::format("TOML", "gear", e))?;
     toml_s.push_str(&gear_s);
     for r in &set.runs {
         toml_s.push_str("\n[[run]]\n");

@@ -74,8 +74,7 @@ pub fn save(fig: &impl Figure, path: impl AsRef<Path>) -> Result<()> {
                 .parent()
                 .filter(|p| !p.as_os_str().is_empty())
                 .unwrap_or(Path::new("."));
-            std::fs::create_dir_all(dir)
-                .map_err(|e| Error::Io(format!("cannot create {}: {e}", dir.display())))?;
+            std::fs::create_dir_all(dir).map_err(|e| Error::file("create", dir, e))?;
             let tmp = dir.join(format!(".tmp-{}-{}.png", std::process::id(), unique()));
             {
                 let root = BitMapBackend::new(&tmp, size).into_drawing_area();
@@ -85,7 +84,7 @@ pub fn save(fig: &impl Figure, path: impl AsRef<Path>) -> Result<()> {
             }
             std::fs::rename(&tmp, path).map_err(|e| {
                 let _ = std::fs::remove_file(&tmp);
-                Error::Io(format!("cannot move into place {}: {e}", path.display()))
+                Error::file("move into place", path, e)
             })
         }
         _ => Err(Error::InvalidInput(format!(

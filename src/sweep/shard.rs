@@ -81,7 +81,7 @@ impl ShardStatus {
 /// 64-bit FNV-1a hash of the spec's JSON text (serde_json prints floats so that they round-trip,
 /// so equal specs give equal text), as 16 hex digits.
 pub fn spec_hash(spec: &SweepSpec) -> Result<String> {
-    let text = serde_json::to_string(spec).map_err(|e| Error::Io(e.to_string()))?;
+    let text = serde_json::to_string(spec).map_err(|e| Error::format("JSON", "sweep spec", e))?;
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for b in text.bytes() {
         h ^= u64::from(b);
@@ -100,9 +100,8 @@ struct Manifest {
 const MANIFEST: &str = "shard.json";
 
 fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Result<T> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| Error::Io(format!("{}: {e}", path.display())))?;
-    serde_json::from_str(&text).map_err(|e| Error::Io(format!("{}: {e}", path.display())))
+    let text = std::fs::read_to_string(path).map_err(|e| Error::file("read", path, e))?;
+    serde_json::from_str(&text).map_err(|e| Error::format("JSON", path.display().to_string(), e))
 }
 
 /// Writes the manifest of a new shard checkpoint, or checks that an existing one names the same
