@@ -8,7 +8,9 @@ use gearbif::identification::model::Geometry;
 use gearbif::identification::preprocess::clean;
 use gearbif::identification::regression::{build, fit, WeakOptions, BASE_TERMS};
 use gearbif::identification::ringdown::fit_ringdown;
-use gearbif::identification::shooting::{refit_by_simulation, ShootingOptions};
+use gearbif::identification::shooting::{
+    choose_windows, mask_windows, refit, ShootingOptions, SimModel,
+};
 use gearbif::identification::synth::{synthesize, SynthOptions};
 use gearbif::io::recordings::RunKind;
 
@@ -62,12 +64,19 @@ fn bench(c: &mut Criterion) {
     let d = build(&all, &geo, &BASE_TERMS, &WeakOptions::default(), 0.0);
     let f = fit(&d, &(0..BASE_TERMS.len()).collect::<Vec<_>>()).unwrap();
     let so = ShootingOptions::default();
-    let w = refit_by_simulation(&d, &f, &all, &geo, 0.0, false, &so)
-        .unwrap()
-        .windows;
+    let model = SimModel {
+        runs: &all,
+        geo,
+        terms: BASE_TERMS.to_vec(),
+        latency: 0.0,
+        fit_latency: false,
+        eta_static_excess: 0.0,
+    };
+    let wins = mask_windows(&model, &f.coef, &choose_windows(&all, so.max_windows));
+    let w = refit(&model, &f.coef, &wins, &so).unwrap().used.len();
     grp.bench_function(
         format!("refit by simulation, base model ({w} windows)"),
-        |b| b.iter(|| refit_by_simulation(&d, &f, &all, &geo, 0.0, false, &so).unwrap()),
+        |b| b.iter(|| refit(&model, &f.coef, &wins, &so).unwrap()),
     );
     let dopts = DiagnoseOptions {
         heldout_predictions: false,

@@ -16,6 +16,9 @@
 //! exact zero multiplier (the stick saltation diag(1, 0) makes the monodromy rank one), and it is
 //! returned as 0.
 
+pub mod block_cyclic;
+pub mod multiple_shooting;
+
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, EventKind, FlowMethod, FlowOptions, Sensitivity};
 use crate::maps::{multipliers, poincare_map, MapImage, Section};

@@ -6,7 +6,8 @@
 //!
 //! Readers: a run's CSV (`parse_csv`), experiment.toml (`parse_experiment`), a whole recording set
 //! from disk (`read_set`, raw bytes including invalid UTF-8), the `--config` TOML (`parse_config`)
-//! and a sweep's checkpoint (spec.json and row files, through `SweepRunner`).
+//! a sweep's checkpoint (spec.json and row files, through `SweepRunner`) and a sharded sweep's
+//! checkpoints (shard.json, spec.json, row files, through `merge_shards`).
 //!
 //! CI runs a few hundred cases per reader (well under a second each). A long run by hand:
 //! `GEARBIF_FUZZ_CASES=200000 cargo test --release --test fuzz_readers` (docs/errors.md).
@@ -15,7 +16,7 @@
 use gearbif::analysis::ClassifyOptions;
 use gearbif::cli::{parse_config, GearConfig};
 use gearbif::io::recordings::{parse_csv, parse_experiment, read_set};
-use gearbif::sweep::{Axis, SweepOutcome, SweepParam, SweepRunner, SweepSpec};
+use gearbif::sweep::{merge_shards, Axis, Shard, SweepOutcome, SweepParam, SweepRunner, SweepSpec};
 use gearbif::Error;
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
@@ -63,6 +64,9 @@ const NASTY: &[&str] = &[
     "1e308",
     "1e309",
     "-1e308",
+    "2",
+    "7",
+    "18446744073709551615",
     "-0",
     "0",
     "-1",
@@ -484,7 +488,116 @@ proptest! {
 }
 
 // ---------------------------------------------------------------------------------------------
+// sweep shards (`sweep --shard i/N` checkpoints, read back by `sweep merge`)
+
+/// The two shard checkpoints (0/2 and 1/2) of the tiny sweep, as (relative path, bytes).
+fn shard_seed() -> &'static Vec<(String, Vec<u8>)> {
+    static SEED: OnceLock<Vec<(String, Vec<u8>)>> = OnceLock::new();
+    SEED.get_or_init(|| {
+        let (spec, _, _) = checkpoint_seed();
+        let dir = tmpdir("shard-seed");
+        let mut files = Vec::new();
+        for i in 0..2 {
+            let d = dir.join(format!("s{i}"));
+            let st = SweepRunner::new(spec.clone())
+                .checkpoint(&d)
+                .run_shard(Shard::new(i, 2).unwrap())
+                .unwrap();
+            assert!(st.complete());
+            for f in ["spec.json", "shard.json", &format!("rows/row-{i:05}.json")] {
+                files.push((format!("s{i}/{f}"), std::fs::read(d.join(f)).unwrap()));
+            }
+        }
+        std::fs::remove_dir_all(&dir).ok();
+        files
+    })
+}
+
+proptest! {
+    #![proptest_config(config(128))]
+
+    /// Damaged shard files (manifest, spec, row) make `merge` refuse with a typed error naming the
+    /// file, never panic; an undamaged set merges to the sweep's two rows.
+    #[test]
+    fn shard_files_mutated(which in 0..6usize, m in mutations()) {
+        let files = shard_seed();
+        let dir = tmpdir("shard");
+        for (k, (name, bytes)) in files.iter().enumerate() {
+            let p = dir.join(name);
+            std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+            let b = if k == which { apply(bytes.clone(), &m) } else { bytes.clone() };
+            std::fs::write(p, b).unwrap();
+        }
+        let r = merge_shards(&[dir.join("s0"), dir.join("s1")]);
+        std::fs::remove_dir_all(&dir).ok();
+        match r {
+            Ok(res) => {
+                prop_assert_eq!(res.rows.len(), 2);
+                for (i, row) in res.rows.iter().enumerate() {
+                    prop_assert_eq!(row.row, i);
+                    prop_assert_eq!(row.points.len(), 2);
+                }
+            }
+            Err(Error::Recording { file, .. }) => {
+                prop_assert!(file.ends_with(".json"), "{}", file);
+            }
+            // a file that does not parse: the format error names it, the JSON error its line
+            Err(Error::Format { what, source, .. }) => {
+                prop_assert!(what.ends_with(".json"), "{}", what);
+                let s = source.to_string();
+                prop_assert!(s.contains("line") || s.contains("UTF-8") || s.contains("utf-8"), "{}", s);
+            }
+            Err(Error::File { path, .. }) => prop_assert!(path.ends_with(".json"), "{}", path),
+            Err(Error::InvalidInput(m)) => prop_assert!(!m.is_empty()),
+            Err(e) => prop_assert!(false, "untyped error {:?}", e),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
 // regressions found by the fuzzers
+
+/// Shard manifests whose shard is impossible (count 0, index beyond count, a count no sweep of
+/// these rows can have) are refused; before, `merge` indexed out of bounds or tried to allocate
+/// 2^64 slots.
+#[test]
+fn impossible_shard_manifests_are_refused() {
+    let files = shard_seed();
+    let manifest = &files.iter().find(|(n, _)| n == "s0/shard.json").unwrap().1;
+    let manifest = String::from_utf8(manifest.clone()).unwrap();
+    let count = manifest
+        .find("\"count\": 2")
+        .expect("count in the manifest");
+    let index = manifest
+        .find("\"index\": 0")
+        .expect("index in the manifest");
+    for (what, at) in [
+        ("\"count\": 0", count),
+        ("\"index\": 5", index),
+        ("\"count\": 18446744073709551615", count),
+        ("\"count\": 3", count),
+    ] {
+        let mut m = manifest.clone();
+        m.replace_range(at..at + 10, what);
+        let dir = tmpdir("shard-manifest");
+        for (name, bytes) in files {
+            let p = dir.join(name);
+            std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+            let b = if name == "s0/shard.json" {
+                m.as_bytes()
+            } else {
+                bytes
+            };
+            std::fs::write(p, b).unwrap();
+        }
+        let r = merge_shards(&[dir.join("s0"), dir.join("s1")]);
+        std::fs::remove_dir_all(&dir).ok();
+        match r {
+            Err(Error::InvalidInput(msg)) => assert!(msg.contains("shard.json"), "{what}: {msg}"),
+            other => panic!("{what}: expected a refusal naming shard.json, got {other:?}"),
+        }
+    }
+}
 
 #[test]
 fn run_files_outside_the_set_folder_are_refused() {

@@ -3,6 +3,7 @@
 //! symmetry, rotation number, Lyapunov exponent; [`classify`], [`lyapunov`]).
 
 pub mod classify;
+pub mod global_events;
 pub mod harmonic;
 pub mod lyapunov;
 

@@ -3,10 +3,12 @@
 use super::common::{
     check_frequency, count, limits, output_file, start_state, tolerance, within, GearArgs, Output,
 };
-use crate::continuation::{switch_branch, Branch, Continuation, ContinuationOptions};
+use crate::continuation::multiple_shooting::{continue_branch, MultipleShootingOptions};
+use crate::continuation::pinned::switch_at;
+use crate::continuation::{Branch, Continuation, ContinuationOptions};
 use crate::error::{Error, Result};
 use crate::maps::Section;
-use crate::model::{Gear, GearParam, Parameter};
+use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};
 
 /// Arguments of `gearbif continue`.
@@ -56,11 +58,15 @@ pub struct Args {
     /// Integrator tolerance, in (0, 1).
     #[arg(long, default_value_t = 1e-11)]
     tol: f64,
-    /// Stop when a multiplier modulus exceeds this (finite, > 1).
+    /// Single shooting is trusted up to this multiplier modulus (finite, > 1); beyond it the branch
+    /// is continued by multiple shooting (or stops, with --no-multiple-shooting).
     #[arg(long, default_value_t = 1e4)]
     max_multiplier: f64,
+    /// Stop at --max-multiplier instead of switching to multiple shooting.
+    #[arg(long)]
+    no_multiple_shooting: bool,
     /// After the continuation, switch at special point number N (flip or symmetry-breaking) and
-    /// continue the new branch too.
+    /// continue the new branch too, on the side of the point where it exists (away from the point).
     #[arg(long)]
     switch_at: Option<usize>,
     /// Write the branch (JSON) to this file.
@@ -178,6 +184,13 @@ fn summary(b: &Branch) -> String {
         b.map_evaluations,
         b.stop
     ));
+    if let Some(i) = b.multiple_shooting_from {
+        s.push_str(&format!(
+            "  multiple shooting from point {i} ({} = {:.6}) on\n",
+            b.param.name(),
+            b.points.get(i).map(|p| p.param).unwrap_or(f64::NAN)
+        ));
+    }
     for (i, sp) in b.specials.iter().enumerate() {
         let mu = sp.floquet.multipliers;
         s.push_str(&format!(
@@ -233,7 +246,13 @@ pub fn run(a: Args) -> Result<()> {
         shooting,
         ..Default::default()
     };
-    let branch = Continuation::from_orbit(gear, param, &orbit, opts)?.run(None)?;
+    let ms = (!a.no_multiple_shooting).then(MultipleShootingOptions::default);
+    let branch = continue_branch(
+        Continuation::from_orbit(gear, param, &orbit, opts)?,
+        &opts,
+        ms.as_ref(),
+        None,
+    )?;
     let mut branches = vec![branch];
     if let Some(n) = a.switch_at {
         let b0 = &branches[0];
@@ -243,17 +262,21 @@ pub fn run(a: Args) -> Result<()> {
                 b0.specials.len()
             ))
         })?;
-        let sw = switch_branch(b0, sp, -sign * 1e-3 * sp.param.abs().max(1.0), &shooting)?;
-        let b1 = Continuation::from_orbit(
-            sw.system,
-            param,
-            &sw.orbit,
-            ContinuationOptions {
-                ds: sign * 0.25 * a.ds.abs(),
-                ..opts
-            },
-        )?
-        .run(None)?;
+        // pinned switching: the new orbit is found at a fixed distance from the bifurcating one,
+        // with the parameter free, so it lands on the side where the new branch exists; the new
+        // branch is continued away from the point
+        let (sys1, orbit1) = switch_at(b0, sp, 1e-2, &shooting)?;
+        let side = (sys1.param(param) - sp.param).signum();
+        let o1 = ContinuationOptions {
+            ds: side * 0.25 * a.ds.abs(),
+            ..opts
+        };
+        let b1 = continue_branch(
+            Continuation::from_orbit(sys1, param, &orbit1, o1)?,
+            &o1,
+            ms.as_ref(),
+            None,
+        )?;
         branches.push(b1);
     }
     if let Some(p) = &a.out {

@@ -12,6 +12,7 @@ mod classify;
 mod common;
 mod continue_;
 mod diagnose;
+mod diagram;
 mod figure;
 mod fit;
 mod info;
@@ -46,6 +47,9 @@ pub enum Command {
     Continue(continue_::Args),
     /// Refine one special point (fold, flip, symmetry-breaking, Neimark–Sacker) by Newton.
     Locate(locate::Args),
+    /// The whole bifurcation diagram over a parameter range, automatically: seeds from simulations
+    /// and analytic branches, switching at every flip and symmetry-breaking point.
+    Diagram(diagram::Args),
     /// A two-parameter curve of special points, by default the lock-loss boundary f_c(Θ).
     Boundary(boundary::Args),
     /// Integrate the driven gear: trajectory CSV (t, alpha, beta, omega, delta) and events on ω = 0.
@@ -80,6 +84,7 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Info(a) => info::run(a),
         Command::Continue(a) => continue_::run(a),
         Command::Locate(a) => locate::run(a),
+        Command::Diagram(a) => diagram::run(a),
         Command::Boundary(a) => boundary::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Map(a) => map::run(a),

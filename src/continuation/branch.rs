@@ -118,6 +118,9 @@ pub enum StopReason {
     },
     /// The branch left the parameter range but no orbit could be corrected onto the bound.
     BoundNotReached(f64),
+    /// The branch ran onto a branch already computed (same orbits, up to the symmetry R, the 2π
+    /// lift and the choice of map); the detail names it. Used by the automatic diagram.
+    KnownBranch(String),
     /// Not stopped yet.
     Running,
 }
@@ -138,8 +141,13 @@ pub struct Branch<S: Parametrised = Gear> {
     pub specials: Vec<SpecialPoint>,
     /// Why the continuation stopped.
     pub stop: StopReason,
-    /// Map evaluations (each one integration with sensitivities).
+    /// Map evaluations (each one integration with sensitivities; with multiple shooting one
+    /// evaluation of all segments).
     pub map_evaluations: usize,
+    /// Index of the first point computed by multiple shooting (where single shooting reached its
+    /// multiplier limit), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub multiple_shooting_from: Option<usize>,
 }
 
 impl<S: Parametrised> Branch<S> {

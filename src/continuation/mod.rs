@@ -21,8 +21,12 @@
 
 pub mod branch;
 pub mod detect;
+pub mod diagram;
+pub mod identity;
+pub mod multiple_shooting;
 pub mod options;
 pub mod palc;
+pub mod pinned;
 pub mod switch;
 pub mod two_param;
 

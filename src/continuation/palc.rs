@@ -116,6 +116,7 @@ impl<S: Parametrised, M: FlowMethod<S>> Continuation<S, M> {
             specials: Vec::new(),
             stop: StopReason::Running,
             map_evaluations: 0,
+            multiple_shooting_from: None,
         };
         let mut c = Self {
             method,

@@ -165,6 +165,29 @@ pub fn catalog() -> Vec<Effect> {
         },
     ];
     for p in [DriftParam::Eta, DriftParam::Zeta, DriftParam::Coupling] {
+        for clock in [Clock::DriveFrequency, Clock::VelocityRange] {
+            v.push(Effect {
+                id: "condition_dependence",
+                class: "state-dependent parameter",
+                explanation: match p {
+                    DriftParam::Eta => {
+                        "the dry friction η differs from run to run with the run's conditions                          (drive frequency or velocity range): a friction law that depends on the                          state, which one linear model cannot hold"
+                    }
+                    DriftParam::Zeta => {
+                        "the viscous damping ζ differs from run to run with the run's conditions                          (drive frequency or velocity range): a damping law that is not linear in                          the velocity"
+                    }
+                    DriftParam::Coupling => {
+                        "the coupling strength g differs from run to run with the run's                          conditions (drive frequency or velocity range)"
+                    }
+                },
+                terms: vec![Term::Drift(p, clock)],
+                candidates: vec![
+                    "a friction or damping law depending on the velocity or the angles",
+                    "a drift over the session (when the runs were recorded in the order of the                      condition)",
+                ],
+                discriminating_experiment: "repeat runs of one condition at the start and the end                     of a session, and record the conditions in shuffled order: a condition                     dependence stays with the condition, a drift with the time",
+            });
+        }
         for clock in [Clock::RunIndex, Clock::SessionTime] {
             v.push(Effect {
                 id: "parameter_drift",
@@ -217,7 +240,8 @@ pub fn same_slot(a: &Effect, b: &Effect) -> bool {
 }
 
 /// Dictionary for the sparse search: trig(kα + lβ) with |k|, |l| ≤ 2 (not already in the base
-/// model or the catalog), and velocity/sign terms modulated by cos β, sin β.
+/// model or the catalog) and cos/sin 3β, velocity/sign terms modulated by cos β, sin β, and dry
+/// friction modulated by cos/sin(kα + lβ) for (k, l) = (0, 2), (1, 0), (2, 0), (1, ±1).
 pub fn dictionary() -> Vec<Term> {
     let mut v = Vec::new();
     for k in 0..=2i8 {
@@ -233,7 +257,15 @@ pub fn dictionary() -> Vec<Term> {
             v.push(Term::Sin(k, l));
         }
     }
+    // torques with the third harmonic of β
+    v.extend([Term::Cos(0, 3), Term::Sin(0, 3)]);
     v.extend([Term::VCosB, Term::VSinB, Term::SCosB, Term::SSinB]);
+    // dry friction modulated by harmonics of α and β: sgn β̇ · cos/sin(kα + lβ)
+    for (k, l) in [(0, 2), (1, 0), (2, 0), (1, 1), (1, -1)] {
+        for sin in [false, true] {
+            v.push(Term::STrig(k, l, sin));
+        }
+    }
     v
 }
 
@@ -248,7 +280,7 @@ pub fn effect_params(
     let mut p = BTreeMap::new();
     let get = |t: Term| coef.get(&t.name()).copied();
     match effect.id {
-        "parameter_drift" => {
+        "parameter_drift" | "condition_dependence" => {
             for t in &effect.terms {
                 if let (Term::Drift(dp, clock), Some((v, s))) = (t, get(*t)) {
                     let name = dp.name();
@@ -269,6 +301,14 @@ pub fn effect_params(
                     p.insert(
                         "clock_session_time".into(),
                         f64::from(u8::from(*clock == Clock::SessionTime)),
+                    );
+                    p.insert(
+                        "clock_drive_frequency".into(),
+                        f64::from(u8::from(*clock == Clock::DriveFrequency)),
+                    );
+                    p.insert(
+                        "clock_velocity_range".into(),
+                        f64::from(u8::from(*clock == Clock::VelocityRange)),
                     );
                 }
             }

@@ -19,6 +19,8 @@ pub struct LsqFit {
     pub rss: f64,
     /// Whether the optimiser reported success.
     pub converged: bool,
+    /// Jacobian of the residuals at the solution (central differences), rows × parameters.
+    pub jac: DMatrix<f64>,
 }
 
 struct Problem<'a, F: Fn(&[f64]) -> Option<Vec<f64>>> {
@@ -26,6 +28,7 @@ struct Problem<'a, F: Fn(&[f64]) -> Option<Vec<f64>>> {
     p: na34::DVector<f64>,
     steps: Vec<f64>,
     m: usize,
+    forward: bool,
 }
 
 impl<F: Fn(&[f64]) -> Option<Vec<f64>>> Problem<'_, F> {
@@ -33,18 +36,27 @@ impl<F: Fn(&[f64]) -> Option<Vec<f64>>> Problem<'_, F> {
         let n = p.len();
         let mut j = DMatrix::zeros(self.m, n);
         let mut q = p.to_vec();
+        let r0 = if self.forward {
+            Some((self.f)(p)?)
+        } else {
+            None
+        };
         for k in 0..n {
             let h = self.steps[k] * p[k].abs().max(1.0);
             q[k] = p[k] + h;
             let rp = (self.f)(&q)?;
-            q[k] = p[k] - h;
-            let rm = (self.f)(&q)?;
+            let (rm, den) = if let Some(r0) = &r0 {
+                (r0.clone(), h)
+            } else {
+                q[k] = p[k] - h;
+                ((self.f)(&q)?, 2.0 * h)
+            };
             q[k] = p[k];
             if rp.len() != self.m || rm.len() != self.m {
                 return None;
             }
             for i in 0..self.m {
-                j[(i, k)] = (rp[i] - rm[i]) / (2.0 * h);
+                j[(i, k)] = (rp[i] - rm[i]) / den;
             }
         }
         Some(j)
@@ -89,17 +101,20 @@ pub fn least_squares<F: Fn(&[f64]) -> Option<Vec<f64>>>(
     steps: &[f64],
     patience: usize,
 ) -> Option<LsqFit> {
-    least_squares_tol(f, p0, steps, patience, None)
+    least_squares_tol(f, p0, steps, patience, None, false)
 }
 
 /// [`least_squares`] with the optimiser's relative tolerances (ftol, xtol) set: looser ones stop
-/// earlier when every residual evaluation is expensive and the start is already close.
+/// earlier when every residual evaluation is expensive and the start is already close; `forward`:
+/// forward differences (one evaluation per parameter, with the residual at p evaluated once per
+/// Jacobian) instead of central ones.
 pub fn least_squares_tol<F: Fn(&[f64]) -> Option<Vec<f64>>>(
     f: &F,
     p0: &[f64],
     steps: &[f64],
     patience: usize,
     tol: Option<(f64, f64)>,
+    forward: bool,
 ) -> Option<LsqFit> {
     let r0 = f(p0)?;
     let m = r0.len();
@@ -112,6 +127,7 @@ pub fn least_squares_tol<F: Fn(&[f64]) -> Option<Vec<f64>>>(
         p: na34::DVector::from_column_slice(p0),
         steps: steps.to_vec(),
         m,
+        forward,
     };
     let mut lm = LevenbergMarquardt::new().with_patience(patience);
     if let Some((ftol, xtol)) = tol {
@@ -138,6 +154,7 @@ pub fn least_squares_tol<F: Fn(&[f64]) -> Option<Vec<f64>>>(
         cov,
         rss,
         converged: report.termination.was_successful(),
+        jac: j,
     })
 }
 

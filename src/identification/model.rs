@@ -45,6 +45,15 @@ pub enum ExtraTerm {
     FricCos,
     /// Dry friction modulated by sin β.
     FricSin,
+    /// Dry friction modulated by cos(kα + lβ) (sin when `sin`).
+    FricTrig {
+        /// Harmonic of α.
+        k: i8,
+        /// Harmonic of β.
+        l: i8,
+        /// Sine instead of cosine.
+        sin: bool,
+    },
 }
 
 /// Slots for [`ExtraTerm`]s in [`Coefficients::extra`] (the field is written with the literal 4).
@@ -236,7 +245,10 @@ impl AugmentedGear {
                     a_beta -= th * omega * cb;
                     a_omega -= th * sb;
                 }
-                ExtraTerm::FricCos | ExtraTerm::FricSin | ExtraTerm::Unused => {}
+                ExtraTerm::FricCos
+                | ExtraTerm::FricSin
+                | ExtraTerm::FricTrig { .. }
+                | ExtraTerm::Unused => {}
             }
         }
         (a, a_beta, a_omega, a_alpha)
@@ -250,6 +262,10 @@ impl AugmentedGear {
             match term {
                 ExtraTerm::FricCos => r += th * beta.cos(),
                 ExtraTerm::FricSin => r += th * beta.sin(),
+                ExtraTerm::FricTrig { k, l, sin } => {
+                    let x = k as f64 * alpha + l as f64 * beta;
+                    r += th * if sin { x.sin() } else { x.cos() };
+                }
                 _ => {}
             }
         }
@@ -257,11 +273,13 @@ impl AugmentedGear {
     }
     fn friction_varies(&self) -> bool {
         self.c.eta_load != 0.0
-            || self
-                .c
-                .extra
-                .iter()
-                .any(|&(t, th)| th != 0.0 && matches!(t, ExtraTerm::FricCos | ExtraTerm::FricSin))
+            || self.c.extra.iter().any(|&(t, th)| {
+                th != 0.0
+                    && matches!(
+                        t,
+                        ExtraTerm::FricCos | ExtraTerm::FricSin | ExtraTerm::FricTrig { .. }
+                    )
+            })
     }
 }
 

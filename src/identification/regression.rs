@@ -54,6 +54,9 @@ pub enum Term {
     SCosB,
     /// −sgn β̇ · sin β (dictionary).
     SSinB,
+    /// −sgn β̇ · cos(kα + lβ), or sin when the flag is set (dictionary: dry friction modulated by
+    /// the angles).
+    STrig(i8, i8, bool),
     /// A base parameter varying linearly over the recording session: the base term of
     /// `param` times the session position s ∈ [−½, ½] on `clock` (`parameter_drift`).
     Drift(DriftParam, Clock),
@@ -101,6 +104,11 @@ pub enum Clock {
     RunIndex,
     /// Recording time accumulated over the runs in file order (runs back to back).
     SessionTime,
+    /// A run condition, not a clock: the drive frequency (0 for ring-downs), scaled to [−½, ½]
+    /// over the runs.
+    DriveFrequency,
+    /// A run condition: the run's rms output velocity, scaled to [−½, ½] over the runs.
+    VelocityRange,
 }
 
 impl Clock {
@@ -109,7 +117,13 @@ impl Clock {
         match self {
             Clock::RunIndex => "run_index",
             Clock::SessionTime => "session_time",
+            Clock::DriveFrequency => "drive_frequency",
+            Clock::VelocityRange => "velocity_range",
         }
+    }
+    /// Whether it orders the session (a clock) rather than describing a run's conditions.
+    pub fn is_session_order(&self) -> bool {
+        matches!(self, Clock::RunIndex | Clock::SessionTime)
     }
 }
 
@@ -138,6 +152,13 @@ impl Term {
             Term::VSinB => "-dbeta sin(beta)".into(),
             Term::SCosB => "-sgn(dbeta)cos(beta)".into(),
             Term::SSinB => "-sgn(dbeta)sin(beta)".into(),
+            Term::STrig(k, l, sin) => format!(
+                "-sgn(dbeta){}({k}alpha{:+}beta)",
+                if *sin { "sin" } else { "cos" },
+                l
+            )
+            .replace("+1beta", "+beta")
+            .replace("-1beta", "-beta"),
             Term::Drift(p, c) => format!("drift[{},{}]", p.name(), c.name()),
             Term::Compliance => "input_compliance".into(),
             Term::DrivenOffset => "driven_alpha_offset".into(),
@@ -148,7 +169,7 @@ impl Term {
     pub fn breaks_symmetry(&self) -> bool {
         match self {
             Term::SinB | Term::CosB | Term::VCosB | Term::VSinB | Term::SCosB | Term::SSinB => true,
-            Term::Cos(k, l) | Term::Sin(k, l) => (k + l).rem_euclid(2) == 1,
+            Term::Cos(k, l) | Term::Sin(k, l) | Term::STrig(k, l, _) => (k + l).rem_euclid(2) == 1,
             _ => false,
         }
     }
@@ -229,6 +250,8 @@ struct SampleCtx {
     s_index: f64,
     /// Session position by accumulated recording time, in [−½, ½].
     s_time: f64,
+    /// Drive-frequency and velocity-range conditions of the run, in [−½, ½].
+    s_cond: (f64, f64),
     /// Driven run.
     driven: bool,
     /// Input turns since the start of the run.
@@ -240,6 +263,8 @@ impl SampleCtx {
         match clock {
             Clock::RunIndex => self.s_index,
             Clock::SessionTime => self.s_time,
+            Clock::DriveFrequency => self.s_cond.0,
+            Clock::VelocityRange => self.s_cond.1,
         }
     }
 }
@@ -296,6 +321,10 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
         Term::VSinB => (-v * b.sin(), false),
         Term::SCosB => (b.cos(), true),
         Term::SSinB => (b.sin(), true),
+        Term::STrig(k, l, sin) => {
+            let x = k as f64 * al + l as f64 * b;
+            (if sin { x.sin() } else { x.cos() }, true)
+        }
     }
 }
 
@@ -328,14 +357,53 @@ fn session_clocks(runs: &[CleanRun]) -> Vec<(f64, f64, f64)> {
         .collect()
 }
 
-/// Session positions (by run index, by session time at the run's middle), each in [−½, ½], of
-/// the clocks of [`Term::Drift`].
-pub fn session_positions(runs: &[CleanRun]) -> Vec<(f64, f64)> {
+/// Per run: (drive frequency, rms output velocity), each scaled to [−½, ½] over the runs.
+pub fn run_conditions(runs: &[CleanRun]) -> Vec<(f64, f64)> {
+    let scale = |x: Vec<f64>| -> Vec<f64> {
+        let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        x.iter()
+            .map(|v| {
+                if hi > lo {
+                    (v - lo) / (hi - lo) - 0.5
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    };
+    let f = scale(runs.iter().map(|r| r.alpha_rate.abs()).collect());
+    let v = scale(
+        runs.iter()
+            .map(|r| (r.v.iter().map(|x| x * x).sum::<f64>() / r.v.len().max(1) as f64).sqrt())
+            .collect(),
+    );
+    f.into_iter().zip(v).collect()
+}
+
+/// The value in [−½, ½] of every [`Clock`] for each run (session time at the run's middle).
+pub fn session_positions(runs: &[CleanRun]) -> Vec<[f64; 4]> {
+    let cond = run_conditions(runs);
     session_clocks(runs)
         .iter()
         .zip(runs)
-        .map(|(&(si, start, total), r)| (si, (start + 0.5 * duration(r)) / total - 0.5))
+        .zip(cond)
+        .map(|((&(si, start, total), r), c)| {
+            [si, (start + 0.5 * duration(r)) / total - 0.5, c.0, c.1]
+        })
         .collect()
+}
+
+impl Clock {
+    /// Index into the rows of [`session_positions`].
+    pub fn index(&self) -> usize {
+        match self {
+            Clock::RunIndex => 0,
+            Clock::SessionTime => 1,
+            Clock::DriveFrequency => 2,
+            Clock::VelocityRange => 3,
+        }
+    }
 }
 
 /// The previous sample inside a window: (t, φ, v, term values).
@@ -363,6 +431,7 @@ pub fn build(
     const POW: i32 = 6;
     let delta = crate::model::gear::shaft_index(geo.theta, geo.phi);
     let clocks = session_clocks(runs);
+    let conds = run_conditions(runs);
     for (ri, r) in runs.iter().enumerate() {
         let n = r.t.len();
         if n < 8 {
@@ -374,6 +443,7 @@ pub fn build(
             delta,
             s_index,
             s_time: (run_start + t - t_first) / total - 0.5,
+            s_cond: conds[ri],
             driven: !r.ringdown,
             turns: r.alpha_rate.abs() * (t - t_first) / std::f64::consts::TAU,
         };

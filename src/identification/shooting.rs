@@ -1,34 +1,34 @@
 //! Refit by simulation: multiple shooting over short windows.
 //!
-//! The weak-form regression ([`super::regression`]) selects the terms and gives starting values,
-//! but its quadrature on coarsely sampled runs carries a systematic error of its own (a few tenths
-//! of a percent on g, more on terms with higher harmonics). The refit removes it: every run is cut
-//! into the short prediction windows of [`super::predict`] (≤ 30 samples, ≤ 0.4 s: short enough
-//! for chaos not to matter) and the model is simulated with the exact Filippov integrator over
-//! each window. The window initial states (β, β̇) are nuisance parameters, profiled out (variable
+//! The weak-form regression ([`super::regression`]) proposes terms and gives starting values, but
+//! its quadrature on coarsely sampled runs carries a systematic error of its own (a few tenths of
+//! a percent on g, more on terms with higher harmonics). The refit removes it: runs are cut into
+//! the short prediction windows of [`super::predict`] (≤ 30 samples, ≤ 0.4 s: short enough for
+//! chaos not to matter) and the model is simulated with the exact Filippov integrator over each
+//! window. The window initial states (β, β̇) are nuisance parameters, profiled out (variable
 //! projection: for every trial parameter vector θ each window's state is refitted, warm-started);
 //! θ is fitted to the residuals (β_sim − β_meas)/σ_camera by Levenberg–Marquardt with a central
 //! finite-difference Jacobian of the profiled residuals, whose Gauss–Newton covariance is then the
-//! correct marginal covariance of θ. The residuals are close to white camera noise, so the
-//! covariance needs only a small correction for their autocorrelation.
+//! marginal covariance of θ (inflated by the small autocorrelation of the residuals, with two
+//! degrees of freedom per window removed).
 //!
-//! θ is the coefficient vector of a weak-form fit ([`LinFit`]; every term, mapped per run by
-//! [`coefficients_for_run`], dictionary terms through [`super::model::ExtraTerm`]) and optionally
-//! the sensor latency.
+//! θ is the coefficient vector of a [`SimModel`]'s terms (mapped by [`super::spec`]) and optionally
+//! the sensor latency. The Jacobian at the solution is kept: the judge uses it for the one-step
+//! leave-fold-out refits ([`SimFit::step_without`]).
 
-use super::diagnose::coefficients_for_run;
 use super::lm::least_squares_tol;
-use super::model::{Geometry, MAX_EXTRA};
+use super::model::{AugmentedGear, Coefficients, Geometry};
 use super::predict::{fit_window_state, prediction_windows, window_residuals, window_system};
 use super::preprocess::CleanRun;
-use super::regression::{autocorr_time, Design, LinFit, Term};
-use nalgebra::DMatrix;
+use super::regression::{autocorr_time, Term};
+use super::spec::{coefficients_for_run, simulable};
+use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
 
 /// Options of the refit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShootingOptions {
-    /// Most windows used (spread evenly over the runs; fewer windows, faster and noisier).
+    /// Most windows used (spread over the runs; fewer windows, faster and noisier).
     pub max_windows: usize,
     /// Outer Levenberg–Marquardt patience (evaluations ≈ patience × (parameters + 1)).
     pub patience: usize,
@@ -38,27 +38,231 @@ impl Default for ShootingOptions {
     fn default() -> Self {
         Self {
             max_windows: 240,
-            patience: 3,
+            patience: 1,
         }
     }
 }
 
+/// A prediction window: samples [lo, hi) of run `run`, frames marked in `keep` used.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Win {
+    /// Run index.
+    pub run: usize,
+    /// First sample.
+    pub lo: usize,
+    /// One past the last sample.
+    pub hi: usize,
+    /// Frames used (outlier frames beyond 5σ masked).
+    pub keep: Vec<bool>,
+}
+
+impl Win {
+    /// Frames used.
+    pub fn kept(&self) -> usize {
+        self.keep.iter().filter(|&&k| k).count()
+    }
+}
+
+/// A model to simulate: its terms, the geometry of the force shape, and the latency (a fixed
+/// value, or fitted as the last entry of θ).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimModel<'a> {
+    /// The runs.
+    pub runs: &'a [CleanRun],
+    /// Geometry for the force shape h(α, β).
+    pub geo: Geometry,
+    /// Terms (θ holds their coefficients first).
+    pub terms: Vec<Term>,
+    /// Latency, s (the start value when fitted).
+    pub latency: f64,
+    /// Whether the latency is the last entry of θ.
+    pub fit_latency: bool,
+    /// Breakaway excess of the static friction, s⁻² (not fitted here: [`super::release`]).
+    pub eta_static_excess: f64,
+}
+
+impl SimModel<'_> {
+    /// Latency at θ.
+    pub fn latency_of(&self, theta: &[f64]) -> f64 {
+        if self.fit_latency {
+            theta[self.terms.len()]
+        } else {
+            self.latency
+        }
+    }
+    /// Coefficients of run `run` at θ.
+    pub fn coefficients(&self, theta: &[f64], run: usize) -> Coefficients {
+        let mut c = coefficients_for_run(&self.terms, &theta[..self.terms.len()], self.runs, run);
+        c.eta_static_excess = self.eta_static_excess;
+        c
+    }
+    /// The window's system at θ.
+    pub fn system(&self, theta: &[f64], w: &Win) -> AugmentedGear {
+        let r = &self.runs[w.run];
+        let c = self.coefficients(theta, w.run);
+        window_system(r, &c, &self.geo, self.latency_of(theta), w.lo, w.hi)
+    }
+    /// θ from term coefficients and the latency.
+    pub fn theta(&self, coef: &[f64], latency: f64) -> Vec<f64> {
+        let mut t = coef.to_vec();
+        if self.fit_latency {
+            t.push(latency);
+        }
+        t
+    }
+    /// (χ², frames) of window `w` at θ: its state fitted (multi-start) with the model fixed.
+    pub fn window_chi2(&self, theta: &[f64], w: &Win) -> Option<(f64, usize)> {
+        let r = &self.runs[w.run];
+        let sys = self.system(theta, w);
+        let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
+        let f = fit_window_state(
+            &sys,
+            t,
+            b,
+            &w.keep,
+            r.sigma_camera.max(1e-12),
+            [b[0], r.v[w.lo]],
+            true,
+        )?;
+        Some((f.rss, w.kept()))
+    }
+}
+
+impl SimModel<'_> {
+    /// χ² of window `w` at θ with its state refitted from the warm start `x` (Gauss–Newton steps,
+    /// the projection of the refit).
+    pub fn window_chi2_warm(&self, theta: &[f64], w: &Win, x: [f64; 2]) -> Option<f64> {
+        let r = &self.runs[w.run];
+        let sys = self.system(theta, w);
+        let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
+        let (res, _) = project_state(&sys, t, b, &w.keep, r.sigma_camera.max(1e-12), x)?;
+        Some(res.iter().map(|v| v * v).sum())
+    }
+    /// χ² of window `w` at θ: from the warm start when there is one and its fit is good
+    /// (≤ 4 per frame), else the better of that and a multi-start state fit.
+    pub fn window_chi2_from(&self, theta: &[f64], w: &Win, warm: Option<[f64; 2]>) -> Option<f64> {
+        let from_warm = warm.and_then(|x| self.window_chi2_warm(theta, w, x));
+        match from_warm {
+            Some(c) if c <= 4.0 * w.kept() as f64 => Some(c),
+            _ => {
+                let fresh = self.window_chi2(theta, w).map(|x| x.0);
+                match (fresh, from_warm) {
+                    (Some(a), Some(b)) => Some(a.min(b)),
+                    (a, b) => a.or(b),
+                }
+            }
+        }
+    }
+}
+
+impl SimFit {
+    /// The fitted state of each window of a list of `n` that the refit used.
+    pub fn warm_starts(&self, n: usize) -> Vec<Option<[f64; 2]>> {
+        let mut warm = vec![None; n];
+        for (k, &(wi, _)) in self.used.iter().enumerate() {
+            warm[wi] = Some(self.states[k]);
+        }
+        warm
+    }
+    /// χ² of every window of `wins` at the solution: from the residuals for the used windows,
+    /// by a fresh state fit for the others; and the warm start of each used window.
+    pub fn window_chi2(
+        &self,
+        model: &SimModel,
+        wins: &[Win],
+    ) -> (Vec<Option<f64>>, Vec<Option<[f64; 2]>>) {
+        let mut warm: Vec<Option<[f64; 2]>> = vec![None; wins.len()];
+        let mut chi2: Vec<Option<f64>> = vec![None; wins.len()];
+        for (k, &(wi, row0)) in self.used.iter().enumerate() {
+            warm[wi] = Some(self.states[k]);
+            let n = wins[wi].keep.len();
+            chi2[wi] = Some(self.resid[row0..row0 + n].iter().map(|v| v * v).sum());
+        }
+        let missing: Vec<usize> = (0..wins.len()).filter(|&k| chi2[k].is_none()).collect();
+        let fresh = par_map(missing.len(), |j| {
+            model
+                .window_chi2(&self.theta, &wins[missing[j]])
+                .map(|x| x.0)
+        });
+        for (j, k) in missing.into_iter().enumerate() {
+            chi2[k] = fresh[j];
+        }
+        (chi2, warm)
+    }
+}
+
+/// The windows of `runs`, at most `max` of them: every run keeps an even share (at least
+/// `min(6, its windows)`), spread evenly over the run.
+pub fn choose_windows(runs: &[CleanRun], max: usize) -> Vec<(usize, usize, usize)> {
+    let per: Vec<Vec<(usize, usize)>> = runs.iter().map(prediction_windows).collect();
+    let total: usize = per.iter().map(|p| p.len()).sum();
+    let mut out = Vec::new();
+    for (ri, p) in per.iter().enumerate() {
+        if p.is_empty() {
+            continue;
+        }
+        let share = (p.len() * max).div_ceil(total.max(1));
+        let quota = share.max(6).min(p.len());
+        let stride = p.len() as f64 / quota as f64;
+        for q in 0..quota {
+            let (i, j) = p[(q as f64 * stride) as usize];
+            out.push((ri, i, j));
+        }
+    }
+    out
+}
+
+/// The windows `chosen` with their outlier frames (beyond 5σ of the camera noise under `model`
+/// at θ) masked; windows that cannot be fitted, or with more than a fifth of their frames
+/// masked, are dropped.
+pub fn mask_windows(model: &SimModel, theta: &[f64], chosen: &[(usize, usize, usize)]) -> Vec<Win> {
+    par_map(chosen.len(), |k| {
+        let (run, lo, hi) = chosen[k];
+        let r = &model.runs[run];
+        let mut w = Win {
+            run,
+            lo,
+            hi,
+            keep: vec![true; hi - lo],
+        };
+        let sys = model.system(theta, &w);
+        let (t, b) = (&r.t[lo..hi], &r.beta[lo..hi]);
+        let s = r.sigma_camera.max(1e-12);
+        let f = fit_window_state(&sys, t, b, &w.keep, s, [b[0], r.v[lo]], true)?;
+        let nbad = f.resid.iter().filter(|x| x.abs() > 5.0).count();
+        if nbad > (hi - lo) / 5 {
+            return None;
+        }
+        w.keep = f.resid.iter().map(|x| x.abs() <= 5.0).collect();
+        Some(w)
+    })
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
 /// Result of a refit by simulation.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SimRefit {
-    /// Coefficients in the order of the weak-form fit's columns.
-    pub coef: Vec<f64>,
-    /// Their 1σ uncertainties.
+pub struct SimFit {
+    /// θ (term coefficients, then the latency when fitted).
+    pub theta: Vec<f64>,
+    /// 1σ of θ.
     pub err: Vec<f64>,
-    /// Latency and its 1σ, s, when fitted.
-    pub latency: Option<(f64, f64)>,
-    /// rms of the window residuals at the solution, rad.
+    /// Covariance of θ (inflated as described in the module).
+    pub cov: DMatrix<f64>,
+    /// Jacobian of the profiled residuals at θ (rows: the used windows' frames, in order).
+    pub jac: DMatrix<f64>,
+    /// Residuals at θ, σ units.
+    pub resid: Vec<f64>,
+    /// Indices (into the window list given) of the windows used, with their first row.
+    pub used: Vec<(usize, usize)>,
+    /// Fitted initial states of the used windows (warm starts for later predictions).
+    pub states: Vec<[f64; 2]>,
+    /// rms of the window residuals at θ, rad.
     pub rms_rad: f64,
-    /// rms of the window residuals at the start (the weak-form coefficients), rad.
+    /// rms at the start, rad.
     pub rms_start_rad: f64,
-    /// Windows used.
-    pub windows: usize,
-    /// Samples used.
+    /// Frames used.
     pub samples: usize,
     /// Covariance inflation n/n_eff from the residual autocorrelation.
     pub inflation: f64,
@@ -66,39 +270,166 @@ pub struct SimRefit {
     pub converged: bool,
 }
 
-struct Window {
-    run: usize,
-    lo: usize,
-    hi: usize,
-    keep: Vec<bool>,
+impl SimFit {
+    /// Coefficient values and 1σ of the terms (latency excluded).
+    pub fn coef(&self, nterms: usize) -> (&[f64], &[f64]) {
+        (&self.theta[..nterms], &self.err[..nterms])
+    }
+    /// θ refitted without the windows of the runs for which `out(run)` holds, by one
+    /// Gauss–Newton step from θ on the remaining rows (linear least squares by SVD):
+    /// θ₋ = θ + argmin_δ ‖r_in + J_in δ‖. Exact for a model linear in θ; for the small change of
+    /// leaving a fold out the usual first-order approximation of a refit.
+    pub fn step_without(&self, wins: &[Win], out: impl Fn(usize) -> bool) -> Option<Vec<f64>> {
+        let p = self.theta.len();
+        let mut rows = Vec::new();
+        for &(wi, row0) in &self.used {
+            if !out(wins[wi].run) {
+                rows.extend(row0..row0 + wins[wi].keep.len());
+            }
+        }
+        if rows.len() <= p {
+            return None;
+        }
+        let j = DMatrix::from_fn(rows.len(), p, |a, b| self.jac[(rows[a], b)]);
+        let r = DVector::from_iterator(rows.len(), rows.iter().map(|&i| -self.resid[i]));
+        // scale columns for conditioning
+        let s: Vec<f64> = (0..p)
+            .map(|k| 1.0 / j.column(k).norm().max(1e-300))
+            .collect();
+        let js = DMatrix::from_fn(rows.len(), p, |a, b| j[(a, b)] * s[b]);
+        let d = js.svd(true, true).solve(&r, 1e-12).ok()?;
+        let out: Vec<f64> = (0..p).map(|k| self.theta[k] + d[k] * s[k]).collect();
+        out.iter().all(|v| v.is_finite()).then_some(out)
+    }
 }
 
-/// Whether every column of `f` has a simulation form: dictionary terms do, up to
-/// [`MAX_EXTRA`] of them.
-pub fn simulable(d: &Design, f: &LinFit) -> bool {
-    f.cols
-        .iter()
-        .filter(|&&c| {
-            matches!(
-                d.terms[c],
-                Term::Cos(..)
-                    | Term::Sin(..)
-                    | Term::VCosB
-                    | Term::VSinB
-                    | Term::SCosB
-                    | Term::SSinB
-            )
-        })
-        .count()
-        <= MAX_EXTRA
+/// Refits θ of `model` from `theta0` by multiple shooting over the windows `wins`. Windows whose
+/// start is poor (rms > 2σ: the model cannot follow them there, e.g. a wrong stick/slip branch)
+/// are left out. `None` when the model has no simulation form, no window can be fitted, or the
+/// optimiser cannot evaluate the start.
+pub fn refit(
+    model: &SimModel,
+    theta0: &[f64],
+    wins: &[Win],
+    opts: &ShootingOptions,
+) -> Option<SimFit> {
+    if !simulable(&model.terms) || wins.is_empty() {
+        return None;
+    }
+    let start: Vec<Option<[f64; 2]>> = par_map(wins.len(), |k| {
+        let w = &wins[k];
+        let r = &model.runs[w.run];
+        let sys = model.system(theta0, w);
+        let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
+        let s = r.sigma_camera.max(1e-12);
+        let f = fit_window_state(&sys, t, b, &w.keep, s, [b[0], r.v[w.lo]], true)?;
+        (f.rss / w.kept().max(1) as f64 <= 4.0).then_some([f.p[0], f.p[1]])
+    });
+    let mut used = Vec::new();
+    let mut states = Vec::new();
+    let mut row = 0usize;
+    for (k, s) in start.into_iter().enumerate() {
+        if let Some(x) = s {
+            used.push((k, row));
+            states.push(x);
+            row += wins[k].keep.len();
+        }
+    }
+    if used.is_empty() {
+        return None;
+    }
+    let warm = Mutex::new(states);
+    let residuals = |theta: &[f64]| -> Option<Vec<f64>> {
+        let guesses = warm.lock().ok()?.clone();
+        let per: Vec<Option<(Vec<f64>, [f64; 2])>> = par_map(used.len(), |k| {
+            let w = &wins[used[k].0];
+            let r = &model.runs[w.run];
+            let sys = model.system(theta, w);
+            let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
+            project_state(&sys, t, b, &w.keep, r.sigma_camera.max(1e-12), guesses[k])
+        });
+        let mut out = Vec::with_capacity(row);
+        let mut new_states = guesses;
+        for (k, p) in per.into_iter().enumerate() {
+            let (res, x0) = p?;
+            out.extend(res);
+            new_states[k] = x0;
+        }
+        *warm.lock().ok()? = new_states;
+        Some(out)
+    };
+    let r0 = residuals(theta0)?;
+    let sigma_rms = |res: &[f64]| -> f64 {
+        let (mut ss, mut n) = (0.0, 0usize);
+        for &(wi, row0) in &used {
+            let w = &wins[wi];
+            let s = model.runs[w.run].sigma_camera;
+            for (k, &kp) in w.keep.iter().enumerate() {
+                if kp {
+                    ss += (res[row0 + k] * s).powi(2);
+                    n += 1;
+                }
+            }
+        }
+        (ss / n.max(1) as f64).sqrt()
+    };
+    let nt = model.terms.len();
+    let steps: Vec<f64> = (0..theta0.len())
+        .map(|k| if k >= nt { 1e-3 } else { 1e-4 })
+        .collect();
+    let sol = least_squares_tol(
+        &residuals,
+        theta0,
+        &steps,
+        opts.patience,
+        Some((1e-6, 1e-5)),
+        true,
+    )?;
+    // residual autocorrelation within windows: inflate the covariance by n/n_eff
+    let (mut ratio_n, mut ratio_d) = (0.0, 0.0);
+    for &(wi, row0) in &used {
+        let w = &wins[wi];
+        let e: Vec<f64> = (0..w.keep.len())
+            .filter(|&k| w.keep[k])
+            .map(|k| sol.resid[row0 + k])
+            .collect();
+        ratio_n += e.len() as f64;
+        ratio_d += e.len() as f64 / autocorr_time(&e);
+    }
+    let inflation = (ratio_n / ratio_d.max(1e-300)).max(1.0);
+    // degrees of freedom: the profiled states took two per window
+    let samples: usize = used.iter().map(|&(wi, _)| wins[wi].kept()).sum();
+    let m = samples as f64;
+    let dof = (m - 2.0 * used.len() as f64 - theta0.len() as f64).max(1.0);
+    let s2_fix = (sol.rss / dof) / (sol.rss / (sol.resid.len() - theta0.len()) as f64);
+    let cov: DMatrix<f64> = &sol.cov * (inflation * s2_fix);
+    let err: Vec<f64> = (0..theta0.len())
+        .map(|k| cov[(k, k)].max(0.0).sqrt())
+        .collect();
+    let (rms_rad, rms_start_rad) = (sigma_rms(&sol.resid), sigma_rms(&r0));
+    let states = warm.into_inner().ok()?;
+    Some(SimFit {
+        theta: sol.p.clone(),
+        err,
+        cov,
+        jac: sol.jac.clone(),
+        rms_rad,
+        resid: sol.resid,
+        used,
+        states,
+        rms_start_rad,
+        samples,
+        inflation,
+        converged: sol.converged,
+    })
 }
 
 /// Refits a window's state from the warm start `x` by Gauss–Newton steps (forward-difference
 /// Jacobian, 2×2 normal equations): the projection step of variable projection, a few sims
-/// instead of a full optimiser run. Falls back to [`fit_state`] when the result is poor (a stick
-/// or slip branch change) or a step fails. Returns (residuals, state).
+/// instead of a full optimiser run. Falls back to [`fit_window_state`] when a step fails.
+/// Returns (residuals, state).
 fn project_state(
-    sys: &super::model::AugmentedGear,
+    sys: &AugmentedGear,
     t: &[f64],
     b: &[f64],
     keep: &[bool],
@@ -154,7 +485,8 @@ fn project_state(
     })
 }
 
-fn par_map<T: Send, F: Fn(usize) -> T + Sync + Send>(n: usize, f: F) -> Vec<T> {
+/// `f(0..n)`, in parallel with the `parallel` feature.
+pub fn par_map<T: Send, F: Fn(usize) -> T + Sync + Send>(n: usize, f: F) -> Vec<T> {
     #[cfg(feature = "parallel")]
     {
         use rayon::prelude::*;
@@ -164,180 +496,4 @@ fn par_map<T: Send, F: Fn(usize) -> T + Sync + Send>(n: usize, f: F) -> Vec<T> {
     {
         (0..n).map(f).collect()
     }
-}
-
-/// Refits the coefficients of `fit` (and the latency when `fit_latency`) by multiple shooting
-/// over short windows of `runs`. `None` when the model has no simulation form (dictionary
-/// terms), no window can be fitted, or the optimiser cannot evaluate the start.
-pub fn refit_by_simulation(
-    d: &Design,
-    fit: &LinFit,
-    runs: &[CleanRun],
-    geo: &Geometry,
-    latency: f64,
-    fit_latency: bool,
-    opts: &ShootingOptions,
-) -> Option<SimRefit> {
-    if !simulable(d, fit) {
-        return None;
-    }
-    // windows, evenly thinned to at most max_windows
-    let all: Vec<(usize, usize, usize)> = runs
-        .iter()
-        .enumerate()
-        .flat_map(|(ri, r)| {
-            prediction_windows(r)
-                .into_iter()
-                .map(move |(i, j)| (ri, i, j))
-        })
-        .collect();
-    if all.is_empty() {
-        return None;
-    }
-    let stride = all.len().div_ceil(opts.max_windows.max(1));
-    let chosen: Vec<(usize, usize, usize)> = all.into_iter().step_by(stride).collect();
-    let coef_for = |theta: &[f64], run: usize| coefficients_for_run(d, fit, theta, runs, run);
-    let lat_of = |theta: &[f64]| {
-        if fit_latency {
-            theta[fit.coef.len()]
-        } else {
-            latency
-        }
-    };
-    let mut theta0 = fit.coef.clone();
-    if fit_latency {
-        theta0.push(latency);
-    }
-    // start: fit every window's state at θ0, drop poor windows (the model cannot follow them
-    // there, e.g. a wrong stick/slip branch) and mask outlier frames beyond 5σ
-    let start: Vec<Option<(Window, [f64; 2])>> = par_map(chosen.len(), |k| {
-        let (ri, i, j) = chosen[k];
-        let r = &runs[ri];
-        let sys = window_system(r, &coef_for(&theta0, ri), geo, lat_of(&theta0), i, j);
-        let (t, b) = (&r.t[i..j], &r.beta[i..j]);
-        let sigma = r.sigma_camera.max(1e-12);
-        let mut keep = vec![true; j - i];
-        let mut f = fit_window_state(&sys, t, b, &keep, sigma, [b[0], r.v[i]], true)?;
-        let bad: Vec<bool> = f.resid.iter().map(|x| x.abs() > 5.0).collect();
-        let nbad = bad.iter().filter(|&&x| x).count();
-        if nbad > 0 {
-            if nbad > (j - i) / 5 {
-                return None;
-            }
-            keep = bad.iter().map(|&x| !x).collect();
-            f = fit_window_state(&sys, t, b, &keep, sigma, [f.p[0], f.p[1]], false)?;
-        }
-        let kept = keep.iter().filter(|&&x| x).count();
-        if f.rss / kept as f64 > 4.0 {
-            return None;
-        }
-        Some((
-            Window {
-                run: ri,
-                lo: i,
-                hi: j,
-                keep,
-            },
-            [f.p[0], f.p[1]],
-        ))
-    });
-    let (windows, states): (Vec<Window>, Vec<[f64; 2]>) = start.into_iter().flatten().unzip();
-    if windows.is_empty() {
-        return None;
-    }
-    let warm = Mutex::new(states);
-    let residuals = |theta: &[f64]| -> Option<Vec<f64>> {
-        let guesses = warm.lock().ok()?.clone();
-        let per: Vec<Option<(Vec<f64>, [f64; 2])>> = par_map(windows.len(), |k| {
-            let w = &windows[k];
-            let r = &runs[w.run];
-            let sys = window_system(r, &coef_for(theta, w.run), geo, lat_of(theta), w.lo, w.hi);
-            let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
-            project_state(&sys, t, b, &w.keep, r.sigma_camera.max(1e-12), guesses[k])
-        });
-        let mut out = Vec::new();
-        let mut new_states = guesses;
-        for (k, p) in per.into_iter().enumerate() {
-            let (res, x0) = p?;
-            out.extend(res);
-            new_states[k] = x0;
-        }
-        *warm.lock().ok()? = new_states;
-        Some(out)
-    };
-    let r0 = residuals(&theta0)?;
-    let samples: usize = windows
-        .iter()
-        .map(|w| w.keep.iter().filter(|&&k| k).count())
-        .sum();
-    let sigma_rms = |res: &[f64], w: &[Window]| -> f64 {
-        // back to radians with each run's camera noise
-        let mut ss = 0.0;
-        let mut n = 0usize;
-        let mut pos = 0usize;
-        for win in w {
-            let s = runs[win.run].sigma_camera;
-            for (k, &kp) in win.keep.iter().enumerate() {
-                if kp {
-                    ss += (res[pos + k] * s).powi(2);
-                    n += 1;
-                }
-            }
-            pos += win.keep.len();
-        }
-        (ss / n.max(1) as f64).sqrt()
-    };
-    let rms_start = sigma_rms(&r0, &windows);
-    let steps: Vec<f64> = theta0
-        .iter()
-        .enumerate()
-        .map(|(k, _)| {
-            if fit_latency && k == fit.coef.len() {
-                1e-3
-            } else {
-                1e-4
-            }
-        })
-        .collect();
-    let sol = least_squares_tol(
-        &residuals,
-        &theta0,
-        &steps,
-        opts.patience,
-        Some((1e-6, 1e-5)),
-    )?;
-    // residual autocorrelation within windows: inflate the covariance by n/n_eff
-    let mut pos = 0usize;
-    let mut ratio_n = 0.0;
-    let mut ratio_d = 0.0;
-    for w in &windows {
-        let e: Vec<f64> = (0..w.keep.len())
-            .filter(|&k| w.keep[k])
-            .map(|k| sol.resid[pos + k])
-            .collect();
-        pos += w.keep.len();
-        ratio_n += e.len() as f64;
-        ratio_d += e.len() as f64 / autocorr_time(&e);
-    }
-    let inflation = (ratio_n / ratio_d.max(1e-300)).max(1.0);
-    // degrees of freedom: the profiled states took two per window
-    let m = samples as f64;
-    let dof = (m - 2.0 * windows.len() as f64 - theta0.len() as f64).max(1.0);
-    let s2_fix = (sol.rss / dof) / (sol.rss / (sol.resid.len() - theta0.len()) as f64);
-    let cov: DMatrix<f64> = &sol.cov * (inflation * s2_fix);
-    let err: Vec<f64> = (0..theta0.len())
-        .map(|k| cov[(k, k)].max(0.0).sqrt())
-        .collect();
-    let nc = fit.coef.len();
-    Some(SimRefit {
-        coef: sol.p[..nc].to_vec(),
-        err: err[..nc].to_vec(),
-        latency: fit_latency.then(|| (sol.p[nc], err[nc])),
-        rms_rad: sigma_rms(&sol.resid, &windows),
-        rms_start_rad: rms_start,
-        windows: windows.len(),
-        samples,
-        inflation,
-        converged: sol.converged,
-    })
 }

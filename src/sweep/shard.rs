@@ -157,6 +157,15 @@ fn read_shard(dir: &Path) -> Result<ShardData> {
             manifest.spec_hash
         )));
     }
+    // a shard no run can have written (run_shard checks 0 <= i < N and i < rows)
+    let Shard { index, count } = manifest.shard;
+    let nrows = spec.rows.values.len();
+    if count == 0 || index >= count || count > nrows {
+        return Err(Error::InvalidInput(format!(
+            "{}: shard {index}/{count} is impossible for a sweep of {nrows} rows",
+            man_path.display()
+        )));
+    }
     Ok(ShardData {
         dir: dir.to_path_buf(),
         spec,

@@ -1,0 +1,203 @@
+//! `gearbif diagram`: the whole bifurcation diagram over a parameter range, automatically (seeds
+//! from simulations and analytic branches, continuation, switching at every flip and
+//! symmetry-breaking point, branches recognised modulo symmetry, lift and map).
+
+use super::common::{
+    check_frequency, count, frequency, limits, output_file, tolerance, within, GearArgs, Output,
+};
+use super::continue_::parse_range;
+use crate::continuation::diagram::{diagram, lock_seeds, Diagram, DiagramOptions};
+use crate::continuation::multiple_shooting::MultipleShootingOptions;
+use crate::continuation::ContinuationOptions;
+use crate::error::{Error, Result};
+use crate::model::{GearParam, Parameter};
+use crate::orbits::ShootingOptions;
+
+/// Arguments of `gearbif diagram`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    gear: GearArgs,
+    /// The parameter: f, theta (parallel shafts, deg), delta, zeta, eta or g.
+    #[arg(long, default_value = "f")]
+    param: String,
+    /// Parameter range `lo:hi`.
+    #[arg(long, allow_hyphen_values = true)]
+    range: String,
+    /// Drive frequency [Hz] when the parameter is not f.
+    #[arg(long, default_value_t = 2.0)]
+    f: f64,
+    /// Number of parameter values where attractors are sought by simulation.
+    #[arg(long, default_value_t = 6)]
+    grid: usize,
+    /// Largest period (in drive periods) followed through period doublings.
+    #[arg(long, default_value_t = 16)]
+    max_period: usize,
+    /// Drive periods of relaxation of each simulation seed.
+    #[arg(long, default_value_t = 300)]
+    relax: usize,
+    /// Initial arclength step.
+    #[arg(long, default_value_t = 0.01)]
+    ds: f64,
+    /// Largest arclength step.
+    #[arg(long, default_value_t = 0.05)]
+    ds_max: f64,
+    /// Largest number of steps per continuation run.
+    #[arg(long, default_value_t = 600)]
+    max_steps: usize,
+    /// Integrator tolerance.
+    #[arg(long, default_value_t = 1e-11)]
+    tol: f64,
+    /// Write the diagram (JSON, schema gearbif.diagram/1) to this file.
+    #[arg(long)]
+    out: Option<std::path::PathBuf>,
+    /// The diagram as a figure (.svg or .png).
+    #[arg(long)]
+    plot: Option<std::path::PathBuf>,
+    /// Print the diagram as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+fn summary(d: &Diagram) -> String {
+    let mut s = format!(
+        "diagram in {} ∈ [{}, {}]: {} continuation runs, {} map evaluations\n",
+        d.param.name(),
+        d.range.0,
+        d.range.1,
+        d.branches.len(),
+        d.map_evaluations
+    );
+    let mut pts: Vec<_> = d
+        .special_points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.same_as.is_none())
+        .collect();
+    pts.sort_by(|a, b| a.1.point.param.total_cmp(&b.1.point.param));
+    s.push_str("special points (distinct):\n");
+    for (i, p) in pts {
+        let b = &d.branches[p.branch].branch;
+        let extra = match (&p.criticality, &p.point.jump) {
+            (Some(c), _) => format!(" {c:?}"),
+            (None, Some(j)) => format!(
+                " {:?} → {:?}{}",
+                j.events_before.signature(),
+                j.events_after.signature(),
+                j.crosses
+                    .as_ref()
+                    .map(|c| format!(", multiplier jumps across ({c})"))
+                    .unwrap_or_default()
+            ),
+            _ => String::new(),
+        };
+        s.push_str(&format!(
+            "  [{i:>2}] {:<18} {} = {:.9} ± {:.1e}  on {:?} k = {} p = {:+}{extra}\n",
+            p.point.kind.label(),
+            d.param.name(),
+            p.point.param,
+            p.point.precision,
+            b.spec.section,
+            b.spec.iterations,
+            b.spec.winding,
+        ));
+    }
+    s.push_str("runs:\n");
+    for (i, b) in d.branches.iter().enumerate() {
+        let (lo, hi) = b.branch.param_range().unwrap_or((f64::NAN, f64::NAN));
+        s.push_str(&format!(
+            "  [{i:>2}] {:?} k = {} p = {:+} {} points, {} ∈ [{lo:.6}, {hi:.6}], from {:?}, stop {:?}\n",
+            b.branch.spec.section,
+            b.branch.spec.iterations,
+            b.branch.spec.winding,
+            b.branch.points.len(),
+            d.param.name(),
+            b.origin,
+            b.branch.stop
+        ));
+    }
+    s
+}
+
+/// The domain checks of `diagram`, all before any orbit is computed.
+fn check_args(a: &Args) -> Result<()> {
+    tolerance("tol", a.tol)?;
+    within(
+        "ds-max",
+        a.ds_max,
+        f64::MIN_POSITIVE,
+        f64::MAX,
+        "must be > 0",
+    )?;
+    if !(a.ds.is_finite() && a.ds > 0.0 && a.ds <= a.ds_max) {
+        return Err(Error::InvalidInput(format!(
+            "--ds = {} must be finite, > 0 and at most --ds-max = {}",
+            a.ds, a.ds_max
+        )));
+    }
+    count("grid", a.grid, 1, 1000)?;
+    count("max-period", a.max_period, 1, 64)?;
+    count("relax", a.relax, 1, limits::TURNS_MAX)?;
+    count("max-steps", a.max_steps, 1, limits::TURNS_MAX)?;
+    if let Some(p) = &a.out {
+        output_file("--out", p, false)?;
+    }
+    if let Some(p) = &a.plot {
+        output_file("--plot", p, true)?;
+    }
+    Ok(())
+}
+
+/// Runs `gearbif diagram`.
+pub fn run(a: Args) -> Result<()> {
+    let param = GearParam::from_name(&a.param)?;
+    let (lo, hi) = parse_range(&a.range)?;
+    let f = if param == GearParam::F {
+        frequency("f", lo)?;
+        frequency("f", hi)?;
+        0.5 * (lo + hi)
+    } else {
+        a.f
+    };
+    check_frequency(f)?;
+    check_args(&a)?;
+    let gear = a.gear.params()?.driven(f)?;
+    let shooting = ShootingOptions {
+        tol: a.tol,
+        ..Default::default()
+    };
+    let opts = DiagramOptions {
+        grid: a.grid,
+        max_period: a.max_period,
+        relax_periods: a.relax,
+        continuation: ContinuationOptions {
+            ds: a.ds,
+            ds_max: a.ds_max,
+            max_steps: a.max_steps,
+            shooting,
+            ..Default::default()
+        },
+        multiple_shooting: Some(MultipleShootingOptions::default()),
+        ..DiagramOptions::new(param, (lo, hi))
+    };
+    opts.continuation.validate()?;
+    let seeds = lock_seeds(&gear, &shooting);
+    let d = diagram(&gear, &opts, seeds)?;
+    if let Some(p) = &a.out {
+        crate::io::write_json_atomic(p, &d)?;
+    }
+    if let Some(p) = &a.plot {
+        let fig = crate::plotting::branch::BranchDiagram {
+            title: format!(
+                "bifurcation diagram in {} (automatic, {} runs)",
+                param.name(),
+                d.branches.len()
+            ),
+            branches: d.branches.iter().map(|b| b.branch.clone()).collect(),
+            paper_convention: a.gear.convention() == crate::model::Convention::Paper,
+            ..Default::default()
+        };
+        crate::plotting::save(&fig, p)?;
+    }
+    Output { json: a.json }.emit(&d, || summary(&d))
+}

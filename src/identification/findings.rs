@@ -1,0 +1,291 @@
+//! Findings from the judged selection: physical parameters from the refit by simulation, the
+//! headline size ([`EffectSize`]) and the numbers of the held-out judgement.
+
+use super::catalog::{effect_params, Effect};
+use super::judge::{rms_rad, Comparison};
+use super::preprocess::CleanRun;
+use super::regression::Term;
+use super::report::{EffectSize, Finding};
+use super::select::{ModelState, Tried};
+use super::shooting::Win;
+use serde_json::json;
+use std::collections::BTreeMap;
+
+/// (value, 1σ) of every term of a refitted model, by term name.
+pub fn coefficient_map(st: &ModelState) -> BTreeMap<String, (f64, f64)> {
+    st.terms
+        .iter()
+        .enumerate()
+        .map(|(k, t)| (t.name(), (st.fit.theta[k], st.fit.err[k])))
+        .collect()
+}
+
+/// (ζ, η, g) of a refitted model.
+pub fn base_values(map: &BTreeMap<String, (f64, f64)>) -> (f64, f64, f64) {
+    let v = |t: Term| map.get(&t.name()).map(|x| x.0).unwrap_or(f64::NAN);
+    (v(Term::Zeta), v(Term::Eta), -v(Term::SinACosB))
+}
+
+/// The headline size of a finding from its parameters (docs/diagnosis.md, "Sizes").
+pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<EffectSize> {
+    let mk = |name: &str, v: &str, e: &str, unit: &str| -> Option<EffectSize> {
+        Some(EffectSize {
+            name: name.into(),
+            value: *p.get(v)?,
+            sigma: *p.get(e)?,
+            unit: unit.into(),
+        })
+    };
+    match effect.id {
+        "static_torque" => mk("amplitude", "amplitude", "amplitude_err", "s^-2"),
+        "quadratic_drag" => mk("q", "q", "q_err", "rad^-1"),
+        "corotating_drag" => mk("c", "c", "c_err", "s^-1"),
+        "load_dependent_friction" => mk("k", "k", "k_err", "1"),
+        "sensor_latency" => mk("latency", "tau_s", "tau_err_s", "s"),
+        "input_compliance" => mk(
+            "lag_at_peak_torque",
+            "lag_at_peak_torque_deg",
+            "lag_at_peak_torque_err_deg",
+            "deg",
+        ),
+        "coupling_geometry" => mk(
+            "alpha_offset",
+            "alpha_offset_deg",
+            "alpha_offset_err_deg",
+            "deg",
+        ),
+        "drive_steps" => mk("offset", "offset_deg", "offset_err_deg", "deg"),
+        "static_friction" => mk("excess", "excess_relative", "excess_relative_err", "1"),
+        "parameter_drift" | "condition_dependence" => ["eta", "zeta", "g"].iter().find_map(|n| {
+            mk(
+                &format!("{n}_change"),
+                &format!("{n}_change"),
+                &format!("{n}_change_err"),
+                match *n {
+                    "eta" => "s^-2",
+                    "zeta" => "s^-1",
+                    _ => "s^-2",
+                },
+            )
+        }),
+        "unexplained" => effect
+            .terms
+            .iter()
+            .filter_map(|t| {
+                Some((
+                    t.name(),
+                    *p.get(&t.name())?,
+                    *p.get(&format!("{}_err", t.name()))?,
+                ))
+            })
+            .max_by(|a, b| (a.1 / a.2).abs().total_cmp(&(b.1 / b.2).abs()))
+            .map(|(n, v, e)| EffectSize {
+                name: n,
+                value: v,
+                sigma: e,
+                unit: "s^-2".into(),
+            }),
+        _ => None,
+    }
+}
+
+/// The physical parameters of the accepted `effect` in the refitted model `st`.
+pub fn params_of(effect: &Effect, st: &ModelState) -> BTreeMap<String, f64> {
+    let map = coefficient_map(st);
+    match effect.id {
+        "sensor_latency" => {
+            let k = st.terms.len();
+            [
+                ("tau_s".to_string(), st.fit.theta[k]),
+                ("tau_err_s".to_string(), st.fit.err[k]),
+            ]
+            .into_iter()
+            .collect()
+        }
+        "unexplained" => effect
+            .terms
+            .iter()
+            .filter_map(|t| {
+                map.get(&t.name())
+                    .map(|v| [(t.name(), v.0), (format!("{}_err", t.name()), v.1)])
+            })
+            .flatten()
+            .collect(),
+        _ => effect_params(effect, &map, base_values(&map)),
+    }
+}
+
+/// The judgement's numbers as evidence.
+pub fn judgement_evidence(
+    t: &Tried,
+    cmp: &Comparison,
+    folds: usize,
+) -> BTreeMap<String, serde_json::Value> {
+    let mut ev = BTreeMap::new();
+    ev.insert("round".into(), json!(t.round));
+    ev.insert("heldout_z".into(), json!(cmp.z));
+    ev.insert("heldout_z_cluster_by_run".into(), json!(cmp.z_cluster));
+    ev.insert("z_threshold".into(), json!(t.z_crit));
+    ev.insert("heldout_chi2_gain".into(), json!(cmp.gain));
+    ev.insert("windows".into(), json!(cmp.windows));
+    ev.insert("runs".into(), json!(cmp.runs));
+    ev.insert("folds".into(), json!(folds));
+    ev.insert("delta_bic_weak_form".into(), json!(t.candidate.weak_dbic));
+    ev.insert(
+        "terms".into(),
+        json!(t
+            .candidate
+            .terms
+            .iter()
+            .map(|x| x.name())
+            .collect::<Vec<_>>()),
+    );
+    ev
+}
+
+/// The experiment that tells an `unexplained` term's possible causes apart.
+pub fn dictionary_experiment(t: Term) -> &'static str {
+    match t {
+        Term::STrig(0, _, _) | Term::SCosB | Term::SSinB => {
+            "dry friction that depends on the output angle: record small-amplitude ring-downs              around equilibria spread over a turn of β (step α0 over a full turn); the linear              decrement per swing follows the modulation in β (a bent shaft or an eccentric              bearing load)"
+        }
+        Term::STrig(..) => {
+            "dry friction that depends on the input angle: ring-downs at many α0 over a turn;              the dry-friction decrement changes with α0 (bearing load from the input side, e.g.              a force on the output shaft that turns with the input)"
+        }
+        Term::Cos(0, _) | Term::Sin(0, _) => {
+            "a torque that depends on the output angle only: ring-downs of the output with the              input magnet removed; the remaining torque and its harmonics are lab-fixed"
+        }
+        Term::Cos(..) | Term::Sin(..) => {
+            "a coupling harmonic: ring-downs at finely stepped α0 over a full turn; κ(α0) and the              equilibrium β0(α0) show the harmonic (dipole shape or position of the magnets)"
+        }
+        Term::VCosB | Term::VSinB => {
+            "damping that depends on the output angle: ring-downs from large amplitudes at              several α0; the viscous decay rate varies with the angle range swept"
+        }
+        _ => "",
+    }
+}
+
+/// The finding of the accepted candidate `t`, judged against `before`.
+pub fn judged_finding(
+    t: &Tried,
+    before: &ModelState,
+    wins: &[Win],
+    runs: &[CleanRun],
+    folds: usize,
+    rivals: &[String],
+    fin: &ModelState,
+) -> Option<Finding> {
+    let st = t.state.as_ref()?;
+    let cmp = t.cmp?;
+    let e = &t.candidate.effect;
+    // parameters from the final model refitted to convergence (it holds every accepted effect)
+    let params = params_of(e, fin);
+    let mut ev = judgement_evidence(t, &cmp, folds);
+    ev.insert(
+        "simulation_refit".into(),
+        json!({"windows": st.fit.used.len(), "samples": st.fit.samples,
+               "rms_start_rad": st.fit.rms_start_rad, "rms_rad": st.fit.rms_rad,
+               "converged": st.fit.converged, "inflation": st.fit.inflation}),
+    );
+    let size = headline_size(e, &params);
+    let (candidates, experiment) = if e.id == "unexplained" {
+        (
+            rivals
+                .iter()
+                .map(|r| r.to_string())
+                .collect::<Vec<String>>(),
+            e.terms
+                .iter()
+                .map(|&t| dictionary_experiment(t))
+                .collect::<Vec<_>>()
+                .join("; "),
+        )
+    } else {
+        (
+            e.candidates.iter().map(|s| s.to_string()).collect(),
+            e.discriminating_experiment.to_string(),
+        )
+    };
+    if !rivals.is_empty() {
+        ev.insert("significant_rivals".into(), json!(rivals));
+    }
+    Some(Finding {
+        effect: e.id.to_string(),
+        class: e.class.to_string(),
+        explanation: e.explanation.to_string(),
+        params,
+        candidates,
+        discriminating_experiment: experiment,
+        rms_before_rad: Some(rms_rad(&before.held.chi2_fit, wins, runs)),
+        rms_after_rad: Some(rms_rad(&st.held.chi2_fit, wins, runs)),
+        heldout_rms_before_rad: Some(cmp.rms_before),
+        heldout_rms_after_rad: Some(cmp.rms_after),
+        evidence: ev,
+        size,
+    })
+}
+
+/// The other candidates of the round of `t` that were significant too (they explain part of the
+/// same mismatch), as "effect (terms): z, gain".
+pub fn rivals(t: &Tried, tried: &[Tried]) -> Vec<String> {
+    tried
+        .iter()
+        .filter(|o| o.round == t.round && !o.accepted)
+        .filter_map(|o| {
+            let c = o.cmp?;
+            (c.z >= o.z_crit).then(|| {
+                format!(
+                    "{} ({}): held-out z = {:.1}, χ² gain {:.0}",
+                    o.candidate.effect.id,
+                    o.candidate
+                        .terms
+                        .iter()
+                        .map(|x| x.name())
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    c.z,
+                    c.gain
+                )
+            })
+        })
+        .collect()
+}
+
+/// The rejected candidates with their numbers (for `fits.rejected_candidates`).
+pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
+    tried
+        .iter()
+        .filter(|t| !t.accepted)
+        .map(|t| {
+            let c = &t.candidate;
+            json!({
+                "round": t.round,
+                "effect": c.effect.id,
+                "terms": c.terms.iter().map(|x| x.name()).collect::<Vec<_>>(),
+                "latency_start_s": c.latency.map(|l| l.0),
+                "delta_bic_weak_form": c.weak_dbic,
+                "heldout_z": t.cmp.map(|m| m.z),
+                "heldout_z_cluster_by_run": t.cmp.map(|m| m.z_cluster),
+                "screening_z": t.screen.map(|m| m.z),
+                "z_threshold": t.z_crit,
+                "heldout_chi2_gain": t.cmp.map(|m| m.gain),
+                "heldout_rms_before_rad": t.cmp.map(|m| m.rms_before),
+                "heldout_rms_after_rad": t.cmp.map(|m| m.rms_after),
+                "reason": match t.cmp {
+                    None => match t.screen {
+                        Some(s) => format!(
+                            "screening (half the windows): held-out z = {:.2} < {}",
+                            s.z,
+                            super::select::SCREEN_Z
+                        ),
+                        None => "the refit by simulation failed".to_string(),
+                    },
+                    Some(m) if m.z < t.z_crit => format!(
+                        "held-out improvement not significant (z = {:.2} < {:.2})", m.z, t.z_crit),
+                    Some(_) => "significant, but another candidate of the round gained more"
+                        .to_string(),
+                },
+            })
+        })
+        .collect()
+}

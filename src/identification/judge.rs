@@ -1,0 +1,234 @@
+//! The decision rule: a candidate effect stands only when the model with it, refitted by
+//! simulation, predicts runs it was not fitted to significantly better than the current model.
+//!
+//! - **Folds.** The runs are split into k folds by run, stratified by run kind (ring-downs dealt
+//!   round-robin in file order, then driven runs continuing the deal), the same folds for every
+//!   candidate and every round.
+//! - **Held-out prediction.** A model is refitted by multiple shooting on all judging windows
+//!   ([`super::shooting::refit`]); its refit without fold f is one Gauss–Newton step on the
+//!   windows of the other folds ([`SimFit::step_without`]). Every judging window of a run in fold
+//!   f is then predicted with that θ: its initial state fitted with the model fixed, the model
+//!   simulated by the exact Filippov integrator; the window's χ² (camera noise units) is its
+//!   held-out error.
+//! - **Paired comparison.** For the windows predicted by both models, d_w = χ²_current − χ²_new.
+//!   The test statistic is z = Σ d_w / √(n/(n−1) Σ_w (d_w − d̄)²): the windows are near-independent
+//!   pairs (each has its own fitted initial state and independent camera noise; under the null
+//!   the parameter error of a fold that all its windows share only lowers d_w). The cluster-robust
+//!   z (runs as clusters, sandwich variance) is reported beside it; it is not the decision, since
+//!   it also counts the legitimate run-to-run variation of a real effect (a latency grows with the
+//!   drive frequency) as noise.
+//! - **Threshold fixed a priori.** With m candidates tried in a round, one-sided at the
+//!   family-wise level α = 0.01 with a Bonferroni correction: z ≥ max(3, Φ⁻¹(1 − α/m)). Nothing is
+//!   tuned to test sets.
+//! - **Greedy over rounds.** Each round evaluates all remaining candidates (each on top of the
+//!   accepted ones), accepts the one with the largest held-out gain Σ d_w among the significant,
+//!   and repeats; the order in which candidates are listed never decides.
+
+use super::preprocess::CleanRun;
+use super::shooting::{par_map, SimFit, SimModel, Win};
+
+/// Folds by run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Folds {
+    /// Fold of each run.
+    pub of_run: Vec<usize>,
+    /// Number of folds.
+    pub k: usize,
+}
+
+impl Folds {
+    /// k folds of `runs`, stratified by kind (see the module).
+    pub fn new(runs: &[CleanRun], k: usize) -> Self {
+        let k = k.clamp(2, runs.len().max(2));
+        let mut of_run = vec![0; runs.len()];
+        let mut next = 0usize;
+        for ringdown in [true, false] {
+            for (i, r) in runs.iter().enumerate() {
+                if r.ringdown == ringdown {
+                    of_run[i] = next % k;
+                    next += 1;
+                }
+            }
+        }
+        Self { of_run, k }
+    }
+}
+
+/// Held-out errors of one model on the judging windows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldOut {
+    /// χ² of each window (camera-noise units) predicted by the model refitted without its
+    /// fold; `None` when the window's state could not be fitted.
+    pub chi2: Vec<Option<f64>>,
+    /// In-sample χ² of each window (the model fitted on all runs).
+    pub chi2_fit: Vec<Option<f64>>,
+}
+
+/// The held-out errors of `model` with its refit `fit` (see the module).
+pub fn heldout(model: &SimModel, fit: &SimFit, wins: &[Win], folds: &Folds) -> HeldOut {
+    let thetas: Vec<Vec<f64>> = (0..folds.k)
+        .map(|f| {
+            fit.step_without(wins, |run| folds.of_run[run] == f)
+                .unwrap_or_else(|| fit.theta.clone())
+        })
+        .collect();
+    let (chi2_fit, warm) = fit.window_chi2(model, wins);
+    let chi2: Vec<Option<f64>> = par_map(wins.len(), |k| {
+        let w = &wins[k];
+        let th = &thetas[folds.of_run[w.run]];
+        model.window_chi2_from(th, w, warm[k])
+    });
+    HeldOut { chi2, chi2_fit }
+}
+
+/// rms (rad) of the windows predicted in `chi2` (σ of each run's camera).
+pub fn rms_rad(chi2: &[Option<f64>], wins: &[Win], runs: &[CleanRun]) -> f64 {
+    let (mut ss, mut n) = (0.0, 0usize);
+    for (c, w) in chi2.iter().zip(wins) {
+        if let Some(c) = c {
+            ss += c * runs[w.run].sigma_camera.powi(2);
+            n += w.kept();
+        }
+    }
+    if n > 0 {
+        (ss / n as f64).sqrt()
+    } else {
+        f64::NAN
+    }
+}
+
+/// rms (rad) per run of the windows predicted in `chi2` (`None` for runs without windows).
+pub fn rms_per_run(chi2: &[Option<f64>], wins: &[Win], runs: &[CleanRun]) -> Vec<Option<f64>> {
+    (0..runs.len())
+        .map(|r| {
+            let (mut ss, mut n) = (0.0, 0usize);
+            for (c, w) in chi2.iter().zip(wins).filter(|(_, w)| w.run == r) {
+                if let Some(c) = c {
+                    ss += c * runs[r].sigma_camera.powi(2);
+                    n += w.kept();
+                }
+            }
+            (n > 0).then(|| (ss / n as f64).sqrt())
+        })
+        .collect()
+}
+
+/// A paired comparison of two models' held-out errors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Comparison {
+    /// Σ d_w, χ² units: the held-out improvement (positive: the new model predicts better).
+    pub gain: f64,
+    /// z of the gain with the windows as independent pairs (the decision).
+    pub z: f64,
+    /// z with the windows of a run as a cluster (sandwich variance; reported, not decided on: it
+    /// also counts the legitimate run-to-run variation of a real effect's size as noise).
+    pub z_cluster: f64,
+    /// Windows compared.
+    pub windows: usize,
+    /// Runs (clusters) compared.
+    pub runs: usize,
+    /// Held-out rms of the current model on the compared windows, rad.
+    pub rms_before: f64,
+    /// Held-out rms of the new model on the compared windows, rad.
+    pub rms_after: f64,
+}
+
+/// Compares the held-out errors `after` against `before` (see the module).
+pub fn compare(before: &HeldOut, after: &HeldOut, wins: &[Win], runs: &[CleanRun]) -> Comparison {
+    let pairs: Vec<(usize, f64, f64)> = (0..wins.len())
+        .filter_map(|k| Some((k, before.chi2[k]?, after.chi2[k]?)))
+        .collect();
+    let n = pairs.len();
+    let gain: f64 = pairs.iter().map(|p| p.1 - p.2).sum();
+    let mean = gain / n.max(1) as f64;
+    let mut per_run = vec![(0.0, 0usize); runs.len()];
+    for &(k, b, a) in &pairs {
+        let e = &mut per_run[wins[k].run];
+        e.0 += b - a - mean;
+        e.1 += 1;
+    }
+    let g = per_run.iter().filter(|e| e.1 > 0).count();
+    let v: f64 = per_run.iter().map(|e| e.0 * e.0).sum::<f64>() * g as f64
+        / (g.saturating_sub(1)).max(1) as f64;
+    let z_cluster = if v > 0.0 { gain / v.sqrt() } else { 0.0 };
+    let vw: f64 = pairs
+        .iter()
+        .map(|p| (p.1 - p.2 - mean).powi(2))
+        .sum::<f64>()
+        * n as f64
+        / n.saturating_sub(1).max(1) as f64;
+    let z = if vw > 0.0 { gain / vw.sqrt() } else { 0.0 };
+    let (mut sb, mut sa, mut m) = (0.0, 0.0, 0usize);
+    for &(k, b, a) in &pairs {
+        let s2 = runs[wins[k].run].sigma_camera.powi(2);
+        sb += b * s2;
+        sa += a * s2;
+        m += wins[k].kept();
+    }
+    let m = m.max(1) as f64;
+    Comparison {
+        gain,
+        z,
+        z_cluster,
+        windows: n,
+        runs: g,
+        rms_before: (sb / m).sqrt(),
+        rms_after: (sa / m).sqrt(),
+    }
+}
+
+/// Family-wise level of one round of the judge.
+pub const FAMILY_ALPHA: f64 = 0.01;
+
+/// The z a candidate must reach when `m` candidates are tried in a round:
+/// max(3, Φ⁻¹(1 − α/m)), α = [`FAMILY_ALPHA`] (one-sided, Bonferroni).
+pub fn z_threshold(m: usize) -> f64 {
+    let p = FAMILY_ALPHA / m.max(1) as f64;
+    // Φ⁻¹(1 − p) by bisection on the upper tail
+    let (mut lo, mut hi) = (0.0f64, 12.0f64);
+    for _ in 0..80 {
+        let mid = 0.5 * (lo + hi);
+        if upper_tail(mid) > p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (0.5 * (lo + hi)).max(3.0)
+}
+
+/// 1 − Φ(z) = erfc(z/√2)/2, erfc by its Chebyshev fit (Numerical Recipes `erfcc`, relative
+/// error < 1.2e-7).
+pub fn upper_tail(z: f64) -> f64 {
+    let x = z / std::f64::consts::SQRT_2;
+    let a = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * a);
+    let y = t
+        * (-a * a - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
+    let erfc = if x >= 0.0 { y } else { 2.0 - y };
+    0.5 * erfc
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[test]
+    fn normal_tail_and_threshold() {
+        // Φ(3) = 0.998650102, Φ(1.959964) = 0.975
+        assert!((upper_tail(3.0) - 1.349_898e-3).abs() < 1e-9);
+        assert!((upper_tail(1.959_964) - 0.025).abs() < 1e-8);
+        assert!((upper_tail(-1.0) - 0.841_344_746).abs() < 1e-8);
+        // one candidate: max(3, Φ⁻¹(0.99) = 2.326) = 3; 20 candidates: Φ⁻¹(1 − 5e-4) = 3.2905
+        assert_eq!(z_threshold(1), 3.0);
+        assert!((z_threshold(20) - 3.2905).abs() < 1e-3);
+    }
+}

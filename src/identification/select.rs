@@ -1,0 +1,263 @@
+//! Greedy selection over rounds ([`super::judge`]'s rule): each round the weak form proposes
+//! candidates for the current model ([`super::propose`]), every candidate is refitted by
+//! simulation on top of the accepted ones and judged by its held-out prediction, and the best
+//! significant one is accepted. Every candidate tried is kept with its numbers.
+
+use super::catalog::Effect;
+use super::judge::{compare, heldout, z_threshold, Comparison, Folds, HeldOut};
+use super::model::Geometry;
+use super::preprocess::CleanRun;
+use super::propose::{propose, Candidate, ProposeCtx};
+use super::regression::Term;
+use super::shooting::{refit, ShootingOptions, SimFit, SimModel, Win};
+
+/// A model with its refit by simulation and its held-out errors.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelState {
+    /// Terms.
+    pub terms: Vec<Term>,
+    /// Whether the latency is fitted (last entry of θ).
+    pub fit_latency: bool,
+    /// The refit.
+    pub fit: SimFit,
+    /// Held-out errors.
+    pub held: HeldOut,
+    /// Effects accepted so far.
+    pub effects: Vec<Effect>,
+}
+
+impl ModelState {
+    /// The simulated model.
+    pub fn model<'a>(&self, runs: &'a [CleanRun], geo: &Geometry) -> SimModel<'a> {
+        SimModel {
+            runs,
+            geo: *geo,
+            terms: self.terms.clone(),
+            latency: self.latency(),
+            fit_latency: self.fit_latency,
+            eta_static_excess: 0.0,
+        }
+    }
+    /// The latency, s (0 when not fitted).
+    pub fn latency(&self) -> f64 {
+        if self.fit_latency {
+            self.fit.theta[self.terms.len()]
+        } else {
+            0.0
+        }
+    }
+}
+
+/// A candidate as tried in a round.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tried {
+    /// Round (1-based).
+    pub round: usize,
+    /// The candidate.
+    pub candidate: Candidate,
+    /// Its comparison against the model of that round on all judging windows (`None`: the
+    /// refit failed or the candidate did not pass the screening).
+    pub cmp: Option<Comparison>,
+    /// Its screening comparison (every second judging window).
+    pub screen: Option<Comparison>,
+    /// The threshold of the round.
+    pub z_crit: f64,
+    /// Accepted.
+    pub accepted: bool,
+    /// The refitted model with it (kept for the accepted one).
+    pub state: Option<ModelState>,
+}
+
+/// What the selection needs.
+#[derive(Debug, Clone, Copy)]
+pub struct SelectCtx<'a> {
+    /// Runs.
+    pub runs: &'a [CleanRun],
+    /// Geometry of the force shape.
+    pub geo: &'a Geometry,
+    /// Judging windows.
+    pub wins: &'a [Win],
+    /// Folds.
+    pub folds: &'a Folds,
+    /// Refit options.
+    pub shooting: &'a ShootingOptions,
+    /// The proposer.
+    pub propose: &'a ProposeCtx<'a>,
+    /// Most rounds.
+    pub max_rounds: usize,
+}
+
+/// The starting θ of `cand` on top of `cur`: the current refit shifted by the weak form's change
+/// when the candidate's terms are added, the new terms at their weak-form values, the latency at
+/// the current fit or the profiled value.
+fn start_theta(cur: &ModelState, cand: &Candidate) -> Vec<f64> {
+    let nc = cur.terms.len();
+    let mut th: Vec<f64> = (0..nc)
+        .map(|k| cur.fit.theta[k] + cand.weak_coef[k] - cand.weak_coef_current[k])
+        .collect();
+    th.extend_from_slice(&cand.weak_coef[nc..]);
+    if cur.fit_latency {
+        th.push(cur.latency());
+    } else if let Some((tau, _)) = cand.latency {
+        th.push(tau);
+    }
+    th
+}
+
+/// Refits `cur` + `cand` on the windows `wins` and gives its held-out errors on them.
+fn evaluate_on(
+    ctx: &SelectCtx,
+    wins: &[Win],
+    cur: &ModelState,
+    cand: &Candidate,
+) -> Option<ModelState> {
+    let mut terms = cur.terms.clone();
+    terms.extend(cand.terms.iter().copied());
+    let fit_latency = cur.fit_latency || cand.latency.is_some();
+    let theta0 = start_theta(cur, cand);
+    let model = SimModel {
+        runs: ctx.runs,
+        geo: *ctx.geo,
+        terms: terms.clone(),
+        latency: if fit_latency {
+            theta0[terms.len()]
+        } else {
+            0.0
+        },
+        fit_latency,
+        eta_static_excess: 0.0,
+    };
+    let fit = refit(&model, &theta0, wins, ctx.shooting)?;
+    let held = heldout(&model, &fit, wins, ctx.folds);
+    let mut effects = cur.effects.clone();
+    effects.push(cand.effect.clone());
+    Some(ModelState {
+        terms,
+        fit_latency,
+        fit,
+        held,
+        effects,
+    })
+}
+
+/// Refits `cur` + `cand` on all judging windows and gives its held-out errors.
+pub fn evaluate(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<ModelState> {
+    evaluate_on(ctx, ctx.wins, cur, cand)
+}
+
+/// The final model refitted to convergence (the judge's refits stop after a few
+/// Levenberg–Marquardt steps from their warm starts: enough to judge, not to report), with its
+/// held-out errors recomputed.
+pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
+    if st.effects.is_empty() {
+        return st.clone();
+    }
+    let model = st.model(ctx.runs, ctx.geo);
+    let opts = ShootingOptions {
+        patience: 4,
+        ..*ctx.shooting
+    };
+    match refit(&model, &st.fit.theta, ctx.wins, &opts) {
+        Some(fit) => {
+            let held = heldout(&model, &fit, ctx.wins, ctx.folds);
+            ModelState {
+                fit,
+                held,
+                ..st.clone()
+            }
+        }
+        None => st.clone(),
+    }
+}
+
+/// Screening z below which a candidate is not refitted on all judging windows.
+pub const SCREEN_Z: f64 = 1.0;
+
+/// Screening: `cand` refitted and judged on every second judging window. A candidate whose
+/// full-set z reaches the threshold (≥ 3) has an expected half-set z of ≥ 3/√2 ≈ 2.1, far above
+/// [`SCREEN_Z`].
+fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Comparison> {
+    let idx: Vec<usize> = (0..ctx.wins.len()).step_by(2).collect();
+    let sub: Vec<Win> = idx.iter().map(|&k| ctx.wins[k].clone()).collect();
+    let st = evaluate_on(ctx, &sub, cur, cand)?;
+    let cur_sub = HeldOut {
+        chi2: idx.iter().map(|&k| cur.held.chi2[k]).collect(),
+        chi2_fit: idx.iter().map(|&k| cur.held.chi2_fit[k]).collect(),
+    };
+    Some(compare(&cur_sub, &st.held, &sub, ctx.runs))
+}
+
+/// The greedy selection from `base`; `progress` gets a line per candidate. Returns the tried
+/// candidates of all rounds (the accepted ones with their refitted state) and the final model.
+pub fn select(
+    ctx: &SelectCtx,
+    base: ModelState,
+    progress: &dyn Fn(&str),
+) -> (Vec<Tried>, ModelState) {
+    let mut cur = base;
+    let mut tried: Vec<Tried> = Vec::new();
+    for round in 1..=ctx.max_rounds {
+        let lat = cur.fit_latency.then(|| cur.latency());
+        let cands = propose(ctx.propose, &cur.terms, lat, &cur.effects);
+        if cands.is_empty() {
+            break;
+        }
+        let z_crit = z_threshold(cands.len());
+        let mut best: Option<(usize, f64)> = None;
+        let first = tried.len();
+        for c in cands {
+            progress(&format!(
+                "round {round}: judging {} ({}) by simulation on held-out runs",
+                c.effect.id,
+                c.terms
+                    .iter()
+                    .map(|t| t.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+            let scr = screen(ctx, &cur, &c);
+            let st = match scr {
+                Some(sc) if sc.z >= SCREEN_Z => evaluate(ctx, &cur, &c),
+                _ => None,
+            };
+            let cmp = st
+                .as_ref()
+                .map(|s| compare(&cur.held, &s.held, ctx.wins, ctx.runs));
+            progress(&format!(
+                "  screening z = {} (gain {}), held-out z = {} (threshold {z_crit:.2}), gain = {}",
+                scr.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
+                scr.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
+                cmp.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
+                cmp.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
+            ));
+            if let Some(cm) = cmp {
+                if cm.z >= z_crit && best.map(|b| cm.gain > b.1).unwrap_or(true) {
+                    best = Some((tried.len(), cm.gain));
+                }
+            }
+            tried.push(Tried {
+                round,
+                candidate: c,
+                cmp,
+                screen: scr,
+                z_crit,
+                accepted: false,
+                state: st,
+            });
+        }
+        let Some((bi, _)) = best else {
+            for t in &mut tried[first..] {
+                t.state = None;
+            }
+            break;
+        };
+        tried[bi].accepted = true;
+        cur = tried[bi].state.clone().expect("evaluated");
+        for (k, t) in tried.iter_mut().enumerate().skip(first) {
+            if k != bi {
+                t.state = None;
+            }
+        }
+    }
+    (tried, cur)
+}

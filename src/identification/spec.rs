@@ -1,0 +1,125 @@
+//! A model as a list of terms with a coefficient vector: the map from the coefficients of the
+//! weak-form columns ([`Term`]) to the [`Coefficients`] of the augmented gear that the simulations
+//! run. Shared by the weak form, the refit by simulation and the judge, so none of them imports
+//! another to build a model.
+
+use super::model::{Coefficients, ExtraTerm};
+use super::preprocess::CleanRun;
+use super::regression::{session_positions, DriftParam, Term};
+
+/// The simulation form of a dictionary term (an [`ExtraTerm`] slot), `None` for catalog terms.
+pub fn extra_term(t: Term) -> Option<ExtraTerm> {
+    match t {
+        Term::Cos(k, l) => Some(ExtraTerm::Trig { k, l, sin: false }),
+        Term::Sin(k, l) => Some(ExtraTerm::Trig { k, l, sin: true }),
+        Term::VCosB => Some(ExtraTerm::VelCos),
+        Term::VSinB => Some(ExtraTerm::VelSin),
+        Term::SCosB => Some(ExtraTerm::FricCos),
+        Term::SSinB => Some(ExtraTerm::FricSin),
+        Term::STrig(k, l, sin) => Some(ExtraTerm::FricTrig { k, l, sin }),
+        _ => None,
+    }
+}
+
+/// Whether every term has a simulation form: dictionary terms do, up to
+/// [`super::model::MAX_EXTRA`] of them.
+pub fn simulable(terms: &[Term]) -> bool {
+    terms.iter().filter(|&&t| extra_term(t).is_some()).count() <= super::model::MAX_EXTRA
+}
+
+/// The model coefficients of `terms` with values `coef` (dictionary terms go to the
+/// [`Coefficients::extra`] slots; drift terms need the run: see [`coefficients_for_run`]).
+/// Compliance and drive offsets are fitted as χg², −gε, −g·(ε per turn) (regression.rs).
+pub fn coefficients(terms: &[Term], coef: &[f64]) -> Coefficients {
+    let mut c = Coefficients::default();
+    let (mut compliance, mut offset, mut offset_rate) = (0.0, 0.0, 0.0);
+    for (&t, &v) in terms.iter().zip(coef) {
+        match t {
+            Term::Zeta => c.zeta = v,
+            Term::Eta => c.eta = v,
+            Term::SinACosB => c.c_sc = v,
+            Term::CosASinB => c.c_cs = v,
+            Term::CosACosB => c.c_cc = v,
+            Term::SinASinB => c.c_ss = v,
+            Term::SinB => c.st_a = v,
+            Term::CosB => c.st_b = v,
+            Term::Quad => c.quad = v,
+            Term::Corot => c.corot = v,
+            Term::LoadFric => c.eta_load = v,
+            Term::Compliance => compliance = v,
+            Term::DrivenOffset => offset = v,
+            Term::DrivenOffsetRate => offset_rate = v,
+            Term::Drift(..) => {}
+            other => {
+                if let (Some(e), Some(slot)) = (
+                    extra_term(other),
+                    c.extra.iter_mut().find(|s| s.0 == ExtraTerm::Unused),
+                ) {
+                    *slot = (e, v);
+                }
+            }
+        }
+    }
+    let g = c.g();
+    if g != 0.0 {
+        c.compliance = compliance / (g * g);
+        c.alpha_offset = -offset / g;
+        c.alpha_offset_per_turn = -offset_rate / g;
+    }
+    c
+}
+
+/// The coefficients that hold in run `run`: [`coefficients`] plus the parameter drift at the
+/// run's session position (its middle), and the driven-run input offsets only on driven runs.
+pub fn coefficients_for_run(
+    terms: &[Term],
+    coef: &[f64],
+    runs: &[CleanRun],
+    run: usize,
+) -> Coefficients {
+    let mut c = coefficients(terms, coef);
+    if runs[run].ringdown {
+        c.alpha_offset = 0.0;
+        c.alpha_offset_per_turn = 0.0;
+    }
+    if !terms.iter().any(|t| matches!(t, Term::Drift(..))) {
+        return c;
+    }
+    let pos = session_positions(runs)[run];
+    for (&t, &v) in terms.iter().zip(coef) {
+        if let Term::Drift(p, clock) = t {
+            let s = pos[clock.index()];
+            let dv = v * s;
+            match p {
+                DriftParam::Zeta => c.zeta += dv,
+                DriftParam::Eta => c.eta += dv,
+                DriftParam::Coupling => {
+                    // g(s) = g + dv scales the base coupling −g sin α cos β + gΔ cos α sin β
+                    let g = c.g();
+                    if g != 0.0 {
+                        let scale = (g + dv) / g;
+                        c.c_sc *= scale;
+                        c.c_cs *= scale;
+                    }
+                }
+            }
+        }
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[test]
+    fn base_terms_map_to_the_base_coefficients() {
+        let terms = super::super::regression::BASE_TERMS;
+        let c = coefficients(&terms, &[1.1, 23.0, -310.0, 310.0 * 0.2]);
+        assert_eq!(c, Coefficients::base(310.0, 0.2, 1.1, 23.0));
+        // compliance: the column's coefficient is χ g²
+        let mut t2 = terms.to_vec();
+        t2.push(Term::Compliance);
+        let c2 = coefficients(&t2, &[1.1, 23.0, -310.0, 62.0, 310.0 * 310.0 * 1e-4]);
+        assert!((c2.compliance - 1e-4).abs() < 1e-15);
+    }
+}
