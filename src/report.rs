@@ -27,6 +27,9 @@ use crate::sweep::{
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 
+/// Schema id of `report.json` (docs/formats.md).
+pub const SCHEMA: &str = "gearbif.report/1";
+
 /// One section of a report.
 #[derive(Debug, Clone, Serialize)]
 pub struct ReportSection {
@@ -73,7 +76,10 @@ impl Report {
     pub fn write(&self, dir: impl AsRef<Path>) -> Result<()> {
         let dir = dir.as_ref();
         crate::io::write_atomic(dir.join("report.md"), self.markdown().as_bytes())?;
-        crate::io::write_json_atomic(dir.join("report.json"), self)
+        crate::io::write_json_atomic(
+            dir.join("report.json"),
+            &crate::io::with_schema(SCHEMA, self),
+        )
     }
 }
 

@@ -534,6 +534,9 @@ pub struct RowResult {
     pub points: Vec<PointRecord>,
 }
 
+/// Schema id of `sweep.json` (docs/formats.md).
+pub const SCHEMA: &str = "gearbif.sweep/1";
+
 /// The result of a complete sweep: the spec and every row.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SweepResult {
@@ -575,7 +578,10 @@ impl SweepResult {
     pub fn write(&self, dir: impl AsRef<Path>) -> Result<()> {
         let dir = dir.as_ref();
         crate::io::write_atomic(dir.join("points.csv"), self.to_csv()?.as_bytes())?;
-        crate::io::write_json_atomic(dir.join("sweep.json"), self)
+        crate::io::write_json_atomic(
+            dir.join("sweep.json"),
+            &crate::io::with_schema(SCHEMA, self),
+        )
     }
 }
 

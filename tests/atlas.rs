@@ -258,6 +258,7 @@ fn report_has_its_sections() {
     assert!(md.contains("## Operating advice") && md.contains("f_c"));
     let js: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(js["schema"], "gearbif.report/1");
     // f_c in the JSON is the analytic value, and Θ = 0 is safe over this short ramp
     let fc = js["sections"][0]["data"]["f_c_hz"].as_f64().unwrap();
     assert!((fc - 39.84).abs() < 0.01);

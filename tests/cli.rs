@@ -54,7 +54,7 @@ fn simulate_csv_matches_the_library_flow() {
         "25",
         "--f",
         "2.7",
-        "--x0",
+        "--x0-deg",
         "28.6478897565,2",
         "--periods",
         "3",
@@ -93,8 +93,8 @@ fn paper_convention_shifts_beta_by_pi() {
         "--periods",
         "2",
     ];
-    let phys = gearbif(&[&common[..], &["--x0", "40,1"]].concat());
-    let pap = gearbif(&[&common[..], &["--x0", "220,1", "--convention", "paper"]].concat());
+    let phys = gearbif(&[&common[..], &["--x0-deg", "40,1"]].concat());
+    let pap = gearbif(&[&common[..], &["--x0-deg", "220,1", "--convention", "paper"]].concat());
     let (a, b) = (
         rows(&String::from_utf8(phys.stdout).unwrap()),
         rows(&String::from_utf8(pap.stdout).unwrap()),
@@ -119,7 +119,7 @@ fn simulate_json_summary_and_event_file() {
         "31",
         "--f",
         "0.3",
-        "--x0",
+        "--x0-deg",
         "57.29577951308232,0",
         "--periods",
         "3",
@@ -156,16 +156,20 @@ fn map_json_iterates_and_is_consistent() {
         "--json",
     ];
     let one = json(&gearbif(
-        &[&base[..], &["--x0", "28.6478897565,2"]].concat(),
+        &[&base[..], &["--x0-deg", "28.6478897565,2"]].concat(),
     ));
     let img = [
         one["image"][0].as_f64().unwrap(),
         one["image"][1].as_f64().unwrap(),
     ];
     let x1 = format!("{},{}", img[0].to_degrees(), img[1]);
-    let again = json(&gearbif(&[&base[..], &["--x0", &x1]].concat()));
+    let again = json(&gearbif(&[&base[..], &["--x0-deg", &x1]].concat()));
     let two = json(&gearbif(
-        &[&base[..], &["--x0", "28.6478897565,2", "--iterations", "2"]].concat(),
+        &[
+            &base[..],
+            &["--x0-deg", "28.6478897565,2", "--iterations", "2"],
+        ]
+        .concat(),
     ));
     for i in 0..2 {
         let (a, b) = (
@@ -191,7 +195,7 @@ fn map_json_iterates_and_is_consistent() {
         &[
             &base[..],
             &[
-                "--x0",
+                "--x0-deg",
                 "28.6478897565,2",
                 "--section",
                 "half",
@@ -212,8 +216,8 @@ fn bad_input_exits_2_with_a_message() {
     fails_with(&["simulate", "--zeta", "NaN"], "zeta");
     fails_with(&["simulate", "--theta-deg", "inf"], "theta");
     fails_with(&["simulate", "--tol", "0"], "tol");
-    fails_with(&["simulate", "--x0", "1,nan"], "x0");
-    fails_with(&["simulate", "--x0", "abc"], "x0");
+    fails_with(&["simulate", "--x0-deg", "1,nan"], "x0");
+    fails_with(&["simulate", "--x0-deg", "abc"], "x0");
     fails_with(
         &["simulate", "--samples-per-period", "0"],
         "samples-per-period",
@@ -291,6 +295,7 @@ fn bench_integrators_writes_csv_figure_and_json() {
         svg.to_str().unwrap(),
         "--json",
     ]));
+    assert_eq!(v["schema"], "gearbif.bench_integrators/1");
     let pts = v["points"].as_array().unwrap();
     let n_reg = usize::from(cfg!(feature = "diffsol-check"));
     assert_eq!(pts.len(), 3 + n_reg);
@@ -341,6 +346,7 @@ fn synth_fit_diagnose_round_trip() {
         serde_json::from_str(&std::fs::read_to_string(set.join("truth.json")).unwrap()).unwrap();
     // fit: base parameters as JSON, g near the concealed truth (within 2%: a small set)
     let v = json(&gearbif(&["fit", s, "--json"]));
+    assert_eq!(v["schema"], "gearbif.fit/1");
     let g = v["baseline"]["params"]["g"].as_f64().unwrap();
     let g_true = truth["g"].as_f64().unwrap();
     assert!((g - g_true).abs() < 0.02 * g_true, "g {g} vs {g_true}");
@@ -378,4 +384,102 @@ fn synth_fit_diagnose_round_trip() {
     );
     assert!(!bad_out.join("report.json").exists());
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn every_json_output_carries_its_schema_id() {
+    // docs/formats.md lists these ids; each output is checked for its own
+    let d = tmpdir("schema");
+    let schema = |v: &serde_json::Value| v["schema"].as_str().unwrap_or("").to_string();
+    assert_eq!(
+        schema(&json(&gearbif(&["info", "--f", "5", "--json"]))),
+        "gearbif.info/1"
+    );
+    assert_eq!(schema(&json(&gearbif(&["map", "--json"]))), "gearbif.map/1");
+    let traj = d.join("traj.csv");
+    let sim = json(&gearbif(&[
+        "simulate",
+        "--periods",
+        "1",
+        "--out",
+        traj.to_str().unwrap(),
+        "--json",
+    ]));
+    assert_eq!(schema(&sim), "gearbif.simulate/1");
+    let cls = json(&gearbif(&[
+        "classify",
+        "--f",
+        "5",
+        "--settle",
+        "5",
+        "--record",
+        "2",
+        "--analysis",
+        "4",
+        "--json",
+    ]));
+    assert_eq!(schema(&cls), "gearbif.classify/1");
+    let out = d.join("branch.json");
+    let cont = json(&gearbif(&[
+        "continue",
+        "--f",
+        "5",
+        "--lock",
+        "stable",
+        "--range",
+        "4:6",
+        "--ds",
+        "0.5",
+        "--ds-max",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]));
+    assert_eq!(schema(&cont), "gearbif.branches/1");
+    assert!(cont["branches"][0]["points"].as_array().unwrap().len() > 2);
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(file, cont);
+    let loc = json(&gearbif(&[
+        "locate",
+        "--f",
+        "39.8",
+        "--kind",
+        "fold",
+        "--state-rad",
+        "1.6,250",
+        "--json",
+    ]));
+    assert_eq!(schema(&loc), "gearbif.locate/1");
+    let bnd = json(&gearbif(&["boundary", "--step", "27.5", "--json"]));
+    assert_eq!(schema(&bnd), "gearbif.curves/1");
+    let sw = d.join("sweep");
+    let r = gearbif(&[
+        "sweep",
+        "--rows",
+        "theta:0:0:1",
+        "--cols",
+        "f:5:5:1",
+        "--settle",
+        "5",
+        "--record",
+        "2",
+        "--analysis",
+        "0",
+        "--quiet",
+        "--out",
+        sw.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(sw.join("sweep.json")).unwrap()).unwrap();
+    assert_eq!(schema(&v), "gearbif.sweep/1");
+    // the old unit-less flags are gone: the unit is in the name
+    fails_with(&["map", "--x0", "28,2"], "--x0-deg");
+    fails_with(
+        &["continue", "--f", "2", "--range", "1:3", "--state", "1,2"],
+        "--state-rad",
+    );
+    std::fs::remove_dir_all(&d).ok();
 }

@@ -409,7 +409,10 @@ fn cli_continue_writes_branch_json_and_plots() {
     ])
     .unwrap();
     gearbif::cli::run(cli).unwrap();
-    let v: Vec<Branch> = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(doc["schema"], "gearbif.branches/1");
+    let v: Vec<Branch> = serde_json::from_value(doc["branches"].clone()).unwrap();
     let fc = Gear::paper(0.0, 1.0)
         .unwrap()
         .lock_loss_frequency()

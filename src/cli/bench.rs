@@ -18,9 +18,13 @@ pub struct Args {
     /// Drive (input) frequency f [Hz].
     #[arg(long, default_value_t = 2.7, allow_hyphen_values = true)]
     f: f64,
-    /// Initial state "BETA_DEG,OMEGA" [deg, rad/s] (default 28.6479,2 = (0.5 rad, 2 rad/s):
+    /// Initial state "BETA,OMEGA": β [deg], ω [rad/s] (default 28.6479,2 = (0.5 rad, 2 rad/s):
     /// at Θ = 25°, f = 2.7 Hz its first period crosses ω = 0).
-    #[arg(long, value_name = "BETA_DEG,OMEGA", allow_hyphen_values = true)]
+    #[arg(
+        long = "x0-deg",
+        value_name = "BETA_DEG,OMEGA",
+        allow_hyphen_values = true
+    )]
     x0: Option<String>,
     /// Duration in drive periods [1], in (0, 1000] (1 = one stroboscopic map P_T).
     #[arg(long, default_value_t = 1.0)]
@@ -215,7 +219,7 @@ pub fn run(a: Args) -> Result<()> {
         );
         crate::plotting::save(&crate::bench::figure(&report.points, &title), path)?;
     }
-    Output { json: a.json }.emit(&report, || {
+    Output { json: a.json }.emit_tagged("gearbif.bench_integrators/1", &report, || {
         let mut s = String::new();
         let _ = writeln!(
             s,

@@ -35,8 +35,12 @@ pub struct Args {
     /// analytic lock fold at Θ = 0 and at 54.74°, i.e. the lock-loss boundary).
     #[arg(long)]
     start_free: Option<f64>,
-    /// Start state `beta,omega` (rad, rad/s; |beta| <= 2π, |omega| <= 1e6).
-    #[arg(long, allow_hyphen_values = true)]
+    /// Start state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention; |β| <= 2π, |ω| <= 1e6).
+    #[arg(
+        long = "start-state-rad",
+        value_name = "BETA_RAD,OMEGA",
+        allow_hyphen_values = true
+    )]
     start_state: Option<String>,
     /// Step the range downwards (from hi to lo); the start is then at hi.
     #[arg(long)]
@@ -82,10 +86,10 @@ pub fn run(a: Args) -> Result<()> {
     } else {
         let (lo, hi) = parse_range(a.range.as_deref().unwrap_or("0:54.7356103"))?;
         let x = parse_state(a.start_state.as_deref().ok_or_else(|| {
-            Error::InvalidInput("--start-state is needed for this curve".into())
+            Error::InvalidInput("--start-state-rad is needed for this curve".into())
         })?)?;
         let f0 = a.start_free.ok_or_else(|| {
-            Error::InvalidInput("--start-free is needed with --start-state".into())
+            Error::InvalidInput("--start-free is needed with --start-state-rad".into())
         })?;
         let spec = match parse_section(&a.section)? {
             Section::HalfPeriod => OrbitSpec::symmetric(a.winding),
@@ -96,8 +100,10 @@ pub fn run(a: Args) -> Result<()> {
         let c = follow(&g, &spec, kind, free, along, x, f0, &vals, &opts)?;
         vec![(format!("{} curve", kind.label()), c)]
     };
+    // one document for --out and --json: {"schema": "gearbif.curves/1", "curves": [[label, curve], ...]}
+    let tagged = serde_json::json!({ "schema": "gearbif.curves/1", "curves": &curves });
     if let Some(p) = &a.out {
-        crate::io::write_json_atomic(p, &curves)?;
+        crate::io::write_json_atomic(p, &tagged)?;
     }
     if let Some(p) = &a.plot {
         let mut marks = Vec::new();
@@ -118,7 +124,7 @@ pub fn run(a: Args) -> Result<()> {
         };
         crate::plotting::save(&fig, p)?;
     }
-    Output { json: a.json }.emit(&curves, || {
+    Output { json: a.json }.emit(&tagged, || {
         let mut s = String::new();
         for (label, c) in &curves {
             s.push_str(&format!(

@@ -143,7 +143,7 @@ pub fn run(a: Args) -> Result<()> {
         event_driven: ev,
         rk4_t50: rk,
     };
-    Output { json: a.json }.emit(&out, || {
+    Output { json: a.json }.emit_tagged("gearbif.classify/1", &out, || {
         let mut s = format!(
             "Θ = {:.3}°, Φ = {:.3}°, f = {} Hz, start α = {}°, β = {}° ({:?}), {} + {} turns\n",
             p.theta.to_degrees(),

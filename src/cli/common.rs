@@ -225,6 +225,17 @@ pub struct Output {
 }
 
 impl Output {
+    /// Prints `value` tagged with its schema id (`{"schema": schema, …}`, docs/formats.md) as
+    /// JSON, or `text()` otherwise.
+    pub fn emit_tagged<T: serde::Serialize>(
+        &self,
+        schema: &'static str,
+        value: &T,
+        text: impl FnOnce() -> String,
+    ) -> Result<()> {
+        self.emit(&crate::io::with_schema(schema, value), text)
+    }
+
     /// Prints `value` as JSON, or `text()` otherwise.
     pub fn emit<T: serde::Serialize>(
         &self,

@@ -19,19 +19,25 @@ pub struct Args {
     /// Drive frequency f [Hz] of the start orbit, in [1e-3, 1e4].
     #[arg(long)]
     f: f64,
-    /// Continuation parameter: f, theta (parallel shafts, deg), delta, zeta, eta or g.
+    /// Continuation parameter: f [Hz], theta (parallel shafts) [deg], delta [1], zeta [1/s],
+    /// eta [1/s²] or g [1/s²].
     #[arg(long, default_value = "f")]
     param: String,
-    /// Parameter range `lo:hi` (finite, lo < hi); the continuation stops on its bounds.
+    /// Parameter range `lo:hi` in the parameter's unit (finite, lo < hi); the continuation stops
+    /// on its bounds.
     #[arg(long, allow_hyphen_values = true)]
     range: String,
     /// Initial direction: up or down in the parameter.
     #[arg(long, default_value = "up")]
     direction: String,
-    /// Start state `beta,omega` (rad, rad/s, physical convention; |beta| <= 2π, |omega| <= 1e6);
-    /// default: from a simulation
-    /// (relaxed, period and winding detected), or the analytic lock with --lock.
-    #[arg(long, allow_hyphen_values = true)]
+    /// Start state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention; |β| <= 2π,
+    /// |ω| <= 1e6), as in the `x` of the JSON outputs; default: from a simulation (relaxed, period
+    /// and winding detected), or the analytic lock with --lock.
+    #[arg(
+        long = "state-rad",
+        value_name = "BETA_RAD,OMEGA",
+        allow_hyphen_values = true
+    )]
     state: Option<String>,
     /// Start from the analytic lock branch (Δ = ±1 only): stable or unstable.
     #[arg(long)]
@@ -83,6 +89,9 @@ pub struct Args {
     json: bool,
 }
 
+/// Schema id of the branch document written by `--json` and `--out`.
+pub const BRANCHES_SCHEMA: &str = "gearbif.branches/1";
+
 /// Parses `lo:hi`.
 pub(crate) fn parse_range(s: &str) -> Result<(f64, f64)> {
     let (a, b) = s
@@ -108,10 +117,10 @@ pub(crate) fn parse_state(s: &str) -> Result<[f64; 2]> {
         .split(',')
         .map(|x| x.trim().parse::<f64>())
         .collect::<std::result::Result<_, _>>()
-        .map_err(|_| Error::InvalidInput(format!("state `{s}` must be beta,omega")))?;
+        .map_err(|_| Error::InvalidInput(format!("state `{s}` must be BETA_RAD,OMEGA")))?;
     if v.len() != 2 || !v.iter().all(|x| x.is_finite()) {
         return Err(Error::InvalidInput(format!(
-            "state `{s}` must be two finite numbers"
+            "state `{s}` must be two finite numbers (β [rad], ω [rad/s])"
         )));
     }
     start_state("state", v[0], v[1], false)?;
@@ -156,7 +165,7 @@ fn start_orbit(
         let x = parse_state(s)?;
         let p = a
             .winding
-            .ok_or_else(|| Error::InvalidInput("--state needs --winding".into()))?;
+            .ok_or_else(|| Error::InvalidInput("--state-rad needs --winding".into()))?;
         return shoot(gear, &mk_spec(p), x, shooting);
     }
     let o = orbit_from_simulation(
@@ -279,8 +288,10 @@ pub fn run(a: Args) -> Result<()> {
         )?;
         branches.push(b1);
     }
+    // one document for --out and --json: {"schema": "gearbif.branches/1", "branches": [...]}
+    let tagged = serde_json::json!({ "schema": BRANCHES_SCHEMA, "branches": &branches });
     if let Some(p) = &a.out {
-        crate::io::write_json_atomic(p, &branches)?;
+        crate::io::write_json_atomic(p, &tagged)?;
     }
     if let Some(p) = &a.plot {
         let fig = crate::plotting::branch::BranchDiagram {
@@ -298,7 +309,7 @@ pub fn run(a: Args) -> Result<()> {
         };
         crate::plotting::save(&fig, p)?;
     }
-    Output { json: a.json }.emit(&branches, || {
+    Output { json: a.json }.emit(&tagged, || {
         branches.iter().map(summary).collect::<Vec<_>>().join("")
     })
 }

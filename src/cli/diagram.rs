@@ -184,7 +184,7 @@ pub fn run(a: Args) -> Result<()> {
     let seeds = lock_seeds(&gear, &shooting);
     let d = diagram(&gear, &opts, seeds)?;
     if let Some(p) = &a.out {
-        crate::io::write_json_atomic(p, &d)?;
+        crate::io::write_json_atomic(p, &crate::io::with_schema("gearbif.diagram/1", &d))?;
     }
     if let Some(p) = &a.plot {
         let fig = crate::plotting::branch::BranchDiagram {
@@ -199,5 +199,5 @@ pub fn run(a: Args) -> Result<()> {
         };
         crate::plotting::save(&fig, p)?;
     }
-    Output { json: a.json }.emit(&d, || summary(&d))
+    Output { json: a.json }.emit_tagged("gearbif.diagram/1", &d, || summary(&d))
 }

@@ -27,6 +27,7 @@ pub fn run(a: Args) -> Result<()> {
     };
     let d = diagnose(&set, &opts, &|s| eprintln!("[fit] {s}"))?;
     let v = serde_json::json!({
+        "schema": "gearbif.fit/1",
         "baseline": d.report.baseline,
         "ringdowns": d.ringdowns,
         "kappa_alpha0": d.kappa,

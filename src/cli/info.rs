@@ -83,7 +83,7 @@ pub fn run(a: Args) -> Result<()> {
         max_torque_nm: p.coupling() * tmax,
         lock,
     };
-    Output { json: a.json }.emit(&info, || {
+    Output { json: a.json }.emit_tagged("gearbif.info/1", &info, || {
         let mut s = String::new();
         s += &format!(
             "gear: m1 = {} A m², m2 = {} A m², r = {} m, I = {:e} kg m², Θ = {:.3}°, Φ = {:.3}°, ζ = {} 1/s, η = {} 1/s²\n",

@@ -25,8 +25,13 @@ pub struct Args {
     /// The parameter solved for (f, theta, delta, zeta, eta, g).
     #[arg(long, default_value = "f")]
     param: String,
-    /// Guess of the state `beta,omega` (rad, rad/s; |beta| <= 2π, |omega| <= 1e6).
-    #[arg(long, allow_hyphen_values = true)]
+    /// Guess of the state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention; |β| <= 2π,
+    /// |ω| <= 1e6).
+    #[arg(
+        long = "state-rad",
+        value_name = "BETA_RAD,OMEGA",
+        allow_hyphen_values = true
+    )]
     state: String,
     /// Orbit problem: sym (G) or strob (P_T^k).
     #[arg(long, default_value = "sym")]
@@ -104,7 +109,7 @@ pub fn run(a: Args) -> Result<()> {
         tolerance_error: te,
         point: p2,
     };
-    Output { json: a.json }.emit(&out, || {
+    Output { json: a.json }.emit_tagged("gearbif.locate/1", &out, || {
         let p = &out.point;
         format!(
             "{} at {} = {:.10} (error estimate {:.1e}: tolerance {:.1e}, Newton {:.1e})\n  x = ({:.9}, {:.9})  μ = {:?}  events {:?}\n",

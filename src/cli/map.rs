@@ -131,7 +131,7 @@ pub fn run(a: Args) -> Result<()> {
         events: img.stats.events,
         stats: img.stats,
     };
-    Output { json: a.json }.emit(&report, || {
+    Output { json: a.json }.emit_tagged("gearbif.map/1", &report, || {
         let r = &report;
         let mut s = String::new();
         let _ = writeln!(

@@ -81,10 +81,15 @@ pub struct DriveArgs {
     /// Drive (input) frequency f [Hz], in [1e-3, 1e4].
     #[arg(long, default_value_t = 2.7, allow_hyphen_values = true)]
     pub f: f64,
-    /// Initial state "BETA_DEG,OMEGA": output angle β [deg] and velocity ω [rad/s] at t = 0, in the
+    /// Initial state "BETA,OMEGA": output angle β [deg] and velocity ω [rad/s] at t = 0, in the
     /// chosen --convention, |β| <= 360°, |ω| <= 1e6 rad/s (default: the locked-input equilibrium
-    /// at α = 0, at rest).
-    #[arg(long, value_name = "BETA_DEG,OMEGA", allow_hyphen_values = true)]
+    /// at α = 0, at rest). The states of orbits (`continue`, `locate`, `boundary`: --state-rad)
+    /// are in rad.
+    #[arg(
+        long = "x0-deg",
+        value_name = "BETA_DEG,OMEGA",
+        allow_hyphen_values = true
+    )]
     pub x0: Option<String>,
 }
 
@@ -114,17 +119,17 @@ pub fn parse_x0(s: &str) -> Result<[f64; 2]> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != 2 {
         return Err(Error::InvalidInput(format!(
-            "--x0 expects BETA_DEG,OMEGA (two numbers), got `{s}`"
+            "--x0-deg expects BETA_DEG,OMEGA (two numbers), got `{s}`"
         )));
     }
     let num = |name: &'static str, t: &str| -> Result<f64> {
         let v: f64 = t
             .parse()
-            .map_err(|_| Error::InvalidInput(format!("--x0: `{t}` is not a number")))?;
+            .map_err(|_| Error::InvalidInput(format!("--x0-deg: `{t}` is not a number")))?;
         finite(name, v)
     };
-    let beta = num("x0 beta_deg", parts[0])?;
-    let omega = num("x0 omega", parts[1])?;
-    start_state("--x0", beta, omega, true)?;
+    let beta = num("x0-deg beta", parts[0])?;
+    let omega = num("x0-deg omega", parts[1])?;
+    start_state("--x0-deg", beta, omega, true)?;
     Ok([beta.to_radians(), omega])
 }

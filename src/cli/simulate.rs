@@ -177,7 +177,7 @@ pub fn run(a: Args) -> Result<()> {
         events_file: a.events.as_ref().map(|p| p.display().to_string()),
     };
     if a.json {
-        Output { json: true }.emit(&summary, String::new)
+        Output { json: true }.emit_tagged("gearbif.simulate/1", &summary, String::new)
     } else if a.out.is_none() {
         print!("{csv}");
         Ok(())

@@ -1,4 +1,4 @@
-//! The diagnosis report, schema `gearbif.diagnosis/1` (shared/design/recordings.md), and its
+//! The diagnosis report, schema `gearbif.diagnosis/1` (docs/formats.md), and its
 //! Markdown rendering.
 
 use serde::{Deserialize, Serialize};

@@ -66,6 +66,22 @@ pub fn write_json_atomic<T: serde::Serialize>(path: impl AsRef<Path>, value: &T)
     write_atomic(path, s.as_bytes())
 }
 
+/// A JSON output with its versioned schema id as first field: `{"schema": "gearbif.map/1", …}`
+/// followed by the fields of `value` (docs/formats.md lists every schema).
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct Schema<'a, T: serde::Serialize> {
+    /// The schema id, `gearbif.<name>/<version>`.
+    pub schema: &'static str,
+    /// The output; its fields are written beside `schema`.
+    #[serde(flatten)]
+    pub value: &'a T,
+}
+
+/// Tags `value` (a struct or map) with the schema id `schema`.
+pub fn with_schema<'a, T: serde::Serialize>(schema: &'static str, value: &'a T) -> Schema<'a, T> {
+    Schema { schema, value }
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

@@ -1,4 +1,4 @@
-//! Recording sets (shared/design/recordings.md): a folder with `experiment.toml` and one CSV file
+//! Recording sets (docs/formats.md): a folder with `experiment.toml` and one CSV file
 //! (`t,alpha,beta`) per run. The reader checks everything and reports a [`Error::Recording`] that
 //! names the file, the line and what is wrong; angles are unwrapped on reading.
 

@@ -1,0 +1,136 @@
+//! The exception hierarchy: one Python class per variant of `gearbif::Error`, all subclasses of
+//! `GearbifError`.
+
+use gearbif::Error;
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+
+create_exception!(
+    gearbif,
+    GearbifError,
+    PyException,
+    "Base class of every error raised by gearbif."
+);
+create_exception!(
+    gearbif,
+    InvalidParameterError,
+    GearbifError,
+    "A parameter is non-finite or outside its admissible range (attributes: name, value)."
+);
+create_exception!(
+    gearbif,
+    InvalidInputError,
+    GearbifError,
+    "An input (state, time, option, name) is malformed or inconsistent."
+);
+create_exception!(
+    gearbif,
+    IntegrationError,
+    GearbifError,
+    "The integrator could not finish (step size underflow, too many steps, non-finite state)."
+);
+create_exception!(
+    gearbif,
+    NewtonError,
+    GearbifError,
+    "A Newton iteration (shooting, location of a special point) did not converge."
+);
+create_exception!(
+    gearbif,
+    ContinuationError,
+    GearbifError,
+    "A continuation or a branch switch could not proceed."
+);
+create_exception!(
+    gearbif,
+    GearbifIOError,
+    GearbifError,
+    "Reading, parsing or writing a file failed."
+);
+create_exception!(
+    gearbif,
+    UnsupportedError,
+    GearbifError,
+    "The operation is not available for this system (e.g. no half-period symmetry)."
+);
+create_exception!(
+    gearbif,
+    NoPeriodError,
+    GearbifError,
+    "A simulation did not settle on a periodic orbit of the largest period tried."
+);
+create_exception!(
+    gearbif,
+    RecordingError,
+    GearbifError,
+    "A recording set (experiment.toml or a CSV file) is malformed (attributes: file, line)."
+);
+
+/// Converts a library error into the matching Python exception.
+pub fn to_py(e: Error) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        Error::InvalidParameter { name, value, .. } => {
+            let err = InvalidParameterError::new_err(msg);
+            Python::attach(|py| {
+                let v = err.value(py);
+                v.setattr("name", name).ok();
+                v.setattr("value", value).ok();
+            });
+            err
+        }
+        Error::InvalidInput(_) | Error::UnknownParameter { .. } => InvalidInputError::new_err(msg),
+        Error::NoParameterColumn { .. } => UnsupportedError::new_err(msg),
+        Error::NoPeriodDetected { .. } => NoPeriodError::new_err(msg),
+        Error::Integration { .. } => IntegrationError::new_err(msg),
+        Error::NewtonFailed { .. } => NewtonError::new_err(msg),
+        Error::Continuation(_) => ContinuationError::new_err(msg),
+        Error::Io(_) | Error::File { .. } | Error::Format { .. } => GearbifIOError::new_err(msg),
+        Error::Unsupported(_) => UnsupportedError::new_err(msg),
+        Error::Recording { file, line, .. } => {
+            let err = RecordingError::new_err(msg);
+            Python::attach(|py| {
+                let v = err.value(py);
+                v.setattr("file", file).ok();
+                v.setattr("line", line).ok();
+            });
+            err
+        }
+    }
+}
+
+/// `Result<T, gearbif::Error>` → `PyResult<T>`.
+pub trait IntoPyResult<T> {
+    /// Maps the error to its Python exception.
+    fn py(self) -> PyResult<T>;
+}
+
+impl<T> IntoPyResult<T> for gearbif::Result<T> {
+    fn py(self) -> PyResult<T> {
+        self.map_err(to_py)
+    }
+}
+
+/// An `InvalidInputError` with a message.
+pub fn invalid(msg: impl Into<String>) -> PyErr {
+    InvalidInputError::new_err(msg.into())
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("GearbifError", py.get_type::<GearbifError>())?;
+    m.add(
+        "InvalidParameterError",
+        py.get_type::<InvalidParameterError>(),
+    )?;
+    m.add("InvalidInputError", py.get_type::<InvalidInputError>())?;
+    m.add("IntegrationError", py.get_type::<IntegrationError>())?;
+    m.add("NewtonError", py.get_type::<NewtonError>())?;
+    m.add("ContinuationError", py.get_type::<ContinuationError>())?;
+    m.add("GearbifIOError", py.get_type::<GearbifIOError>())?;
+    m.add("UnsupportedError", py.get_type::<UnsupportedError>())?;
+    m.add("NoPeriodError", py.get_type::<NoPeriodError>())?;
+    m.add("RecordingError", py.get_type::<RecordingError>())?;
+    Ok(())
+}
