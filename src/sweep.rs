@@ -16,7 +16,7 @@
 
 use crate::analysis::classify::{classify_point, ClassifyOptions, Dynamics, PointResult};
 use crate::error::{Error, Result};
-use crate::integrator::{EventDriven, FixedStep, FlowMethod};
+use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod};
 use crate::model::{Convention, Gear, GearParams};
 use crate::model::{DrivenOscillator, Parametrised};
 pub use crate::progress::{Event, Observer, Silent};
@@ -155,9 +155,11 @@ pub enum Protocol {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
-    /// The exact event-driven Filippov integrator.
+    /// The exact event-driven Filippov integrator (Dormand–Prince 5(4)).
     #[default]
     EventDriven,
+    /// The same with Dormand–Prince 8(5,3) (faster at the sweeps' tolerances).
+    EventDriven853,
     /// The paper's fixed-step RK4 with 50 steps per period (no rigorous classification).
     FixedStep,
 }
@@ -316,6 +318,16 @@ impl SweepSpec {
         let results = match self.method {
             Method::EventDriven => sweep_row(
                 &EventDriven,
+                at,
+                cols,
+                x_start,
+                self.protocol,
+                &self.classify,
+                row,
+                observer,
+            )?,
+            Method::EventDriven853 => sweep_row(
+                &EventDriven853,
                 at,
                 cols,
                 x_start,

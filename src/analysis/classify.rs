@@ -14,7 +14,7 @@
 use super::harmonic::{paper_metrics, PaperClass, PaperMetrics, ThdDefinition};
 use super::lyapunov::{LyapunovAccumulator, LyapunovEstimate};
 use crate::error::{Error, Result};
-use crate::integrator::{EventDriven, FlowMethod, FlowOptions, Sensitivity};
+use crate::integrator::{EventDriven853, FlowMethod, FlowOptions, Sensitivity};
 use crate::maps::{multipliers, poincare_map, Section};
 use crate::model::{DrivenOscillator, Gear, HalfPeriodSymmetry};
 use nalgebra::Matrix2;
@@ -339,21 +339,44 @@ fn settle_early<S: DrivenOscillator + ?Sized, M: FlowMethod<S> + ?Sized>(
     let mut hist: Vec<[f64; 2]> = Vec::with_capacity(turns + 1);
     hist.push(x0);
     let mut x = x0;
-    for c in 1..=turns {
-        let fl = method.flow(sys, (c - 1) as f64 * period, x, c as f64 * period, fopts)?;
-        x = fl.x;
-        hist.push(x);
-        if c < 2 * M_MAX + 1 || c == turns {
-            continue;
+    // integrate in chunks of 4, 8, … 64 turns with a strobe sample at every turn (one integrator
+    // start per chunk), checking after every turn c whether the last two cycles of some period
+    // m ≤ 8 with 2m ≤ c repeat to eps
+    let mut c0 = 0;
+    let mut chunk = 4;
+    while c0 < turns {
+        let c1 = (c0 + chunk).min(turns);
+        chunk = (2 * chunk).min(64);
+        let times: Vec<f64> = (c0 + 1..=c1).map(|c| c as f64 * period).collect();
+        let opts = fopts.clone().samples(times);
+        let fl = method.flow(sys, c0 as f64 * period, x, c1 as f64 * period, &opts)?;
+        if fl.samples.len() != c1 - c0 {
+            return Err(Error::Integration {
+                t: c1 as f64 * period,
+                reason: format!(
+                    "expected {} strobe samples, got {}",
+                    c1 - c0,
+                    fl.samples.len()
+                ),
+            });
         }
-        for m in 1..=M_MAX {
-            if cyl_dist(hist[c], hist[c - m], period) < eps
-                && cyl_dist(hist[c - m], hist[c - 2 * m], period) < eps
-            {
-                let i = c - m + (turns - c) % m;
-                return Ok(hist[i]);
+        for (j, smp) in fl.samples.iter().enumerate() {
+            let c = c0 + 1 + j;
+            hist.push(if c == c1 { fl.x } else { [smp.beta, smp.omega] });
+            if c == turns {
+                continue;
+            }
+            for m in 1..=M_MAX.min(c / 2) {
+                if cyl_dist(hist[c], hist[c - m], period) < eps
+                    && cyl_dist(hist[c - m], hist[c - 2 * m], period) < eps
+                {
+                    let i = c - m + (turns - c) % m;
+                    return Ok(hist[i]);
+                }
             }
         }
+        x = fl.x;
+        c0 = c1;
     }
     Ok(x)
 }
@@ -396,7 +419,7 @@ pub fn rigorous_classify_with_section<S: DrivenOscillator + ?Sized>(
     for j in 0..steps {
         let t0 = j as f64 * 0.5 * period;
         let t1 = (j + 1) as f64 * 0.5 * period;
-        let fl = EventDriven.flow(sys, t0, cur, t1, &fo)?;
+        let fl = EventDriven853.flow(sys, t0, cur, t1, &fo)?;
         let jac = fl.jac_x.ok_or_else(|| Error::Integration {
             t: t1,
             reason: "no Jacobian".into(),
@@ -493,7 +516,7 @@ fn confirm_period<S: DrivenOscillator + ?Sized>(
     let mut res = f64::INFINITY;
     let mut jac = Matrix2::identity();
     for _ in 0..30 {
-        let img = match poincare_map(&EventDriven, sys, section, xi, iters, &fo) {
+        let img = match poincare_map(&EventDriven853, sys, section, xi, iters, &fo) {
             Ok(i) => i,
             Err(_) => return Ok(None),
         };

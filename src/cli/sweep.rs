@@ -57,6 +57,9 @@ pub struct Args {
     /// Use the paper's fixed-step RK4 (T/50) instead of the exact integrator.
     #[arg(long)]
     rk4: bool,
+    /// Use the event-driven DP5 instead of the default event-driven DOP853.
+    #[arg(long, conflicts_with = "rk4")]
+    dp5: bool,
     /// Output directory (checkpoints in it; rerun the same command to resume).
     #[arg(long, default_value = "sweep-out")]
     out: PathBuf,
@@ -171,7 +174,7 @@ pub fn spec(a: &Args) -> Result<SweepSpec> {
             alpha0_deg: a.alpha0_deg,
             beta0_deg: a.beta0_deg,
             convention: a.gear.convention(),
-            method: Method::EventDriven,
+            method: Method::EventDriven853,
             classify: ClassifyOptions::default(),
         }
     };
@@ -191,9 +194,13 @@ pub fn spec(a: &Args) -> Result<SweepSpec> {
     } else {
         s.classify.analysis_turns = a.analysis;
     }
-    if a.rk4 {
-        s.method = Method::FixedStep;
-    }
+    s.method = if a.rk4 {
+        Method::FixedStep
+    } else if a.dp5 {
+        Method::EventDriven
+    } else {
+        Method::EventDriven853
+    };
     s.validate()?;
     Ok(s)
 }
