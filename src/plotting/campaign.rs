@@ -120,6 +120,22 @@ fn draw_confusion<DB: DrawingBackend>(s: &Summary, area: &DrawingArea<DB, Shift>
             }
         }
     }
+    let note_y = title_h + label_h + nr as i32 * chh + 24;
+    for (k, line) in [
+        "cells: counts; shade: fraction of the row",
+        "left panels: fraction named right per size, bars: 95 % interval,",
+        "grey line: the 90 % goal",
+    ]
+    .iter()
+    .enumerate()
+    {
+        area.draw(&Text::new(
+            *line,
+            (4, note_y + 18 * k as i32),
+            ("sans-serif", 12).into_font(),
+        ))
+        .map_err(plot_err)?;
+    }
     for (j, col) in c.cols.iter().enumerate() {
         let x = label_w + j as i32 * cw + cw / 2 - 6;
         let style = ("sans-serif", 12)
