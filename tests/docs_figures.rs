@@ -118,9 +118,20 @@ fn check_command(img: &Path, cmd: &str) -> Result<(), String> {
                 }
                 return src_has(&cli, stem);
             }
+            if let (None, None, Some(out)) = (
+                flag(&words, "--plot"),
+                flag(&words, "--figure"),
+                flag(&words, "--out"),
+            ) {
+                // a command writing a folder: the image's folder, the name in its source
+                if Path::new(out) != dir {
+                    return Err(format!("{sub} writes into {out}"));
+                }
+                return src_has(&cli, stem);
+            }
             let target = flag(&words, "--plot")
                 .or_else(|| flag(&words, "--figure"))
-                .ok_or("no --plot or --figure output")?;
+                .ok_or("no --plot, --figure or --out output")?;
             if Path::new(target) == img {
                 Ok(())
             } else {
