@@ -281,6 +281,8 @@ fn bench_integrators_writes_csv_figure_and_json() {
         "bench-integrators",
         "--event-tols",
         "1e-6,1e-9",
+        "--dop853-tols",
+        "1e-9",
         "--fixed-steps",
         "50",
         "--reg-tols",
@@ -298,11 +300,13 @@ fn bench_integrators_writes_csv_figure_and_json() {
     assert_eq!(v["schema"], "gearbif.bench_integrators/1");
     let pts = v["points"].as_array().unwrap();
     let n_reg = usize::from(cfg!(feature = "diffsol-check"));
-    assert_eq!(pts.len(), 3 + n_reg);
+    // DP5 at two tolerances, DOP853 at one, the fixed step, the regularised method
+    assert_eq!(pts.len(), 4 + n_reg);
     let err = |i: usize| pts[i]["error"].as_f64().unwrap();
     assert!(err(1) < err(0) && err(1) < 1e-7);
+    assert!(err(2) < 1e-7, "DOP853 at tol 1e-9: error {}", err(2));
     // the paper's 50 steps per period: error far above the event-driven one, Jacobian wrong
-    assert!(err(2) > 1e-3 && pts[2]["jac_error"].as_f64().unwrap() > 1e-2);
+    assert!(err(3) > 1e-3 && pts[3]["jac_error"].as_f64().unwrap() > 1e-2);
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), pts.len() + 1);
     assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
