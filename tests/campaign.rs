@@ -201,10 +201,12 @@ fn ci_campaign_detects_clear_effects() {
 /// Every detection must report its size; misses beyond `max_consistent_failures(n, 0.10, 0.01)`
 /// refute the goal at the 1 % level.
 ///
-/// Ignored while the diagnosis reports no headline sizes: on this campaign every detection came
-/// without a `size` (the first assert failed; coverage 0 of 0 comparable).
+/// Ignored while the goal is not met (the assert is kept as it is, not loosened): with the
+/// diagnosis of this commit every detection carries its size, but the static-torque amplitude came
+/// out 10.8–11.6 ± 0.2 s⁻² for a truth of 12 (0 of 6 within ±2σ; the sin 2β part appears as an extra
+/// `unexplained` term) and the latency 11.2 ± 0.13 and 11.95 ± 0.14 ms for 12 ms (1 of 2 within).
 #[test]
-#[ignore = "the diagnosis does not report headline sizes yet"]
+#[ignore = "σ coverage goal not met yet: 1 of 8 sizes within ±2σ (see the comment)"]
 fn ci_campaign_sigma_coverage() {
     let c = &summary().coverage;
     assert_eq!(c.missing_size, 0, "detections without a headline size");
