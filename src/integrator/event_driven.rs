@@ -242,14 +242,10 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         let mut y: V = [0.0; NMAX];
         self.layout.init(x0, &mut y);
         // skip samples before t0
-        while self
-            .opts
-            .sample_times
-            .get(self.next_sample)
-            .is_some_and(|&ts| ts < t0)
-        {
-            self.next_sample += 1;
-        }
+        self.next_sample += self.opts.sample_times[self.next_sample..]
+            .iter()
+            .take_while(|&&ts| ts < t0)
+            .count();
         let mut t = t0;
         let mut mode = super::initial_mode(sys, t0, x0);
         if mode == Mode::Stick {
@@ -265,10 +261,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
             facold: 1e-4,
             last_rejected: false,
         };
-        // guard against Zeno-like repetition of events without progress
-        let mut stalled = 0usize;
-        let mut last_event_t = f64::NEG_INFINITY;
-        let tiny = 1e-13 * period.max(1e-300);
+        let mut guard = ZenoGuard::new(period);
         let state_only = Layout {
             ncols: 0,
             with_params: false,
@@ -282,24 +275,16 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                 });
             }
             if mode == Mode::Stick {
-                match self.stick_phase(t, &mut y, t1, stalled > 8) {
+                match self.stick_phase(t, &mut y, t1, guard.degenerate()) {
                     None => {
                         t = t1;
                         break;
                     }
                     Some((tr, s)) => {
-                        if tr - last_event_t <= tiny {
-                            stalled += 1;
-                        } else {
-                            stalled = 0;
-                        }
-                        if stalled > 16 {
-                            return Err(Error::Integration {
-                                t: tr,
-                                reason: "events repeat without progress (stick/slip chattering at a degenerate point)".into(),
-                            });
-                        }
-                        last_event_t = tr;
+                        guard.record(
+                            tr,
+                            "events repeat without progress (stick/slip chattering at a degenerate point)",
+                        )?;
                         t = tr;
                         mode = Mode::from_side(s);
                         fsal = false;
@@ -401,20 +386,11 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                     *v = nested(&dense_coeffs(tab, i, &y, &yn, &k, hs)[..m], thc);
                 }
                 yc[1] = 0.0;
-                if tc - last_event_t <= tiny {
-                    stalled += 1;
-                } else {
-                    stalled = 0;
-                }
-                if stalled > 16 {
-                    return Err(Error::Integration {
-                        t: tc,
-                        reason: "events repeat without progress (degenerate contact with ω = 0)"
-                            .into(),
-                    });
-                }
-                last_event_t = tc;
-                mode = self.handle_arrival(tc, &mut yc, s, stalled > 8);
+                guard.record(
+                    tc,
+                    "events repeat without progress (degenerate contact with ω = 0)",
+                )?;
+                mode = self.handle_arrival(tc, &mut yc, s, guard.degenerate());
                 y = yc;
                 t = tc;
                 fsal = false;
@@ -644,4 +620,45 @@ struct StepInfo {
     wmin: f64,
     /// Largest |ω̇| over the stages.
     dmax: f64,
+}
+
+/// Guard against Zeno-like repetition of events without progress: events closer than
+/// 10⁻¹³ T to the previous one count as a stall; more than 8 in a row mark the point degenerate
+/// (the event handlers then take the degenerate branch), more than 16 are an error.
+struct ZenoGuard {
+    stalled: usize,
+    last_event_t: f64,
+    tiny: f64,
+}
+
+impl ZenoGuard {
+    fn new(period: f64) -> Self {
+        Self {
+            stalled: 0,
+            last_event_t: f64::NEG_INFINITY,
+            tiny: 1e-13 * period.max(1e-300),
+        }
+    }
+
+    /// Records an event at `t`; an error with `reason` after more than 16 stalls in a row.
+    fn record(&mut self, t: f64, reason: &str) -> Result<()> {
+        if t - self.last_event_t <= self.tiny {
+            self.stalled += 1;
+        } else {
+            self.stalled = 0;
+        }
+        if self.stalled > 16 {
+            return Err(Error::Integration {
+                t,
+                reason: reason.into(),
+            });
+        }
+        self.last_event_t = t;
+        Ok(())
+    }
+
+    /// Whether the current point is degenerate (more than 8 stalls in a row).
+    fn degenerate(&self) -> bool {
+        self.stalled > 8
+    }
 }
