@@ -3,7 +3,7 @@
 //! simulation on top of the accepted ones and judged by its held-out prediction, and the best
 //! significant one is accepted. Every candidate tried is kept with its numbers.
 
-use super::catalog::Effect;
+use super::catalog::{judged_members, Effect};
 use super::judge::{compare, heldout, z_threshold, Comparison, Folds, HeldOut};
 use super::model::Geometry;
 use super::preprocess::CleanRun;
@@ -66,6 +66,10 @@ pub struct Tried {
     pub accepted: bool,
     /// The refitted model with it (kept for the accepted one).
     pub state: Option<ModelState>,
+    /// For a significant member of a family whose members the judge picks (not the smallest):
+    /// the held-out z of this member against the smaller member chosen before it (the larger
+    /// member replaces it when z reaches the threshold).
+    pub member_z: Option<f64>,
 }
 
 /// What the selection needs.
@@ -203,7 +207,6 @@ pub fn select(
             break;
         }
         let z_crit = z_threshold(cands.len());
-        let mut best: Option<(usize, f64)> = None;
         let first = tried.len();
         for c in cands {
             progress(&format!(
@@ -230,11 +233,6 @@ pub fn select(
                 cmp.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
                 cmp.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
             ));
-            if let Some(cm) = cmp {
-                if cm.z >= z_crit && best.map(|b| cm.gain > b.1).unwrap_or(true) {
-                    best = Some((tried.len(), cm.gain));
-                }
-            }
             tried.push(Tried {
                 round,
                 candidate: c,
@@ -243,8 +241,15 @@ pub fn select(
                 z_crit,
                 accepted: false,
                 state: st,
+                member_z: None,
             });
         }
+        let passed = choose_members(ctx, &mut tried[first..], z_crit);
+        let best = passed
+            .iter()
+            .map(|&k| (first + k, tried[first + k].cmp.map(|c| c.gain)))
+            .filter_map(|(k, g)| Some((k, g?)))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
         let Some((bi, _)) = best else {
             for t in &mut tried[first..] {
                 t.state = None;
@@ -260,4 +265,44 @@ pub fn select(
         }
     }
     (tried, cur)
+}
+
+/// The candidates of a round that may be accepted: every significant one (held-out z ≥ `z_crit`),
+/// except that of a family whose members the judge picks ([`judged_members`], nested members)
+/// only one passes: starting from the smallest significant member, a larger member replaces it
+/// when it predicts the held-out windows significantly better than it (the same rule, z ≥
+/// `z_crit`, on the paired windows of the two). Indices into `round`.
+fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<usize> {
+    let significant = |t: &Tried| t.cmp.map(|c| c.z >= z_crit).unwrap_or(false) && t.state.is_some();
+    let mut out: Vec<usize> = (0..round.len())
+        .filter(|&k| significant(&round[k]) && !judged_members(round[k].candidate.effect.id))
+        .collect();
+    let mut ids: Vec<&'static str> = round
+        .iter()
+        .map(|t| t.candidate.effect.id)
+        .filter(|id| judged_members(id))
+        .collect();
+    ids.dedup();
+    for id in ids {
+        let mut members: Vec<usize> = (0..round.len())
+            .filter(|&k| round[k].candidate.effect.id == id && significant(&round[k]))
+            .collect();
+        members.sort_by_key(|&k| round[k].candidate.terms.len());
+        let Some(&first) = members.first() else {
+            continue;
+        };
+        let mut chosen = first;
+        for &k in &members[1..] {
+            let (Some(a), Some(b)) = (&round[chosen].state, &round[k].state) else {
+                continue;
+            };
+            let z = compare(&a.held, &b.held, ctx.wins, ctx.runs).z;
+            round[k].member_z = Some(z);
+            if z >= z_crit {
+                chosen = k;
+            }
+        }
+        out.push(chosen);
+    }
+    out
 }
