@@ -223,7 +223,7 @@ pub fn den_hartog_coulomb_amplitude(osc: &CoulombOscillator) -> Option<f64> {
 /// the formula above. Its limit at resonance, π/4, is Den Hartog's classical bound. `None` where U
 /// is singular (r = 1/(2k+1)) or r is not positive.
 pub fn den_hartog_coulomb_stop_ratio(r: f64) -> Option<f64> {
-    if !(r > 0.0) || (r - 1.0).abs() < 1e-12 {
+    if r.is_nan() || r <= 0.0 || (r - 1.0).abs() < 1e-12 {
         return None;
     }
     let v = 1.0 / (1.0 - r * r);
