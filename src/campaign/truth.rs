@@ -182,8 +182,8 @@ impl TruthModel {
     pub fn friction(&self, alpha_m: f64, beta: f64, omega: f64) -> f64 {
         let mut coulomb = self.eta;
         if let Some(l) = self.load {
-            let ratio = self.radial_load(alpha_m, beta, l.weight_over_force, l.tilt)
-                / l.weight_over_force;
+            let ratio =
+                self.radial_load(alpha_m, beta, l.weight_over_force, l.tilt) / l.weight_over_force;
             coulomb *= (1.0 - l.fraction) + l.fraction * ratio;
         }
         coulomb *= 1.0 + self.angle_modulation * (2.0 * beta).cos();

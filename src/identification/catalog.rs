@@ -487,10 +487,7 @@ pub fn effect_params(
 /// R sin(kβ + φ), R = √(A² + B²), φ = atan2(B, A), with first-order σ. Keys for k = 1:
 /// `amplitude`, `phase_deg` (and `a_sin_beta`, `b_cos_beta`); for k ≥ 2: `amplitude_k`,
 /// `phase_k_deg`; `harmonics` = the highest k.
-fn static_torque_params(
-    get: &dyn Fn(Term) -> Option<(f64, f64)>,
-    p: &mut BTreeMap<String, f64>,
-) {
+fn static_torque_params(get: &dyn Fn(Term) -> Option<(f64, f64)>, p: &mut BTreeMap<String, f64>) {
     let pairs = [
         (1, Term::SinB, Term::CosB),
         (2, Term::Sin(0, 2), Term::Cos(0, 2)),
@@ -504,7 +501,11 @@ fn static_torque_params(
         let err = ((a * sa).powi(2) + (b * sb).powi(2)).sqrt() / amp.max(1e-300);
         let phase_err =
             (((b * sa).powi(2) + (a * sb).powi(2)).sqrt() / (amp * amp).max(1e-300)).to_degrees();
-        let suffix = if k == 1 { String::new() } else { format!("_{k}") };
+        let suffix = if k == 1 {
+            String::new()
+        } else {
+            format!("_{k}")
+        };
         p.insert(format!("amplitude{suffix}"), amp);
         p.insert(format!("amplitude{suffix}_err"), err);
         p.insert(format!("phase{suffix}_deg"), b.atan2(a).to_degrees());

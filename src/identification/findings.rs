@@ -3,8 +3,8 @@
 
 use super::catalog::{effect_params, Effect};
 use super::judge::{rms_rad, Comparison};
-use super::preprocess::CleanRun;
 use super::model::Shape;
+use super::preprocess::CleanRun;
 use super::regression::Term;
 use super::report::{EffectSize, Finding};
 use super::select::{ModelState, Tried};
@@ -41,8 +41,9 @@ pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<Effec
         "static_torque" => mk("amplitude", "amplitude", "amplitude_err", "s^-2"),
         "power_law_drag" => mk("exponent", "exponent", "exponent_err", "1"),
         "corotating_drag" => mk("c", "c", "c_err", "s^-1"),
-        "load_dependent_friction" => mk("fraction", "fraction", "fraction_err", "1")
-            .or_else(|| mk("k", "k", "k_err", "1")),
+        "load_dependent_friction" => {
+            mk("fraction", "fraction", "fraction_err", "1").or_else(|| mk("k", "k", "k_err", "1"))
+        }
         "sensor_latency" => mk("latency", "tau_s", "tau_err_s", "s"),
         "input_compliance" => mk(
             "lag_at_peak_torque",
@@ -139,7 +140,11 @@ pub fn load_fraction(st: &ModelState) -> Option<(f64, f64)> {
     if !(rho > 0.0 && d > 0.0) {
         return None;
     }
-    let grad = [(i_eta, -n / (d * d)), (i_load, rho * eta / (d * d)), (i_rho, el * eta / (d * d))];
+    let grad = [
+        (i_eta, -n / (d * d)),
+        (i_load, rho * eta / (d * d)),
+        (i_rho, el * eta / (d * d)),
+    ];
     let mut var = 0.0;
     for &(a, ga) in &grad {
         for &(b, gb) in &grad {

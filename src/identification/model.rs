@@ -642,7 +642,10 @@ mod tests {
         });
         for k in 0..12 {
             let (t, b, w) = (0.11 * k as f64, 0.6 * k as f64 - 3.0, 9.0 - 1.7 * k as f64);
-            assert_eq!(quad.forces_jet(t, b, w, false), two.forces_jet(t, b, w, false));
+            assert_eq!(
+                quad.forces_jet(t, b, w, false),
+                two.forces_jet(t, b, w, false)
+            );
             let (d, _) = drag(Some(2.0), w);
             assert_eq!(d, w * w.abs());
         }
@@ -655,8 +658,16 @@ mod tests {
             let j = sys.forces_jet(t, b, w, false);
             let fb = (sys.forces(t, b + h, w).a - sys.forces(t, b - h, w).a) / (2.0 * h);
             let fw = (sys.forces(t, b, w + h).a - sys.forces(t, b, w - h).a) / (2.0 * h);
-            assert!((j.a_beta - fb).abs() < 1e-6 * (1.0 + fb.abs()), "{} {fb}", j.a_beta);
-            assert!((j.a_omega - fw).abs() < 1e-6 * (1.0 + fw.abs()), "{} {fw}", j.a_omega);
+            assert!(
+                (j.a_beta - fb).abs() < 1e-6 * (1.0 + fb.abs()),
+                "{} {fb}",
+                j.a_beta
+            );
+            assert!(
+                (j.a_omega - fw).abs() < 1e-6 * (1.0 + fw.abs()),
+                "{} {fw}",
+                j.a_omega
+            );
         }
         // the value: −q |ω|^1.5 sgn ω + 2.5 sin 2β − 1.5 cos 2β + 0.7 cos 3β on top of the base
         let base = driven_test_gear(Coefficients::base(300.0, 0.2, 1.0, 20.0));
@@ -682,7 +693,11 @@ mod tests {
             let j = sys.forces_jet(t, b, w, false);
             assert!((j.r - (20.0 + 8.0 * (-(w / 0.4f64).powi(2)).exp())).abs() < 1e-12);
             let fd = (sys.forces(t, b, w + h).r - sys.forces(t, b, w - h).r) / (2.0 * h);
-            assert!((j.r_omega - fd).abs() < 1e-6 * (1.0 + fd.abs()), "{} {fd}", j.r_omega);
+            assert!(
+                (j.r_omega - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+                "{} {fd}",
+                j.r_omega
+            );
         }
         assert!((sys.static_friction(0.3, 1.0) - sys.forces(0.3, 1.0, 0.0).r).abs() < 1e-12);
         let at_rest_only = driven_test_gear(Coefficients {

@@ -154,7 +154,10 @@ pub const STRIBECK_WIDTH_GRID: [u8; 6] = [10, 20, 35, 50, 75, 120];
 
 /// The weak-form grid columns of the families' profiles.
 fn grid_columns() -> Vec<Term> {
-    let mut v: Vec<Term> = DRAG_EXPONENT_GRID.iter().map(|&p| Term::PowDrag(p)).collect();
+    let mut v: Vec<Term> = DRAG_EXPONENT_GRID
+        .iter()
+        .map(|&p| Term::PowDrag(p))
+        .collect();
     v.extend(STRIBECK_WIDTH_GRID.iter().map(|&w| Term::StribeckGrid(w)));
     for radial in [false, true] {
         v.extend(LOAD_WEIGHT_GRID.iter().map(|&r| Term::LoadGrid(r, radial)));

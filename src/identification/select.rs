@@ -273,7 +273,8 @@ pub fn select(
 /// when it predicts the held-out windows significantly better than it (the same rule, z ≥
 /// `z_crit`, on the paired windows of the two). Indices into `round`.
 fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<usize> {
-    let significant = |t: &Tried| t.cmp.map(|c| c.z >= z_crit).unwrap_or(false) && t.state.is_some();
+    let significant =
+        |t: &Tried| t.cmp.map(|c| c.z >= z_crit).unwrap_or(false) && t.state.is_some();
     let mut out: Vec<usize> = (0..round.len())
         .filter(|&k| significant(&round[k]) && !judged_members(round[k].candidate.effect.id))
         .collect();

@@ -179,7 +179,10 @@ mod tests {
             Term::Cos(0, 3),
             Term::Cos(1, 2),
         ]);
-        let c = coefficients(&terms, &[1.0, 20.0, -300.0, 60.0, 0.04, 1.6, 2.0, -3.0, 0.5]);
+        let c = coefficients(
+            &terms,
+            &[1.0, 20.0, -300.0, 60.0, 0.04, 1.6, 2.0, -3.0, 0.5],
+        );
         assert_eq!((c.quad, c.drag_exponent), (0.04, Some(1.6)));
         assert_eq!(c.st_harmonics, [(2.0, 0.0), (0.0, -3.0)]);
         assert_eq!(c.extra[0].1, 0.5);
