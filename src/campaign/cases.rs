@@ -114,7 +114,7 @@ pub const EFFECTS: &[EffectSpec] = &[
         reference: 0.5,
         unit: "1",
         form: "friction η + Δη_s exp(−(β̇/w)²), Δη_s = size·η, w = 0.5 rad/s; at rest the bound is \
-               η + Δη_s",
+               η + Δη_s; headline: Δη_s/η",
     },
     EffectSpec {
         id: "tanh_drag",
@@ -347,7 +347,14 @@ pub fn build_case(
                 } else {
                     StribeckShape::Lorentzian
                 },
-            })
+            });
+            if spec.id == "stribeck" {
+                truths.push(TruthSize {
+                    effect: "static_friction".into(),
+                    value: s,
+                    unit: "1".into(),
+                });
+            }
         }
         "tanh_drag" => truth.tanh_drag = Some(TanhDrag { coef: s, v0: 2.0 }),
         "latency" => {

@@ -8,7 +8,7 @@
 //! `static_friction` (no regression term: profiled over the stick phases by simulation,
 //! [`super::release`]).
 
-use super::model::Shape;
+use super::model::{Shape, DRAG_REFERENCE_SPEED};
 use super::regression::{Clock, DriftParam, Term};
 use std::collections::BTreeMap;
 
@@ -54,7 +54,8 @@ pub fn catalog() -> Vec<Effect> {
         Effect {
             id: "power_law_drag",
             class: "velocity-dependent damping",
-            explanation: "drag −q |β̇|^p sgn β̇ with the exponent p fitted by simulation (p = 2: \
+            explanation: "drag −q (|β̇|/V)^p sgn β̇ (q the drag at V = 4 rad/s) with the exponent p \
+                          fitted by simulation (p = 2: \
                           the quadratic air drag of the rotating magnet; p between 1 and 2: drag \
                           in the transition from laminar to turbulent flow)",
             terms: vec![Term::Quad, Term::Shape(Shape::DragExponent)],
@@ -442,8 +443,10 @@ pub fn effect_params(
             if let (Some((q, s)), Some((pe, pe_err))) =
                 (get(Term::Quad), get(Term::Shape(Shape::DragExponent)))
             {
-                p.insert("q".into(), q);
-                p.insert("q_err".into(), s);
+                // −q (|β̇|/V)^p sgn β̇: q is the drag at the reference speed V
+                p.insert("q_at_reference_speed".into(), q);
+                p.insert("q_at_reference_speed_err".into(), s);
+                p.insert("reference_speed".into(), DRAG_REFERENCE_SPEED);
                 p.insert("exponent".into(), pe);
                 p.insert("exponent_err".into(), pe_err);
                 // the quadratic member (p = 2) within 2σ

@@ -3,7 +3,7 @@
 
 use super::catalog::{effect_params, Effect};
 use super::judge::{rms_rad, Comparison};
-use super::model::Shape;
+use super::model::{Shape, DRAG_REFERENCE_SPEED};
 use super::preprocess::CleanRun;
 use super::regression::Term;
 use super::report::{EffectSize, Finding};
@@ -114,6 +114,14 @@ pub fn params_of(effect: &Effect, st: &ModelState) -> BTreeMap<String, f64> {
             })
             .flatten()
             .collect(),
+        "power_law_drag" => {
+            let mut p = effect_params(effect, &map, base_values(&map));
+            if let Some((q, e)) = drag_coefficient(st) {
+                p.insert("q".into(), q);
+                p.insert("q_err".into(), e);
+            }
+            p
+        }
         "load_dependent_friction" => {
             let mut p = effect_params(effect, &map, base_values(&map));
             if let Some((l, e)) = load_fraction(st) {
@@ -124,6 +132,24 @@ pub fn params_of(effect: &Effect, st: &ModelState) -> BTreeMap<String, f64> {
         }
         _ => effect_params(effect, &map, base_values(&map)),
     }
+}
+
+/// The drag family's coefficient in SI form, q_SI = q V^(−p) of −q_SI |β̇|^p sgn β̇
+/// (rad^(1−p) s^(p−2); rad⁻¹ for p = 2), with its 1σ from the refit's covariance (first order).
+pub fn drag_coefficient(st: &ModelState) -> Option<(f64, f64)> {
+    let at = |t: Term| st.terms.iter().position(|&x| x == t);
+    let (iq, ip) = (at(Term::Quad)?, at(Term::Shape(Shape::DragExponent))?);
+    let (q, p) = (st.fit.theta[iq], st.fit.theta[ip]);
+    let v = DRAG_REFERENCE_SPEED;
+    let qs = q * v.powf(-p);
+    let grad = [(iq, v.powf(-p)), (ip, -qs * v.ln())];
+    let mut var = 0.0;
+    for &(a, ga) in &grad {
+        for &(b, gb) in &grad {
+            var += ga * gb * st.fit.cov[(a, b)];
+        }
+    }
+    Some((qs, var.max(0.0).sqrt()))
 }
 
 /// The load-dependent fraction λ = η_L ρ / (η + η_L ρ) of the friction η + η_L L (catalog.rs,

@@ -6,7 +6,7 @@
 //! β̈ = −ζ β̇ − s (η + η_L h(α, β))
 //!     + c_sc sin α cos β + c_cs cos α sin β + c_cc cos α cos β + c_ss sin α sin β   (coupling)
 //!     + A sin β + B cos β + Σ_{k=2,3} (A_k sin kβ + B_k cos kβ)   (static_torque, lab-fixed)
-//!     − q |β̇|^p sgn β̇                                     (power_law_drag; p = 2 unless set)
+//!     − q (|β̇|/V)^p sgn β̇                                 (power_law_drag; V = 4 rad/s)
 //!     − c_r (β̇ − α̇)                                       (corotating_drag)
 //! ```
 //! with α(t) = α₀ + α̇ t (α̇ = 0 for a ring-down) in the coupling replaced by the input magnet's
@@ -115,7 +115,8 @@ pub struct Coefficients {
     pub st_b: f64,
     /// Static torque harmonics k = 2, 3: (A_k, B_k) of A_k sin kβ + B_k cos kβ, s⁻².
     pub st_harmonics: [(f64, f64); 2],
-    /// Power-law drag coefficient q of −q |β̇|^p sgn β̇, rad^(1−p) s^(p−2) (rad⁻¹ for p = 2).
+    /// Drag coefficient: q of −q β̇|β̇| (rad⁻¹) without an exponent, the drag at the reference
+    /// speed q of −q (|β̇|/V)^p sgn β̇ (s⁻², [`drag`]) with one.
     pub quad: f64,
     /// Drag exponent p (`None`: 2, the quadratic drag), clamped to [`Shape::range`].
     pub drag_exponent: Option<f64>,
@@ -238,20 +239,29 @@ pub fn load_shape(geo: &Geometry, alpha: f64, beta: f64, rho: f64, radial: bool)
     (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt()
 }
 
-/// The drag shape |ω|^p sgn ω and its ω-derivative p |ω|^(p−1) (`None`: p = 2, evaluated as
-/// ω|ω| and 2|ω| exactly).
+/// Reference speed V of the drag family, rad/s: the family's coefficient is the drag at V,
+/// −q (|β̇|/V)^p sgn β̇ (s⁻²), which keeps q and p nearly uncorrelated for output speeds of a
+/// few rad/s. A power of two, so that p = 2 reproduces the quadratic drag q_old β̇|β̇| with
+/// q = q_old V² bit for bit.
+pub const DRAG_REFERENCE_SPEED: f64 = 4.0;
+
+/// The drag shape and its ω-derivative: `None` (the quadratic drag) ω|ω| and 2|ω|; `Some(p)`
+/// (|ω|/V)^p sgn ω and (p/V)(|ω|/V)^(p−1), V = [`DRAG_REFERENCE_SPEED`], p clamped to
+/// [`Shape::range`].
 pub fn drag(exponent: Option<f64>, omega: f64) -> (f64, f64) {
     match exponent {
         None => (omega * omega.abs(), 2.0 * omega.abs()),
         Some(p) => {
             let (lo, hi) = Shape::DragExponent.range();
             let p = p.clamp(lo, hi);
-            let w = omega.abs();
+            let x = omega / DRAG_REFERENCE_SPEED;
+            let w = x.abs();
             if w == 0.0 {
-                return (0.0, if p == 1.0 { 1.0 } else { 0.0 });
+                let d0 = if p == 1.0 { 1.0 } else { 0.0 };
+                return (0.0, d0 / DRAG_REFERENCE_SPEED);
             }
             let wp = w.powf(p - 1.0);
-            (omega * wp, p * wp)
+            (x * wp, p * wp / DRAG_REFERENCE_SPEED)
         }
     }
 }
@@ -636,8 +646,10 @@ mod tests {
         let mut c = Coefficients::base(300.0, 0.2, 1.0, 20.0);
         c.quad = 0.03;
         let quad = driven_test_gear(c);
+        let v2 = DRAG_REFERENCE_SPEED * DRAG_REFERENCE_SPEED;
         let two = driven_test_gear(Coefficients {
             drag_exponent: Some(2.0),
+            quad: c.quad * v2,
             ..c
         });
         for k in 0..12 {
@@ -647,7 +659,7 @@ mod tests {
                 two.forces_jet(t, b, w, false)
             );
             let (d, _) = drag(Some(2.0), w);
-            assert_eq!(d, w * w.abs());
+            assert_eq!(d * v2, w * w.abs());
         }
         c.drag_exponent = Some(1.5);
         c.st_harmonics = [(2.5, -1.5), (0.0, 0.7)];
@@ -673,7 +685,8 @@ mod tests {
         let base = driven_test_gear(Coefficients::base(300.0, 0.2, 1.0, 20.0));
         let (t, b, w) = (0.2, 0.9, -2.0);
         let extra = sys.forces(t, b, w).a - base.forces(t, b, w).a;
-        let want = 0.03 * 2f64.powf(1.5) + 2.5 * (1.8f64).sin() - 1.5 * (1.8f64).cos()
+        let want = 0.03 * (2.0 / DRAG_REFERENCE_SPEED).powf(1.5) + 2.5 * (1.8f64).sin()
+            - 1.5 * (1.8f64).cos()
             + 0.7 * (2.7f64).cos();
         assert!((extra - want).abs() < 1e-12, "{extra} vs {want}");
     }

@@ -188,12 +188,27 @@ fn shape_grid(e: &Effect) -> Vec<Vec<(Shape, f64)>> {
 }
 
 /// The family's best member by the weak form: for a family with a shape parameter the
-/// parameter profiled on its coarse grid (the start value of the refit by simulation).
+/// parameter profiled on its coarse grid (the start value of the refit by simulation). The drag
+/// family is proposed by its best exponent but starts from the quadratic member (p = 2): the
+/// weak form's velocities carry noise, which biases the columns |β̇|^p the more the larger p
+/// (errors in variables), so its best exponent is not a reliable start; the simulation fits p.
 fn family_candidate(d: &Design, current: &[Term], cur: &LinFit, e: Effect) -> Option<Candidate> {
-    shape_grid(&e)
+    let all: Vec<Candidate> = shape_grid(&e)
         .iter()
         .filter_map(|shapes| candidate(d, current, cur, e.clone(), None, shapes))
-        .min_by(|a, b| a.weak_dbic.total_cmp(&b.weak_dbic))
+        .collect();
+    let best = all
+        .iter()
+        .min_by(|a, b| a.weak_dbic.total_cmp(&b.weak_dbic))?
+        .clone();
+    if !e.terms.contains(&Term::Shape(Shape::DragExponent)) {
+        return Some(best);
+    }
+    let quadratic = candidate(d, current, cur, e, None, &[(Shape::DragExponent, 2.0)])?;
+    Some(Candidate {
+        weak_dbic: best.weak_dbic,
+        ..quadratic
+    })
 }
 
 /// Proposals for the model `current` (terms) at `latency`, given the effects already `accepted`.

@@ -13,7 +13,7 @@
 //! correlated: the effective sample size n_eff = Σ_runs n_run / τ_run, with τ the integrated
 //! autocorrelation time of the standardised residuals, scales the covariance and the BIC.
 
-use super::model::{force_shape, load_shape, Geometry, Shape};
+use super::model::{drag, force_shape, load_shape, Geometry, Shape};
 use super::preprocess::CleanRun;
 use nalgebra::{DMatrix, DVector};
 
@@ -39,8 +39,8 @@ pub enum Term {
     /// −β̇|β̇| (quadratic drag; with a [`Term::Shape`] `DragExponent` in the model, the
     /// simulation's −|β̇|^p sgn β̇).
     Quad,
-    /// −|β̇|^p sgn β̇ with p = the value / 10: a weak-form column on the exponent grid of the
-    /// drag family's profile (`power_law_drag`).
+    /// −(|β̇|/V)^p sgn β̇ with p = the value / 10 (V the drag family's reference speed): a
+    /// weak-form column on the exponent grid of the drag family's profile (`power_law_drag`).
     PowDrag(u8),
     /// −sgn β̇ · |P(F − ρẑ)| (radial bearing load, `load_dependent_friction` family; ρ from a
     /// [`Term::Shape`] `LoadWeight` in the model, else 0).
@@ -160,7 +160,7 @@ impl Term {
             Term::SinB => "sin(beta)".into(),
             Term::CosB => "cos(beta)".into(),
             Term::Quad => "-dbeta|dbeta|".into(),
-            Term::PowDrag(t) => format!("-|dbeta|^{}sgn(dbeta)", f64::from(*t) / 10.0),
+            Term::PowDrag(t) => format!("-(|dbeta|/V)^{}sgn(dbeta)", f64::from(*t) / 10.0),
             Term::Shape(s) => s.name().into(),
             Term::RadialLoadFric => "-sgn(dbeta)h_radial(alpha,beta)".into(),
             Term::StaticExcess => "-sgn(dbeta)exp(-(dbeta/w)^2)".into(),
@@ -346,7 +346,7 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
         Term::SinB => (b.sin(), false),
         Term::CosB => (b.cos(), false),
         Term::Quad => (-v * v.abs(), false),
-        Term::PowDrag(t) => (-v.signum() * v.abs().powf(f64::from(t) / 10.0), false),
+        Term::PowDrag(t) => (-drag(Some(f64::from(t) / 10.0), v).0, false),
         Term::Shape(_) => (0.0, false),
         Term::RadialLoadFric => (load_shape(geo, al, b, 0.0, true), true),
         Term::StaticExcess => ((-(v / 0.5).powi(2)).exp(), true),
