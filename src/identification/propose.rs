@@ -6,6 +6,7 @@ use super::catalog::{catalog, dictionary, judged_members, same_slot, Effect};
 use super::model::{Geometry, Shape};
 use super::preprocess::CleanRun;
 use super::regression::{build, delta_bic, fit, Design, LinFit, Term, WeakOptions};
+use super::spec::column_term;
 
 /// A candidate effect to judge.
 #[derive(Debug, Clone, PartialEq)]
@@ -82,22 +83,6 @@ fn align(terms: &[Term], coef: &[f64], shapes: &[(Shape, f64)]) -> Vec<f64> {
             _ => it.next().copied().unwrap_or(0.0),
         })
         .collect()
-}
-
-/// The weak-form column standing for `t` at the shape values `shapes` (the drag family's
-/// −β̇|β̇| becomes −|β̇|^p sgn β̇ on the profile grid).
-fn column_term(t: Term, shapes: &[(Shape, f64)]) -> Term {
-    let shape = |s: Shape| shapes.iter().find(|x| x.0 == s).map(|x| x.1);
-    // `as u8` saturates: values beyond the grid's range stay at its ends
-    if let (Term::StaticExcess, Some(w)) = (t, shape(Shape::StribeckWidth)) {
-        return Term::StribeckGrid((100.0 * w).round() as u8);
-    }
-    match (t, shape(Shape::DragExponent), shape(Shape::LoadWeight)) {
-        (Term::Quad, Some(p), _) => Term::PowDrag((10.0 * p).round() as u8),
-        (Term::LoadFric, _, Some(r)) => Term::LoadGrid((10.0 * r).round() as u8, false),
-        (Term::RadialLoadFric, _, Some(r)) => Term::LoadGrid((10.0 * r).round() as u8, true),
-        _ => t,
-    }
 }
 
 /// The weak-form columns of a refitted model's `terms` at its θ: the drag at its fitted exponent

@@ -10,6 +10,7 @@ use super::preprocess::CleanRun;
 use super::propose::{propose, Candidate, ProposeCtx};
 use super::regression::Term;
 use super::shooting::{refit, ShootingOptions, SimFit, SimModel, Win};
+use super::spec::{fix_shapes, free_shapes};
 
 /// A model with its refit by simulation and its held-out errors.
 #[derive(Debug, Clone, PartialEq)]
@@ -91,6 +92,12 @@ pub struct SelectCtx<'a> {
     pub max_rounds: usize,
 }
 
+/// The terms `cand` adds as judged, with their weak-form values: a family's shape parameter held
+/// at the proposal's grid value ([`fix_shapes`]; it is fitted by simulation in [`polish`]).
+fn judged_terms(cur: &ModelState, cand: &Candidate) -> (Vec<Term>, Vec<f64>) {
+    fix_shapes(&cand.terms, &cand.weak_coef[cur.terms.len()..])
+}
+
 /// The starting θ of `cand` on top of `cur`: the current refit shifted by the weak form's change
 /// when the candidate's terms are added, the new terms at their weak-form values, the latency at
 /// the current fit or the profiled value.
@@ -99,7 +106,7 @@ fn start_theta(cur: &ModelState, cand: &Candidate) -> Vec<f64> {
     let mut th: Vec<f64> = (0..nc)
         .map(|k| cur.fit.theta[k] + cand.weak_coef[k] - cand.weak_coef_current[k])
         .collect();
-    th.extend_from_slice(&cand.weak_coef[nc..]);
+    th.extend(judged_terms(cur, cand).1);
     if cur.fit_latency {
         th.push(cur.latency());
     } else if let Some((tau, _)) = cand.latency {
@@ -116,7 +123,7 @@ fn evaluate_on(
     cand: &Candidate,
 ) -> Option<ModelState> {
     let mut terms = cur.terms.clone();
-    terms.extend(cand.terms.iter().copied());
+    terms.extend(judged_terms(cur, cand).0);
     let fit_latency = cur.fit_latency || cand.latency.is_some();
     let theta0 = start_theta(cur, cand);
     let model = SimModel {
@@ -150,21 +157,35 @@ pub fn evaluate(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<M
 }
 
 /// The final model refitted to convergence (the judge's refits stop after a few
-/// Levenberg–Marquardt steps from their warm starts: enough to judge, not to report), with its
-/// held-out errors recomputed.
+/// Levenberg–Marquardt steps from their warm starts: enough to judge, not to report), with the
+/// families' shape parameters freed ([`free_shapes`]): they are fitted here, by simulation, next
+/// to the linear coefficients, and their σ come from this refit's covariance. Its held-out errors
+/// are recomputed when no shape was freed; with shapes, the judged model's are kept (the one-step
+/// leave-fold-out refits are first order, too coarse for a shape parameter and the coefficient
+/// it trades off with).
 pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
     if st.effects.is_empty() {
         return st.clone();
     }
-    let model = st.model(ctx.runs, ctx.geo);
+    let (terms, theta0) = free_shapes(&st.terms, &st.fit.theta);
+    let freed = terms != st.terms;
+    let model = SimModel {
+        terms: terms.clone(),
+        ..st.model(ctx.runs, ctx.geo)
+    };
     let opts = ShootingOptions {
         patience: 4,
         ..*ctx.shooting
     };
-    match refit(&model, &st.fit.theta, ctx.wins, &opts) {
+    match refit(&model, &theta0, ctx.wins, &opts) {
         Some(fit) => {
-            let held = heldout(&model, &fit, ctx.wins, ctx.folds);
+            let held = if freed {
+                st.held.clone()
+            } else {
+                heldout(&model, &fit, ctx.wins, ctx.folds)
+            };
             ModelState {
+                terms,
                 fit,
                 held,
                 ..st.clone()
