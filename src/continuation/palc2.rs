@@ -479,7 +479,7 @@ fn locate_between<S: Parametrised, M: FlowMethod<S>>(
     let tb = s.tests(b);
     let mut out = Vec::new();
     for ((kind, fa), (_, fb)) in ta.into_iter().zip(tb) {
-        if !(fa * fb < 0.0) {
+        if fa * fb >= 0.0 || fa.is_nan() || fb.is_nan() {
             continue;
         }
         if let Ok(p) = locate_one(s, a, b, kind, fa, fb, after) {
