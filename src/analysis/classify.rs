@@ -619,7 +619,7 @@ fn confirm_period<S: DrivenOscillator + ?Sized>(
         let lift_dist = (xi[0] - x[0])
             .abs()
             .max((xi[1] - x[1]).abs() * period / TAU);
-        if !(lift_dist <= NEWTON_TRUST) {
+        if lift_dist > NEWTON_TRUST {
             return Ok(None);
         }
     }
