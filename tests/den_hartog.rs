@@ -4,7 +4,8 @@
 
 use gearbif::continuation::{Continuation, ContinuationOptions, SpecialKind};
 use gearbif::model::den_hartog::{
-    den_hartog_coulomb_amplitude, non_stop_orbit, stop_boundary_frequency,
+    den_hartog_coulomb_amplitude, den_hartog_coulomb_stop_ratio, non_stop_orbit,
+    stop_boundary_frequency,
 };
 use gearbif::model::{CoulombOscillator, CoulombParam};
 use gearbif::orbits::{shoot, OrbitSpec, ShootingOptions};
@@ -98,6 +99,115 @@ fn continuation_in_f_follows_den_hartog_and_locates_the_onset_of_stops() {
     eprintln!("{n} non-stop points, worst state difference {worst:e}");
     assert!(n >= 10);
     assert!(worst < 1e-8, "{worst}");
+}
+
+/// The frequency ratio r in [lo, hi] where Den Hartog's boundary (μ/F)_stop(r) equals `ratio`
+/// (bisection on the closed form; the boundary rises with r on the intervals used here).
+fn published_stop_ratio_root(ratio: f64, mut lo: f64, mut hi: f64) -> f64 {
+    let g = |r: f64| den_hartog_coulomb_stop_ratio(r).unwrap() - ratio;
+    assert!(
+        g(lo) < 0.0 && g(hi) > 0.0,
+        "not bracketed: {} {}",
+        g(lo),
+        g(hi)
+    );
+    while hi - lo > 1e-14 {
+        let m = 0.5 * (lo + hi);
+        if g(m) < 0.0 {
+            lo = m
+        } else {
+            hi = m
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+#[test]
+fn published_boundary_limits_and_closed_form_agree() {
+    // the classical resonance bound π/4 and the exact point r = 1/2 (μ/F = 1/3)
+    let near = den_hartog_coulomb_stop_ratio(1.0 - 1e-7).unwrap();
+    assert!((near - std::f64::consts::FRAC_PI_4).abs() < 1e-6, "{near}");
+    assert!((den_hartog_coulomb_stop_ratio(0.5).unwrap() - 1.0 / 3.0).abs() < 1e-15);
+    // the formula against the tangency of the boundary-value solution (the code's own derivation)
+    for &ratio in &[0.3, 0.5, 0.7] {
+        let r = published_stop_ratio_root(ratio, 0.45, 0.84);
+        let osc = CoulombOscillator::new(TAU, 0.0, ratio, 1.0, 1.0).unwrap();
+        let f_b = stop_boundary_frequency(&osc, 0.45, 0.84, 1e-13).unwrap();
+        assert!((f_b - r).abs() < 1e-9, "μ/F = {ratio}: {f_b} vs {r}");
+    }
+}
+
+/// ξ = 0, ω₀ = 2π (so r = f in Hz), F = 1: the first nonsmooth point of the generic continuation,
+/// started on the non-stop orbit at f = 0.84 Hz and run down in f.
+fn continued_onset_of_stops(ratio: f64) -> (f64, f64) {
+    let f_start = 0.84;
+    let osc = CoulombOscillator::new(TAU, 0.0, ratio, 1.0, f_start).unwrap();
+    let x0 = non_stop_orbit(&osc).unwrap().state(0.0);
+    let opts = ContinuationOptions {
+        ds: -0.02,
+        ds_max: 0.05,
+        param_min: 0.36,
+        param_max: 0.9,
+        ..Default::default()
+    };
+    let b = Continuation::new(osc, CoulombParam::F, OrbitSpec::symmetric(0), x0, opts)
+        .unwrap()
+        .run(None)
+        .unwrap();
+    let onset = b
+        .specials_of(SpecialKind::Nonsmooth)
+        .next()
+        .unwrap_or_else(|| panic!("μ/F = {ratio}: no nonsmooth point {:?}", b.specials));
+    let jump = onset.jump.as_ref().unwrap();
+    assert_eq!(jump.events_before.signature(), (1, 0));
+    assert!(jump.events_after.sticks > 0);
+    (onset.param, onset.precision)
+}
+
+#[test]
+fn continuation_locates_den_hartogs_published_stop_boundary() {
+    // for μ/F ≥ 0.3 stops begin where the reversal turns tangential: Den Hartog's boundary
+    for &ratio in &[0.5, 0.7] {
+        let (f, prec) = continued_onset_of_stops(ratio);
+        let r = published_stop_ratio_root(ratio, 0.45, 0.84);
+        eprintln!(
+            "μ/F = {ratio}: continuation {f} ± {prec:e}, Den Hartog {r}, difference {:e}",
+            f - r
+        );
+        assert!((f - r).abs() < prec + 1e-9);
+    }
+}
+
+#[test]
+fn below_the_published_boundary_stops_begin_inside_the_half_period() {
+    // for μ/F = 0.2 and 0.3 the velocity touches zero inside the half period before the reversal
+    // turns tangential: the continuation finds that earlier onset, confirmed by the interior
+    // velocity minimum of the closed form, and Den Hartog's formula lies below it
+    for &(ratio, lo, hi) in &[(0.2, 0.42, 0.44), (0.3, 0.47, 0.5)] {
+        let (f, prec) = continued_onset_of_stops(ratio);
+        let vmin = |f: f64| {
+            let osc = CoulombOscillator::new(TAU, 0.0, ratio, 1.0, f).unwrap();
+            non_stop_orbit(&osc).unwrap().interior_velocity_min().1
+        };
+        let (mut lo, mut hi) = (lo, hi);
+        assert!(vmin(lo) < 0.0 && vmin(hi) > 0.0);
+        while hi - lo > 1e-13 {
+            let m = 0.5 * (lo + hi);
+            if vmin(m) < 0.0 {
+                lo = m
+            } else {
+                hi = m
+            }
+        }
+        let graze = 0.5 * (lo + hi);
+        let published = published_stop_ratio_root(ratio, 0.36, 0.84);
+        eprintln!(
+            "μ/F = {ratio}: continuation {f} ± {prec:e}, interior grazing {graze}, \
+             Den Hartog {published}"
+        );
+        assert!((f - graze).abs() < prec + 1e-9, "{f} vs {graze}");
+        assert!(graze - published > 5e-4);
+    }
 }
 
 #[test]

@@ -4,11 +4,13 @@
 use super::common::{limits, output_file, tolerance, GearArgs, Output};
 use super::continue_::{check_winding, parse_range, parse_section, parse_state};
 use super::locate::parse_kind;
-use crate::continuation::two_param::{follow, grid};
+use crate::continuation::palc2::{continue_curve, lock_loss_curves, CurveOptions};
+use crate::continuation::two_param::{follow, grid, Curve};
 use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
+use crate::integrator::EventDriven;
 use crate::maps::Section;
-use crate::model::{GearParam, Parameter, Parametrised};
+use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::orbits::{OrbitSpec, ShootingOptions};
 
 /// Arguments of `gearbif boundary`.
@@ -63,6 +65,11 @@ pub struct Args {
     /// Print JSON.
     #[arg(long)]
     json: bool,
+    /// Continuation method: palc (pseudo-arclength in both parameters, passes turning points and
+    /// locates codimension-two points; `--step` is the largest arclength step) or natural (steps of
+    /// `--step` in the stepped parameter, stops at turning points).
+    #[arg(long, default_value = "palc")]
+    method: String,
 }
 
 /// Runs `gearbif boundary`.
@@ -77,14 +84,32 @@ pub fn run(a: Args) -> Result<()> {
         tol: a.tol,
         ..Default::default()
     };
+    let palc = a.method == "palc";
+    let (lo, hi) = parse_range(a.range.as_deref().unwrap_or("0:54.7356103"))?;
+    let copts = CurveOptions {
+        ds: 0.5 * a.step,
+        ds_max: a.step,
+        max_steps: 2000,
+        along_range: (lo, hi),
+        free_range: if free == GearParam::F {
+            (1e-3, f64::INFINITY)
+        } else {
+            (f64::NEG_INFINITY, f64::INFINITY)
+        },
+        shooting: opts,
+        ..Default::default()
+    };
     let curves = if a.start_state.is_none()
         && kind == SpecialKind::Fold
         && along == GearParam::ThetaDeg
         && free == GearParam::F
     {
-        crate::continuation::two_param::lock_loss_boundary(&base, a.step, &opts)?
+        if palc {
+            lock_loss_curves(&base, &copts)?
+        } else {
+            crate::continuation::two_param::lock_loss_boundary(&base, a.step, &opts)?
+        }
     } else {
-        let (lo, hi) = parse_range(a.range.as_deref().unwrap_or("0:54.7356103"))?;
         let x = parse_state(a.start_state.as_deref().ok_or_else(|| {
             Error::InvalidInput("--start-state-rad is needed for this curve".into())
         })?)?;
@@ -97,7 +122,15 @@ pub fn run(a: Args) -> Result<()> {
         };
         let vals = grid(lo, hi, a.step, a.reverse);
         let g = base.with_param(free, f0)?.with_param(along, vals[0])?;
-        let c = follow(&g, &spec, kind, free, along, x, f0, &vals, &opts)?;
+        let c: Curve<Gear> = if palc {
+            let o = CurveOptions {
+                ds: if a.reverse { -copts.ds } else { copts.ds },
+                ..copts
+            };
+            continue_curve(&EventDriven, &g, &spec, kind, free, along, x, f0, &o)?
+        } else {
+            follow(&g, &spec, kind, free, along, x, f0, &vals, &opts)?
+        };
         vec![(format!("{} curve", kind.label()), c)]
     };
     // one document for --out and --json: {"schema": "gearbif.curves/1", "curves": [[label, curve], ...]}
@@ -116,6 +149,11 @@ pub fn run(a: Args) -> Result<()> {
                     .to_degrees(),
                 fc,
             ));
+        }
+        for (_, c) in &curves {
+            for q in &c.codim2 {
+                marks.push((q.kind.label().to_string(), q.along, q.free));
+            }
         }
         let fig = crate::plotting::branch::BoundaryPlot {
             title: match kind {
@@ -150,6 +188,17 @@ pub fn run(a: Args) -> Result<()> {
                     p.x[1]
                 ));
             }
+            for q in &c.codim2 {
+                s.push_str(&format!(
+                    "  {}: {} = {:.7}, {} = {:.9} ± {:.1e}\n",
+                    q.kind.label(),
+                    c.along.name(),
+                    q.along,
+                    c.free.name(),
+                    q.free,
+                    q.precision
+                ));
+            }
         }
         s
     })
@@ -158,6 +207,12 @@ pub fn run(a: Args) -> Result<()> {
 /// The domain checks of `boundary`, all before any curve is computed.
 fn check_args(a: &Args) -> Result<()> {
     tolerance("tol", a.tol)?;
+    if a.method != "palc" && a.method != "natural" {
+        return Err(Error::InvalidInput(format!(
+            "--method {}: expected palc or natural",
+            a.method
+        )));
+    }
     check_winding(a.winding)?;
     parse_section(&a.section)?;
     let (lo, hi) = parse_range(a.range.as_deref().unwrap_or("0:54.7356103"))?;

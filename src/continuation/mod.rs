@@ -11,7 +11,11 @@
 //! - [`switch`]: branch switching at flips and symmetry-breaking points;
 //! - [`branch`]: the one result type [`Branch`] with its [`SpecialPoint`]s;
 //! - [`two_param`]: special points as solutions of an augmented system and their curves in two
-//!   parameters.
+//!   parameters by natural continuation;
+//! - [`minaug`]: the map linearisation shared by every corrector, and the bordered test function of
+//!   the minimally augmented systems;
+//! - [`palc2`]: two-parameter curves by pseudo-arclength on the minimally augmented systems, with
+//!   [`codim2`]: codimension-two points located on them.
 //!
 //! Unknowns u = (β, ω, λ). Equations: F(x, λ) = Pᵏ(x; λ) − x − (s, 0) = 0 and the arclength
 //! condition t·(u − u_pred) = 0, with t the unit tangent. The λ column ∂F/∂λ is the map's `jac_p`
@@ -20,12 +24,15 @@
 //! [`Parametrised`]: crate::model::Parametrised
 
 pub mod branch;
+pub mod codim2;
 pub mod detect;
 pub mod diagram;
 pub mod identity;
+pub mod minaug;
 pub mod multiple_shooting;
 pub mod options;
 pub mod palc;
+pub mod palc2;
 pub mod pinned;
 pub mod switch;
 pub mod two_param;

@@ -3,10 +3,12 @@
 //! on the side of the bifurcation point where the new branch exists without being told.
 
 use super::identity::{section_distance, OrbitImages};
+use super::minaug::linearise_map;
 use super::{Branch, SpecialKind, SpecialPoint};
 use crate::error::{Error, Result};
-use crate::model::{param_derivative, Parameter, Parametrised};
-use crate::orbits::{residual, shoot, OrbitSpec, PeriodicOrbit, ShootingOptions};
+use crate::integrator::EventDriven;
+use crate::model::{Parameter, Parametrised};
+use crate::orbits::{shoot, OrbitSpec, PeriodicOrbit, ShootingOptions};
 use nalgebra::{Matrix3, Vector3};
 
 /// The problem on the new branch at a flip (P_T^{2k}) or symmetry-breaking point (P_T).
@@ -121,15 +123,8 @@ fn pinned_newton<S: Parametrised>(
     let mut u = u0;
     for it in 0..sh.max_iter {
         let gear = b.system.with_param(b.param, u[2])?;
-        let (r, img) = residual(&gear, spec, [u[0], u[1]], sh, true)?;
-        let jac = img
-            .jac_x
-            .ok_or_else(|| Error::Continuation("map returned no Jacobian".into()))?;
-        let jp = img
-            .jac_p
-            .as_ref()
-            .ok_or_else(|| Error::Continuation("map returned no parameter Jacobian".into()))?;
-        let fl = param_derivative(&gear, b.param, jp)?;
+        let lin = linearise_map(&EventDriven, &gear, spec, [u[0], u[1]], &[b.param], sh)?;
+        let (r, jac, fl) = (lin.residual, lin.jac, lin.columns[0]);
         let g = q.dot(&(u - ustar)) - eps;
         let a = Matrix3::new(
             jac[(0, 0)] - 1.0,

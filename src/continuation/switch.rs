@@ -2,7 +2,8 @@
 //! symmetry-breaking point (onto one of the pair of asymmetric orbits on P_T), along the eigenvector
 //! of the critical multiplier (numerics.md, "Floquet multipliers and bifurcations").
 
-use super::branch::{Branch, SpecialKind, SpecialPoint};
+use super::branch::{Branch, SpecialPoint};
+use super::pinned::new_spec;
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, FlowMethod};
 use crate::model::{Gear, Parameter, Parametrised};
@@ -32,21 +33,6 @@ pub fn switch_branch<S: Parametrised>(
     opts: &ShootingOptions,
 ) -> Result<SwitchStart<S>> {
     switch_branch_with(&EventDriven, branch, special, dparam, opts)
-}
-
-/// The problem on the new branch after `kind`.
-fn new_spec(old: &OrbitSpec, kind: SpecialKind) -> Result<OrbitSpec> {
-    match kind {
-        SpecialKind::Flip => Ok(OrbitSpec::stroboscopic(2 * old.iterations, 2 * old.winding)),
-        SpecialKind::SymmetryBreaking => {
-            let s = old.on_stroboscopic();
-            Ok(OrbitSpec::stroboscopic(s.iterations, s.winding))
-        }
-        k => Err(Error::Unsupported(format!(
-            "branch switching is implemented at flips and symmetry-breaking points, not at a {}",
-            k.label()
-        ))),
-    }
 }
 
 /// Distance of two orbits on the section, β modulo 2π.

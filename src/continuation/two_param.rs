@@ -13,12 +13,14 @@
 //! built from the Jacobian, so its derivative would need second-order sensitivities).
 //! A curve is followed by natural continuation in the second parameter with a secant predictor.
 
+use super::codim2::Codim2Point;
+use super::minaug::linearise_map;
 use super::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, FlowMethod};
-use crate::model::{param_derivative, Gear, GearParam, Parametrised};
+use crate::model::{Gear, GearParam, Parametrised};
 use crate::numerics::{newton, Linearisation, NewtonOptions};
-use crate::orbits::{residual_with, EventCounts, Floquet, OrbitSpec, ShootingOptions};
+use crate::orbits::{EventCounts, Floquet, OrbitSpec, ShootingOptions};
 use nalgebra::{Matrix3, Vector3};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -66,6 +68,27 @@ pub enum CurveStop {
         /// The free parameter predicted.
         predicted: f64,
     },
+    /// Pseudo-arclength: the step fell below `ds_min` at (free, along).
+    StepTooSmall {
+        /// The free parameter at the last point.
+        free: f64,
+        /// The other parameter at the last point.
+        along: f64,
+        /// The smallest step allowed.
+        ds_min: f64,
+    },
+    /// Pseudo-arclength: the curve reached a bound of a parameter's range.
+    ParameterBound {
+        /// The parameter's name.
+        param: String,
+        /// The bound.
+        value: f64,
+    },
+    /// Pseudo-arclength: the largest number of steps was taken.
+    MaxSteps {
+        /// The number of steps.
+        steps: usize,
+    },
 }
 
 impl std::fmt::Display for CurveStop {
@@ -80,6 +103,20 @@ impl std::fmt::Display for CurveStop {
                 f,
                 "at {at}: solution {free} is far from the prediction {predicted} (another curve?)"
             ),
+            CurveStop::StepTooSmall {
+                free,
+                along,
+                ds_min,
+            } => write!(
+                f,
+                "at ({free}, {along}): the arclength step fell below {ds_min}"
+            ),
+            CurveStop::ParameterBound { param, value } => {
+                write!(f, "at the bound {param} = {value}")
+            }
+            CurveStop::MaxSteps { steps } => {
+                write!(f, "after the largest number of steps, {steps}")
+            }
         }
     }
 }
@@ -103,6 +140,10 @@ pub struct Curve<S: Parametrised = Gear> {
     pub points: Vec<CurvePoint>,
     /// Why the curve stopped before the last requested value, if it did.
     pub stopped: Option<CurveStop>,
+    /// Codimension-two points and turning points located on the curve (pseudo-arclength curves
+    /// only, [`super::palc2`]).
+    #[serde(default)]
+    pub codim2: Vec<Codim2Point>,
 }
 
 fn test_value(kind: SpecialKind, f: &Floquet) -> f64 {
@@ -135,24 +176,22 @@ struct Problem<'a, S: Parametrised, M> {
 impl<S: Parametrised, M: FlowMethod<S>> Problem<'_, S, M> {
     fn eval(&self, u: &Vector3<f64>) -> Result<Eval> {
         let sys = self.sys.with_param(self.free, u[2])?;
-        let (r, img) = residual_with(self.method, &sys, self.spec, [u[0], u[1]], self.opts, true)?;
-        let jac = img
-            .jac_x
-            .ok_or_else(|| Error::Continuation("map returned no Jacobian".into()))?;
-        let jp = img
-            .jac_p
-            .as_ref()
-            .ok_or_else(|| Error::Continuation("map returned no parameter Jacobian".into()))?;
-        let fl = param_derivative(&sys, self.free, jp)?;
-        let events = EventCounts::from_image(&img);
-        let fq = Floquet::of_orbit(&jac, &events);
+        let lin = linearise_map(
+            self.method,
+            &sys,
+            self.spec,
+            [u[0], u[1]],
+            &[self.free],
+            self.opts,
+        )?;
+        let fq = lin.floquet();
         Ok(Eval {
-            r,
-            jac,
-            fl,
+            r: lin.residual,
+            jac: lin.jac,
+            fl: lin.columns[0],
             psi: test_value(self.kind, &fq),
             fq,
-            events,
+            events: lin.events,
         })
     }
 
@@ -393,6 +432,7 @@ pub fn follow_with<S: Parametrised, M: FlowMethod<S>>(
         spec: *spec,
         points: pts,
         stopped,
+        codim2: Vec::new(),
     })
 }
 

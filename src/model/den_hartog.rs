@@ -71,6 +71,38 @@ impl NonStopOrbit {
         [x, v]
     }
 
+    /// The smallest velocity on the open upward half period, located to 1e-13 of the half period
+    /// (a grid of 400 points, then golden-section search around the smallest): (s, ẋ(s)), s after
+    /// the lower reversal. Where it is negative the velocity reverses inside the half period: a
+    /// stop begins there before the reversal becomes tangential (an interior grazing).
+    pub fn interior_velocity_min(&self) -> (f64, f64) {
+        let h = PI / self.omega;
+        let v = |s: f64| self.upward(s)[1];
+        let n = 400;
+        let (mut best, mut vbest) = (1, f64::INFINITY);
+        for i in 1..n {
+            let vi = v(h * i as f64 / n as f64);
+            if vi < vbest {
+                (best, vbest) = (i, vi);
+            }
+        }
+        let (mut a, mut b) = (
+            h * (best - 1) as f64 / n as f64,
+            h * (best + 1) as f64 / n as f64,
+        );
+        let g = 0.5 * (5f64.sqrt() - 1.0);
+        while b - a > 1e-13 * h {
+            let (c, d) = (b - g * (b - a), a + g * (b - a));
+            if v(c) < v(d) {
+                b = d;
+            } else {
+                a = c;
+            }
+        }
+        let s = 0.5 * (a + b);
+        (s, v(s))
+    }
+
     /// The state (x, ẋ) at time t of the steady state (t = 0 is the stroboscopic section).
     pub fn state(&self, t: f64) -> [f64; 2] {
         let period = TAU / self.omega;
@@ -176,6 +208,28 @@ pub fn den_hartog_coulomb_amplitude(osc: &CoulombOscillator) -> Option<f64> {
     let u = (PI / r).sin() / (r * (1.0 + (PI / r).cos()));
     let h = v * v - (osc.mu / osc.force).powi(2) * u * u;
     (h >= 0.0 && h.is_finite()).then(|| osc.force.abs() / (osc.omega0 * osc.omega0) * h.sqrt())
+}
+
+/// Den Hartog's boundary of motion without stops for Coulomb friction alone (ξ = 0): the friction
+/// ratio μ/F at which stops begin for the frequency ratio r = Ω/ω₀,
+///
+/// ```text
+///   (μ/F)_stop = |V| / √(U² + r⁻⁴),   V = 1/(1 − r²),   U = tan(π/(2r)) / r,
+/// ```
+///
+/// (U is Den Hartog's sin(π/r) / (r (1 + cos(π/r)))). It follows from his solution alone: with
+/// ξ = 0 the reversal conditions give X = −R cos ψ and R sin ψ = (μ/ω₀²) U (R = FV/ω₀²), so the
+/// tangency F cos ψ + ω₀² X = μ at the reversal becomes X = μ/(ω₀² r²), and with X² = R² − (μU/ω₀²)²
+/// the formula above. Its limit at resonance, π/4, is Den Hartog's classical bound. `None` where U
+/// is singular (r = 1/(2k+1)) or r is not positive.
+pub fn den_hartog_coulomb_stop_ratio(r: f64) -> Option<f64> {
+    if r.is_nan() || r <= 0.0 || (r - 1.0).abs() < 1e-12 {
+        return None;
+    }
+    let v = 1.0 / (1.0 - r * r);
+    let u = (PI / (2.0 * r)).tan() / r;
+    let q = v.abs() / (u * u + r.powi(-4)).sqrt();
+    q.is_finite().then_some(q)
 }
 
 /// The forcing frequency in [f_lo, f_hi] where stops begin: the zero of the reversal margin

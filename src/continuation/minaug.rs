@@ -1,0 +1,178 @@
+//! The pieces shared by every Newton iteration on an orbit problem with free parameters, and the
+//! minimally augmented test function of a codimension-one point.
+//!
+//! [`linearise_map`] evaluates the shooting residual F(x; λ) = Pᵏ(x; λ) − x − (s, 0), the map's
+//! Jacobian M = ∂Pᵏ/∂x and the columns ∂F/∂λⱼ of the requested parameters (through the parameter
+//! lens, [`crate::model::params`]); the continuation corrector, the augmented systems of
+//! [`super::two_param`] and [`super::palc2`] and the pinned switching of [`super::pinned`] all use it.
+//!
+//! [`bordered_test`] is the test function of a minimally augmented system (Govaerts, *Numerical
+//! Methods for Bifurcations of Dynamical Equilibria*, 2000, ch. 4): with A = M − σI (σ = +1 for a
+//! fold, σ = −1 for a flip, and for a symmetry-breaking point of the half-period map G, where the
+//! P_T-multiplier +1 of the antisymmetric mode is G's multiplier −1) and bordering vectors b, c
+//! close to the left and right null vectors of A,
+//!
+//! ```text
+//!   [ A   b ] [ v ]   [ 0 ]          [ Aᵀ  c ] [ w ]   [ 0 ]
+//!   [ cᵀ  0 ] [ g ] = [ 1 ],         [ bᵀ  0 ] [ g ] = [ 1 ],
+//! ```
+//!
+//! g = 0 exactly where A is singular; v and w are then its right and left null vectors. Unlike
+//! det A, g is scaled like the smallest singular value of A, whatever the other multiplier.
+
+use super::SpecialKind;
+use crate::error::{Error, Result};
+use crate::integrator::FlowMethod;
+use crate::model::{param_derivative, Parametrised};
+use crate::orbits::{residual_with, EventCounts, Floquet, OrbitSpec, ShootingOptions};
+use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+
+/// F, ∂Pᵏ/∂x and the parameter columns of F at one point.
+#[derive(Debug, Clone)]
+pub struct MapLinearisation {
+    /// The shooting residual F(x; λ).
+    pub residual: [f64; 2],
+    /// The map Jacobian M = ∂Pᵏ/∂x (F_x = M − I).
+    pub jac: Matrix2<f64>,
+    /// ∂F/∂λⱼ for the requested parameters, in order.
+    pub columns: Vec<[f64; 2]>,
+    /// Events per application of the orbit's map.
+    pub events: EventCounts,
+}
+
+impl MapLinearisation {
+    /// Floquet data of the orbit's map.
+    pub fn floquet(&self) -> Floquet {
+        Floquet::of_orbit(&self.jac, &self.events)
+    }
+}
+
+/// Evaluates [`MapLinearisation`] of the problem `spec` of `sys` at `x` with the columns of
+/// `params`, the flow computed by `method`.
+pub fn linearise_map<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    x: [f64; 2],
+    params: &[S::Param],
+    opts: &ShootingOptions,
+) -> Result<MapLinearisation> {
+    let (residual, img) = residual_with(method, sys, spec, x, opts, true)?;
+    let jac = img
+        .jac_x
+        .ok_or_else(|| Error::Continuation("map returned no state Jacobian".into()))?;
+    let jp = img
+        .jac_p
+        .as_ref()
+        .ok_or_else(|| Error::Continuation("map returned no parameter Jacobian".into()))?;
+    let columns = params
+        .iter()
+        .map(|&p| param_derivative(sys, p, jp))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(MapLinearisation {
+        residual,
+        jac,
+        columns,
+        events: EventCounts::from_image(&img),
+    })
+}
+
+/// σ in A = M − σI for the special points that have a minimally augmented system.
+pub fn critical_multiplier(kind: SpecialKind) -> Result<f64> {
+    match kind {
+        SpecialKind::Fold => Ok(1.0),
+        SpecialKind::Flip | SpecialKind::SymmetryBreaking => Ok(-1.0),
+        k => Err(Error::Unsupported(format!(
+            "no minimally augmented system for a {} point (fold, flip or symmetry-breaking only)",
+            k.label()
+        ))),
+    }
+}
+
+/// The bordered test function of A = `m` − σI with bordering vectors `b`, `c`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BorderedTest {
+    /// The test function g (zero where A is singular).
+    pub g: f64,
+    /// Right vector v: A v = −g b, cᵀv = 1 (the null vector of A where g = 0).
+    pub v: [f64; 2],
+    /// Left vector w: Aᵀ w = −g c, bᵀw = 1.
+    pub w: [f64; 2],
+}
+
+/// Solves the two bordered systems of the module doc for A = `m` − σI.
+pub fn bordered_test(
+    m: &Matrix2<f64>,
+    sigma: f64,
+    b: [f64; 2],
+    c: [f64; 2],
+) -> Result<BorderedTest> {
+    let a = m - sigma * Matrix2::identity();
+    let border = |a: &Matrix2<f64>, col: [f64; 2], row: [f64; 2]| {
+        Matrix3::new(
+            a[(0, 0)],
+            a[(0, 1)],
+            col[0],
+            a[(1, 0)],
+            a[(1, 1)],
+            col[1],
+            row[0],
+            row[1],
+            0.0,
+        )
+    };
+    let rhs = Vector3::new(0.0, 0.0, 1.0);
+    let solve = |mat: Matrix3<f64>| {
+        mat.lu()
+            .solve(&rhs)
+            .filter(|s| s.iter().all(|z| z.is_finite()))
+            .ok_or_else(|| {
+                Error::Continuation(
+                    "singular bordered matrix (bordering vectors degenerate)".into(),
+                )
+            })
+    };
+    let r = solve(border(&a, b, c))?;
+    let l = solve(border(&a.transpose(), c, b))?;
+    Ok(BorderedTest {
+        g: r[2],
+        v: [r[0], r[1]],
+        w: [l[0], l[1]],
+    })
+}
+
+/// Unit vector along `v` (unchanged if it is zero or not finite).
+pub fn unit(v: [f64; 2]) -> [f64; 2] {
+    let n = Vector2::from(v).norm();
+    if n > 0.0 && n.is_finite() {
+        [v[0] / n, v[1] / n]
+    } else {
+        v
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bordered_test_vanishes_exactly_at_a_singular_matrix_and_gives_its_null_vectors() {
+        // M has eigenvalues 1 and 0.3: A = M − I singular, null vectors known
+        let p = Matrix2::new(1.0, 0.4, 0.2, 1.0);
+        let m = p * Matrix2::new(1.0, 0.0, 0.0, 0.3) * p.try_inverse().unwrap();
+        let t = bordered_test(&m, 1.0, [0.3, 0.9], [1.0, 0.1]).unwrap();
+        assert!(t.g.abs() < 1e-14, "g = {}", t.g);
+        let a = m - Matrix2::identity();
+        let v = Vector2::from(t.v);
+        let w = Vector2::from(t.w);
+        assert!((a * v).norm() < 1e-14 && (a.transpose() * w).norm() < 1e-14);
+        // away from singularity g changes sign with the eigenvalue through 1, like det(A)
+        let m2 = p * Matrix2::new(1.1, 0.0, 0.0, 0.3) * p.try_inverse().unwrap();
+        let m3 = p * Matrix2::new(0.9, 0.0, 0.0, 0.3) * p.try_inverse().unwrap();
+        let g2 = bordered_test(&m2, 1.0, t.w, t.v).unwrap().g;
+        let g3 = bordered_test(&m3, 1.0, t.w, t.v).unwrap().g;
+        assert!(g2 * g3 < 0.0);
+        // first order in the eigenvalue's distance from 1: g(1.1) ≈ −g(0.9)
+        assert!((g2 + g3).abs() < 0.1 * g2.abs(), "{g2} {g3}");
+    }
+}

@@ -1,0 +1,586 @@
+//! Two-parameter curves of codimension-one points by pseudo-arclength continuation of the
+//! minimally augmented system, so a curve passes turning points in either parameter.
+//!
+//! Unknowns u = (β, ω, λ₁, λ₂) (λ₁ "free", λ₂ "along", e.g. f and Θ). Equations
+//!
+//! ```text
+//!   Pᵏ(x; λ₁, λ₂) − x − (s, 0) = 0,   g(x, λ₁, λ₂) = 0,   t·(W u − v_pred) = 0,
+//! ```
+//!
+//! with g the bordered test function of A = M − σI ([`super::minaug`]; det M − 1 for a
+//! Neimark–Sacker curve), W = diag(1, w_ω, 1, 1) and t the unit tangent in scaled variables. The
+//! first two rows of the Newton matrix are the map's Jacobians; the row of g is a forward difference
+//! (g is built from M, so its exact derivative would need second-order sensitivities): this makes
+//! Newton converge linearly at rate ~1e-5, while the solution is as accurate as the residual. The
+//! bordering vectors are reset to the left and right null vectors at every accepted point. The
+//! tangent solves [J W⁻¹; t_prevᵀ] t = e₄. Step control as in [`super::palc`]. Codimension-two points
+//! ([`super::codim2`]) are located between two points by an Illinois secant on the scaled arclength,
+//! each trial point corrected on the hyperplane t_a·(W u − W u_a) = σ.
+
+use super::codim2::{test_functions, Codim2Kind, Codim2Point, CurveLocal};
+use super::minaug::{bordered_test, critical_multiplier, linearise_map, unit, MapLinearisation};
+use super::two_param::{Curve, CurvePoint, CurveStop};
+use super::SpecialKind;
+use crate::error::{Error, Result};
+use crate::integrator::FlowMethod;
+use crate::model::{Parameter, Parametrised};
+use crate::numerics::{newton, Illinois, Linearisation, NewtonOptions};
+use crate::orbits::{OrbitSpec, ShootingOptions};
+use nalgebra::{Matrix4, Vector4};
+use serde::{Deserialize, Serialize};
+
+/// Options of a two-parameter pseudo-arclength continuation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CurveOptions {
+    /// Initial step in scaled arclength; its sign sets the initial direction in the along parameter.
+    pub ds: f64,
+    /// Smallest step before giving up.
+    pub ds_min: f64,
+    /// Largest step.
+    pub ds_max: f64,
+    /// Largest number of steps.
+    pub max_steps: usize,
+    /// Range of the free parameter: the curve stops on its bounds.
+    pub free_range: (f64, f64),
+    /// Range of the along parameter.
+    pub along_range: (f64, f64),
+    /// Weight of ω in the arclength norm.
+    pub omega_weight: f64,
+    /// Shooting options; the corrector converges to `shooting.newton_tol`.
+    pub shooting: ShootingOptions,
+    /// Detect and locate codimension-two points.
+    pub detect: bool,
+    /// Width of the final bracket (scaled arclength) of a located codimension-two point.
+    pub locate_tol: f64,
+}
+
+impl Default for CurveOptions {
+    fn default() -> Self {
+        Self {
+            ds: 0.5,
+            ds_min: 1e-6,
+            ds_max: 1.0,
+            max_steps: 400,
+            free_range: (f64::NEG_INFINITY, f64::INFINITY),
+            along_range: (f64::NEG_INFINITY, f64::INFINITY),
+            omega_weight: 0.1,
+            shooting: ShootingOptions::default(),
+            detect: true,
+            locate_tol: 1e-9,
+        }
+    }
+}
+
+impl CurveOptions {
+    /// Checks steps and ranges.
+    pub fn validate(&self) -> Result<()> {
+        let ok = self.ds.is_finite()
+            && self.ds != 0.0
+            && self.ds_min > 0.0
+            && self.ds_max >= self.ds_min
+            && self.ds.abs() >= self.ds_min
+            && self.max_steps > 0
+            && self.omega_weight > 0.0
+            && self.locate_tol > 0.0
+            && self.free_range.0 <= self.free_range.1
+            && self.along_range.0 <= self.along_range.1;
+        if ok {
+            Ok(())
+        } else {
+            Err(Error::InvalidInput(format!(
+                "curve options: need 0 < ds_min <= |ds| <= ds_max, ordered ranges, positive \
+                 weights and tolerances ({self:?})"
+            )))
+        }
+    }
+}
+
+/// A solved point of the augmented system, with what the next step and the test functions need.
+#[derive(Debug, Clone)]
+struct Node {
+    u: Vector4<f64>,
+    lin: MapLinearisation,
+    g: f64,
+    v: [f64; 2],
+    w: [f64; 2],
+    /// ∇g (unscaled variables).
+    grad: Vector4<f64>,
+    /// Unit tangent in scaled variables.
+    tangent: Vector4<f64>,
+    iterations: usize,
+    step: f64,
+}
+
+/// The augmented system of one curve.
+struct System<'a, S: Parametrised, M> {
+    method: &'a M,
+    sys: &'a S,
+    spec: OrbitSpec,
+    kind: SpecialKind,
+    params: [S::Param; 2],
+    sigma: Option<f64>,
+    b: [f64; 2],
+    c: [f64; 2],
+    opts: CurveOptions,
+}
+
+impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
+    fn weights(&self) -> Vector4<f64> {
+        Vector4::new(1.0, self.opts.omega_weight, 1.0, 1.0)
+    }
+
+    /// The map's linearisation and the test function (g, v, w) at u.
+    fn eval(&self, u: &Vector4<f64>) -> Result<(MapLinearisation, f64, [f64; 2], [f64; 2])> {
+        let sys = self
+            .sys
+            .with_param(self.params[0], u[2])?
+            .with_param(self.params[1], u[3])?;
+        let lin = linearise_map(
+            self.method,
+            &sys,
+            &self.spec,
+            [u[0], u[1]],
+            &self.params,
+            &self.opts.shooting,
+        )?;
+        let (g, v, w) = match self.sigma {
+            Some(s) => {
+                let t = bordered_test(&lin.jac, s, self.b, self.c)?;
+                (t.g, t.v, t.w)
+            }
+            None => (lin.floquet().ns_test(), [0.0; 2], [0.0; 2]),
+        };
+        Ok((lin, g, v, w))
+    }
+
+    /// The Newton matrix rows of F and g at u (∇g by forward differences) and the point data.
+    fn rows(&self, u: &Vector4<f64>) -> Result<(Vector4<f64>, Matrix4<f64>, Node)> {
+        let (lin, g, v, w) = self.eval(u)?;
+        let hs = [
+            1e-6,
+            1e-6 * u[1].abs().max(1.0),
+            1e-6 * u[2].abs().max(1.0),
+            1e-6 * u[3].abs().max(1.0),
+        ];
+        let mut grad = Vector4::zeros();
+        for j in 0..4 {
+            let mut up = *u;
+            up[j] += hs[j];
+            grad[j] = (self.eval(&up)?.1 - g) / hs[j];
+        }
+        let mut jm = Matrix4::zeros();
+        for i in 0..2 {
+            jm[(i, 0)] = lin.jac[(i, 0)] - if i == 0 { 1.0 } else { 0.0 };
+            jm[(i, 1)] = lin.jac[(i, 1)] - if i == 1 { 1.0 } else { 0.0 };
+            jm[(i, 2)] = lin.columns[0][i];
+            jm[(i, 3)] = lin.columns[1][i];
+        }
+        jm.set_row(2, &grad.transpose());
+        let r = Vector4::new(lin.residual[0], lin.residual[1], g, 0.0);
+        let node = Node {
+            u: *u,
+            lin,
+            g,
+            v,
+            w,
+            grad,
+            tangent: Vector4::zeros(),
+            iterations: 0,
+            step: 0.0,
+        };
+        Ok((r, jm, node))
+    }
+
+    /// Newton on {F = 0, g = 0, n·(W u − v_ref) = c} from `u0`, then the tangent oriented along
+    /// `orient` (scaled).
+    fn correct(
+        &self,
+        u0: Vector4<f64>,
+        n: Vector4<f64>,
+        v_ref: Vector4<f64>,
+        c: f64,
+        orient: Vector4<f64>,
+    ) -> Result<Node> {
+        let wts = self.weights();
+        let border = n.component_mul(&wts);
+        let nopts = NewtonOptions::new(self.opts.shooting.newton_tol, self.opts.shooting.max_iter);
+        let mut last_step = 0.0;
+        let sol = newton(
+            u0,
+            &nopts,
+            |u| {
+                let (mut r, mut jm, node) = self.rows(u)?;
+                r[3] = n.dot(&(u.component_mul(&wts) - v_ref)) - c;
+                jm.set_row(3, &border.transpose());
+                Ok(Linearisation {
+                    residual: r,
+                    jacobian: jm,
+                    data: node,
+                })
+            },
+            |_, du| {
+                last_step = du.norm();
+                1.0
+            },
+            &format!("augmented {} curve corrector", self.kind.label()),
+        )?;
+        let mut node = sol.at.data;
+        node.iterations = sol.iterations;
+        node.step = last_step;
+        node.tangent = self.tangent(&node, &orient)?;
+        Ok(node)
+    }
+
+    /// Unit tangent (scaled variables) at `node`, oriented along `prev`.
+    fn tangent(&self, node: &Node, prev: &Vector4<f64>) -> Result<Vector4<f64>> {
+        let wts = self.weights();
+        let mut a = Matrix4::zeros();
+        for i in 0..2 {
+            for j in 0..4 {
+                let d = if i == j { 1.0 } else { 0.0 };
+                let col = if j < 2 {
+                    node.lin.jac[(i, j)] - d
+                } else {
+                    node.lin.columns[j - 2][i]
+                };
+                a[(i, j)] = col / wts[j];
+            }
+        }
+        for j in 0..4 {
+            a[(2, j)] = node.grad[j] / wts[j];
+            a[(3, j)] = prev[j];
+        }
+        let t = a
+            .lu()
+            .solve(&Vector4::new(0.0, 0.0, 0.0, 1.0))
+            .filter(|t| t.iter().all(|z| z.is_finite()) && t.norm() > 0.0)
+            .ok_or_else(|| Error::Continuation("singular bordered matrix: no tangent".into()))?
+            .normalize();
+        Ok(if t.dot(prev) < 0.0 { -t } else { t })
+    }
+
+    /// Resets the bordering vectors to the null vectors at `node` (a no-op for NS curves).
+    fn rebord(&mut self, node: &Node) {
+        if self.sigma.is_some() {
+            self.b = unit(node.w);
+            self.c = unit(node.v);
+        }
+    }
+
+    fn point(&self, n: &Node) -> CurvePoint {
+        CurvePoint {
+            along: n.u[3],
+            free: n.u[2],
+            x: [n.u[0], n.u[1]],
+            floquet: n.lin.floquet(),
+            events: n.lin.events,
+            test_value: n.g,
+            precision: n.step + self.opts.shooting.newton_tol,
+            newton_iterations: n.iterations,
+        }
+    }
+
+    fn tests(&self, n: &Node) -> Vec<(Codim2Kind, f64)> {
+        let fq = n.lin.floquet();
+        test_functions(
+            self.kind,
+            &CurveLocal {
+                floquet: &fq,
+                v: n.v,
+                grad_x: [n.grad[0], n.grad[1]],
+                tangent_lambda: [n.tangent[2], n.tangent[3]],
+            },
+        )
+    }
+}
+
+/// Continues the curve of `kind` points of the problem `spec` of `sys` in the two parameters
+/// `free` (λ₁) and `along` (λ₂), from near (x0, λ₁ = `free0`) at λ₂ = its value in `sys`, with the
+/// flow computed by `method`. The first point is corrected with λ₂ fixed.
+#[allow(clippy::too_many_arguments)]
+pub fn continue_curve<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    kind: SpecialKind,
+    free: S::Param,
+    along: S::Param,
+    x0: [f64; 2],
+    free0: f64,
+    opts: &CurveOptions,
+) -> Result<Curve<S>> {
+    opts.validate()?;
+    if free == along {
+        return Err(Error::InvalidInput(
+            "the two parameters of a curve must differ".into(),
+        ));
+    }
+    if !(x0.iter().all(|z| z.is_finite()) && free0.is_finite()) {
+        return Err(Error::InvalidInput("non-finite start of a curve".into()));
+    }
+    let sigma = match kind {
+        SpecialKind::NeimarkSacker => None,
+        k => Some(critical_multiplier(k)?),
+    };
+    let along0 = sys.param(along);
+    let mut s = System {
+        method,
+        sys,
+        spec: *spec,
+        kind,
+        params: [free, along],
+        sigma,
+        b: [1.0, 0.0],
+        c: [1.0, 0.0],
+        opts: *opts,
+    };
+    // bordering vectors from the multiplier nearest σ at the start
+    if let Some(sg) = sigma {
+        let (lin, ..) = s.eval(&Vector4::new(x0[0], x0[1], free0, along0))?;
+        let m = lin.jac - sg * nalgebra::Matrix2::identity();
+        let svd = m.svd(true, true);
+        let k = if svd.singular_values[0] < svd.singular_values[1] {
+            0
+        } else {
+            1
+        };
+        let (uu, vt) = (svd.u.unwrap(), svd.v_t.unwrap());
+        s.b = [uu[(0, k)], uu[(1, k)]];
+        s.c = [vt[(k, 0)], vt[(k, 1)]];
+    }
+    let e4 = Vector4::new(0.0, 0.0, 0.0, 1.0);
+    let u0 = Vector4::new(x0[0], x0[1], free0, along0);
+    let orient = e4 * opts.ds.signum();
+    let first = s.correct(u0, e4, e4 * along0, 0.0, orient)?;
+    s.rebord(&first);
+    walk(&mut s, first)
+}
+
+/// Where a parameter left its range: (which parameter, the bound).
+fn out_of_range<S: Parametrised, M>(s: &System<S, M>, u: &Vector4<f64>) -> Option<(usize, f64)> {
+    let ranges = [s.opts.free_range, s.opts.along_range];
+    (0..2).find_map(|k| {
+        let (lo, hi) = ranges[k];
+        let z = u[2 + k];
+        if z > hi {
+            Some((k, hi))
+        } else if z < lo {
+            Some((k, lo))
+        } else {
+            None
+        }
+    })
+}
+
+/// The continuation loop from the first node.
+fn walk<S: Parametrised, M: FlowMethod<S>>(s: &mut System<S, M>, first: Node) -> Result<Curve<S>> {
+    let mut nodes_pts = vec![s.point(&first)];
+    let mut codim2 = Vec::new();
+    let mut prev = first;
+    let mut ds = s.opts.ds.abs();
+    let mut stopped = None;
+    for _ in 0..s.opts.max_steps {
+        let Some(mut next) = step(s, &prev, &mut ds) else {
+            stopped = Some(CurveStop::StepTooSmall {
+                free: prev.u[2],
+                along: prev.u[3],
+                ds_min: s.opts.ds_min,
+            });
+            break;
+        };
+        let mut bound = None;
+        if let Some((k, b)) = out_of_range(s, &next.u) {
+            // land on the bound with that parameter fixed
+            let frac = (b - prev.u[2 + k]) / (next.u[2 + k] - prev.u[2 + k]);
+            let mut e = Vector4::zeros();
+            e[2 + k] = 1.0;
+            let up = prev.u + frac * (next.u - prev.u);
+            match s.correct(up, e, e * b, 0.0, prev.tangent) {
+                Ok(n) => next = n,
+                Err(err) => {
+                    stopped = Some(CurveStop::NotConverged {
+                        at: b,
+                        error: err.to_string(),
+                    });
+                    break;
+                }
+            }
+            bound = Some((k, b));
+        }
+        if s.opts.detect {
+            let after = nodes_pts.len() - 1;
+            codim2.extend(locate_between(s, &prev, &next, after));
+        }
+        nodes_pts.push(s.point(&next));
+        s.rebord(&next);
+        ds = match next.iterations {
+            0..=3 => (ds * 1.5).min(s.opts.ds_max),
+            4..=6 => ds,
+            _ => (ds * 0.6).max(s.opts.ds_min),
+        };
+        prev = next;
+        if let Some((k, b)) = bound {
+            stopped = Some(CurveStop::ParameterBound {
+                param: s.params[k].name().to_string(),
+                value: b,
+            });
+            break;
+        }
+    }
+    if stopped.is_none() {
+        stopped = Some(CurveStop::MaxSteps {
+            steps: s.opts.max_steps,
+        });
+    }
+    Ok(Curve {
+        kind: s.kind,
+        along: s.params[1],
+        free: s.params[0],
+        spec: s.spec,
+        points: nodes_pts,
+        stopped,
+        codim2,
+    })
+}
+
+/// Predicts and corrects one node from `prev`, halving the step on failure, on a correction longer
+/// than the step or on a tangent turning by more than 60°; `None` below `ds_min`.
+fn step<S: Parametrised, M: FlowMethod<S>>(
+    s: &System<S, M>,
+    prev: &Node,
+    ds: &mut f64,
+) -> Option<Node> {
+    let wts = s.weights();
+    let v0 = prev.u.component_mul(&wts);
+    loop {
+        let v_pred = v0 + *ds * prev.tangent;
+        let u_pred = v_pred.component_div(&wts);
+        if let Ok(n) = s.correct(u_pred, prev.tangent, v_pred, 0.0, prev.tangent) {
+            let jump = (n.u.component_mul(&wts) - v_pred).norm();
+            if n.tangent.dot(&prev.tangent) > 0.5 && jump <= *ds {
+                return Some(n);
+            }
+        }
+        *ds *= 0.5;
+        if *ds < s.opts.ds_min {
+            return None;
+        }
+    }
+}
+
+/// Locates every codimension-two test function that changes sign between `a` and `b`.
+fn locate_between<S: Parametrised, M: FlowMethod<S>>(
+    s: &System<S, M>,
+    a: &Node,
+    b: &Node,
+    after: usize,
+) -> Vec<Codim2Point> {
+    let ta = s.tests(a);
+    let tb = s.tests(b);
+    let mut out = Vec::new();
+    for ((kind, fa), (_, fb)) in ta.into_iter().zip(tb) {
+        if fa * fb >= 0.0 || fa.is_nan() || fb.is_nan() {
+            continue;
+        }
+        if let Ok(p) = locate_one(s, a, b, kind, fa, fb, after) {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// Illinois secant in the scaled arclength σ from `a` along its tangent for the zero of the test
+/// function `kind`.
+fn locate_one<S: Parametrised, M: FlowMethod<S>>(
+    s: &System<S, M>,
+    a: &Node,
+    b: &Node,
+    kind: Codim2Kind,
+    fa: f64,
+    fb: f64,
+    after: usize,
+) -> Result<Codim2Point> {
+    let wts = s.weights();
+    let va = a.u.component_mul(&wts);
+    let sb = a.tangent.dot(&(b.u.component_mul(&wts) - va));
+    let sgn = fa.signum();
+    let mut r = Illinois::new(0.0, sgn * fa, sb, sgn * fb, 0.05);
+    let value = |n: &Node| {
+        s.tests(n)
+            .into_iter()
+            .find(|(k, _)| *k == kind)
+            .map(|(_, v)| v)
+            .unwrap_or(f64::NAN)
+    };
+    let mut best: Option<(Node, f64)> = None;
+    for _ in 0..40 {
+        if (r.hi() - r.lo()).abs() < s.opts.locate_tol {
+            break;
+        }
+        let Some(sig) = r.next_point() else { break };
+        let frac = if sb != 0.0 { sig / sb } else { 0.0 };
+        let up = a.u + frac * (b.u - a.u);
+        let n = s.correct(up, a.tangent, va, sig, a.tangent)?;
+        let f = value(&n);
+        if !f.is_finite() {
+            return Err(Error::Continuation(
+                "non-finite codim-2 test function".into(),
+            ));
+        }
+        r.update(sig, sgn * f);
+        best = Some((n, f));
+    }
+    let (n, f) = best.ok_or_else(|| Error::Continuation("empty codim-2 bracket".into()))?;
+    Ok(Codim2Point {
+        kind,
+        free: n.u[2],
+        along: n.u[3],
+        x: [n.u[0], n.u[1]],
+        floquet: n.lin.floquet(),
+        test_value: f,
+        tangent_lambda: [n.tangent[2], n.tangent[3]],
+        precision: 0.5 * (r.hi() - r.lo()).abs() + s.opts.shooting.newton_tol,
+        after_point: after,
+    })
+}
+
+/// The lock-loss boundary f_c(Θ) for parallel shafts by pseudo-arclength: the fold curves of the
+/// forward lock (p = +1, from Θ = 0) and of the reversed lock (p = −1, from Θ = 54.74°), each started
+/// at the analytic f_c, with Θ kept in [0°, 54.74°] and f in `opts.free_range`.
+pub fn lock_loss_curves(
+    base: &crate::model::Gear,
+    opts: &CurveOptions,
+) -> Result<Vec<(String, Curve<crate::model::Gear>)>> {
+    use crate::model::GearParam;
+    use std::f64::consts::{FRAC_PI_2, TAU};
+    let fc = base
+        .lock_loss_frequency()
+        .ok_or_else(|| Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into()))?;
+    let th_rev = crate::model::gear::cogging_free_parallel_angles()
+        .2
+        .to_degrees();
+    let mut out = Vec::new();
+    for (p, from) in [(1, 0.0), (-1, th_rev)] {
+        let g = base
+            .with_param(GearParam::ThetaDeg, from)?
+            .with_param(GearParam::F, fc)?;
+        let o = CurveOptions {
+            ds: opts.ds.abs() * if p > 0 { 1.0 } else { -1.0 },
+            along_range: (0.0, th_rev),
+            ..*opts
+        };
+        let c = continue_curve(
+            &crate::integrator::EventDriven,
+            &g,
+            &OrbitSpec::symmetric(p),
+            SpecialKind::Fold,
+            GearParam::F,
+            GearParam::ThetaDeg,
+            [FRAC_PI_2, p as f64 * TAU * fc],
+            fc,
+            &o,
+        )?;
+        out.push((format!("fold of the lock, winding {p:+}"), c));
+    }
+    Ok(out)
+}
