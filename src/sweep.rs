@@ -301,6 +301,61 @@ impl SweepSpec {
             .with_alpha0(self.alpha0_deg.to_radians())
     }
 
+    /// [`sweep_row`] of row `row` (value `rv`) with `method` and `opts`.
+    fn row_with<M: FlowMethod<Gear>>(
+        &self,
+        method: &M,
+        rv: f64,
+        opts: &ClassifyOptions,
+        row: usize,
+        observer: &dyn Observer,
+    ) -> Result<Vec<(Gear, PointResult)>> {
+        let x_start = [self.beta0_deg.to_radians(), 0.0];
+        let at = |cv: f64| self.gear_at(rv, cv);
+        sweep_row(
+            method,
+            at,
+            &self.cols.values,
+            x_start,
+            self.protocol,
+            opts,
+            row,
+            observer,
+        )
+    }
+
+    /// True if rows `i` and `j` simulate the same system at every column. A row depends only on
+    /// its systems and the rest of the spec, so such rows have equal results: the gear depends on
+    /// Θ only through Δ = 1 − 3 sin²Θ (even in Θ, bit for bit), so the rows ±Θ of Fig. 8 are twins.
+    pub fn same_systems(&self, i: usize, j: usize) -> bool {
+        let (Some(&a), Some(&b)) = (self.rows.values.get(i), self.rows.values.get(j)) else {
+            return false;
+        };
+        self.cols
+            .values
+            .iter()
+            .all(|&c| matches!((self.gear_at(a, c), self.gear_at(b, c)), (Ok(x), Ok(y)) if x == y))
+    }
+
+    /// Row `row` as a copy of `twin`'s result (rows with [`Self::same_systems`]).
+    fn copy_row(&self, twin: &RowResult, row: usize) -> RowResult {
+        let rv = self.rows.values[row];
+        let points = twin
+            .points
+            .iter()
+            .map(|p| PointRecord {
+                row,
+                row_value: rv,
+                ..p.clone()
+            })
+            .collect();
+        RowResult {
+            row,
+            row_value: rv,
+            points,
+        }
+    }
+
     /// Computes one row (sequential along the columns).
     pub fn compute_row(&self, row: usize, observer: &dyn Observer) -> Result<RowResult> {
         let rv = *self
@@ -308,45 +363,22 @@ impl SweepSpec {
             .values
             .get(row)
             .ok_or_else(|| Error::InvalidInput(format!("row {row} out of range")))?;
-        let x_start = [self.beta0_deg.to_radians(), 0.0];
-        let fixed_opts = ClassifyOptions {
-            rigorous: false,
-            ..self.classify.clone()
-        };
-        let at = |cv: f64| self.gear_at(rv, cv);
-        let cols = &self.cols.values;
         let results = match self.method {
-            Method::EventDriven => sweep_row(
-                &EventDriven,
-                at,
-                cols,
-                x_start,
-                self.protocol,
-                &self.classify,
-                row,
-                observer,
-            )?,
-            Method::EventDriven853 => sweep_row(
-                &EventDriven853,
-                at,
-                cols,
-                x_start,
-                self.protocol,
-                &self.classify,
-                row,
-                observer,
-            )?,
-            Method::FixedStep => sweep_row(
-                &FixedStep::default(),
-                at,
-                cols,
-                x_start,
-                self.protocol,
-                &fixed_opts,
-                row,
-                observer,
-            )?,
+            Method::EventDriven => {
+                self.row_with(&EventDriven, rv, &self.classify, row, observer)?
+            }
+            Method::EventDriven853 => {
+                self.row_with(&EventDriven853, rv, &self.classify, row, observer)?
+            }
+            Method::FixedStep => {
+                let fixed_opts = ClassifyOptions {
+                    rigorous: false,
+                    ..self.classify.clone()
+                };
+                self.row_with(&FixedStep::default(), rv, &fixed_opts, row, observer)?
+            }
         };
+        let cols = &self.cols.values;
         let points = results
             .iter()
             .zip(cols)
@@ -363,7 +395,8 @@ impl SweepSpec {
 
 /// One row of a sweep of any system: classifies the attractor at each value of `cols` (in order)
 /// with [`classify_point`], the system built by `system_at`; with [`Protocol::SemiStatic`] the end
-/// state of one point starts the next, with [`Protocol::Fresh`] every point starts at `x_start`.
+/// state of one point starts the next (settling [`ClassifyOptions::settle_after_nonperiodic`] turns
+/// after a non-periodic point, if set), with [`Protocol::Fresh`] every point starts at `x_start`.
 /// Reports [`Event::SweepPoint`] { row, col } after each point.
 #[allow(clippy::too_many_arguments)]
 pub fn sweep_row<S, M, F>(
@@ -382,13 +415,17 @@ where
     F: Fn(f64) -> Result<S>,
 {
     let mut x = x_start;
-    let mut out = Vec::with_capacity(cols.len());
+    let mut out: Vec<(S, PointResult)> = Vec::with_capacity(cols.len());
     for (col, &cv) in cols.iter().enumerate() {
         let sys = system_at(cv)?;
-        if protocol == Protocol::Fresh {
-            x = x_start;
-        }
-        let res = classify_point(&sys, x, method, opts)?;
+        let quick = match protocol {
+            Protocol::Fresh => {
+                x = x_start;
+                None
+            }
+            Protocol::SemiStatic => opts.after(out.last().map(|(_, r)| r)),
+        };
+        let res = classify_point(&sys, x, method, quick.as_ref().unwrap_or(opts))?;
         x = res.end_state;
         out.push((sys, res));
         observer.observe(&Event::SweepPoint { row, col });
@@ -759,8 +796,12 @@ impl<'a> SweepRunner<'a> {
             total: Some(owned * ncols),
             done: done * ncols,
         });
+        // rows owned here that are twins of an earlier owned row are copied, not computed
+        let twin: Vec<Option<usize>> = (0..rows.len())
+            .map(|i| (0..i).find(|&j| self.owns(i) && self.owns(j) && self.spec.same_systems(i, j)))
+            .collect();
         let pending: Vec<usize> = (0..rows.len())
-            .filter(|&i| rows[i].is_none() && self.owns(i))
+            .filter(|&i| rows[i].is_none() && self.owns(i) && twin[i].is_none())
             .collect();
         let started = AtomicUsize::new(0);
         let limit = self.max_new_rows.unwrap_or(usize::MAX);
@@ -769,18 +810,7 @@ impl<'a> SweepRunner<'a> {
                 return Ok(None);
             }
             let r = self.spec.compute_row(i, self.observer)?;
-            let path = match &self.checkpoint {
-                Some(dir) => {
-                    let p = Self::row_path(dir, i);
-                    crate::io::write_json_atomic(&p, &r)?;
-                    Some(p)
-                }
-                None => None,
-            };
-            self.observer.observe(&Event::RowDone {
-                row: i,
-                path: path.as_deref(),
-            });
+            self.finish_row(&r)?;
             Ok(Some(r))
         };
         #[cfg(feature = "parallel")]
@@ -796,7 +826,34 @@ impl<'a> SweepRunner<'a> {
                 rows[i] = Some(row);
             }
         }
+        for (i, t) in twin.iter().enumerate() {
+            if let (None, Some(Some(src))) = (&rows[i], t.map(|j| rows[j].as_ref())) {
+                let r = self.spec.copy_row(src, i);
+                for col in 0..ncols {
+                    self.observer.observe(&Event::SweepPoint { row: i, col });
+                }
+                self.finish_row(&r)?;
+                rows[i] = Some(r);
+            }
+        }
         Ok(rows)
+    }
+
+    /// Checkpoints a finished row (if there is a checkpoint) and reports it.
+    fn finish_row(&self, r: &RowResult) -> Result<()> {
+        let path = match &self.checkpoint {
+            Some(dir) => {
+                let p = Self::row_path(dir, r.row);
+                crate::io::write_json_atomic(&p, r)?;
+                Some(p)
+            }
+            None => None,
+        };
+        self.observer.observe(&Event::RowDone {
+            row: r.row,
+            path: path.as_deref(),
+        });
+        Ok(())
     }
 }
 

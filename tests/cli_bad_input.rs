@@ -243,6 +243,7 @@ const CASES: &[(&str, &str)] = &[
     ("sweep --quiet --cols inertia:0:1e-4:5e-5", "inertia"),
     ("sweep --quiet --tol 1", "tol"),
     ("sweep --quiet --settle-tol 0", "settle_tol"),
+    ("sweep --quiet --settle-nonperiodic 0", "settle_nonperiodic"),
     ("sweep --quiet --record 0", "record"),
     ("sweep --quiet --analysis 1", "analysis"),
     ("sweep --quiet --settle 9999999", "settle"),

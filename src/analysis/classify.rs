@@ -53,6 +53,12 @@ pub struct ClassifyOptions {
     /// integrate every settling turn, as the paper did.
     #[serde(default)]
     pub settle_tol: Option<f64>,
+    /// Settling turns of a point that follows a non-periodic point (quasi-periodic, chaotic or
+    /// unresolved) on a semi-static ramp, whose start already lies on the attractor of the
+    /// neighbouring parameter value; a cycle found while settling ([`Self::settle_tol`]) still
+    /// ends it earlier. `None` (default): `settle_turns` for every point. Used by sweeps.
+    #[serde(default)]
+    pub settle_after_nonperiodic: Option<usize>,
 }
 
 impl Default for ClassifyOptions {
@@ -70,6 +76,7 @@ impl Default for ClassifyOptions {
             thd: ThdDefinition::Standard,
             keep_samples: false,
             settle_tol: None,
+            settle_after_nonperiodic: None,
         }
     }
 }
@@ -99,7 +106,27 @@ impl ClassifyOptions {
         if let Some(e) = self.settle_tol {
             crate::error::positive("settle_tol", e)?;
         }
+        if self.settle_after_nonperiodic == Some(0) {
+            return Err(Error::InvalidInput(
+                "settle_after_nonperiodic must be >= 1 turn".into(),
+            ));
+        }
         Ok(())
+    }
+
+    /// The options of a point that follows a point with result `prev` on a semi-static ramp: the
+    /// settling is cut to [`Self::settle_after_nonperiodic`] turns if `prev` was classified as not
+    /// periodic.
+    pub fn after(&self, prev: Option<&PointResult>) -> Option<Self> {
+        let n = self.settle_after_nonperiodic?;
+        let rig = prev?.rigorous.as_ref()?;
+        if matches!(rig.dynamics, Dynamics::Periodic { .. }) || n >= self.settle_turns {
+            return None;
+        }
+        Some(Self {
+            settle_turns: n,
+            ..self.clone()
+        })
     }
 }
 
@@ -260,8 +287,8 @@ where
     let period = sys.period();
     let fopts = FlowOptions::with_tol(opts.tol);
     let t_settle = opts.settle_turns as f64 * period;
-    let settled_x = match opts.settle_tol {
-        None => method.flow(sys, 0.0, x0, t_settle, &fopts)?.x,
+    let (settled_x, cycle) = match opts.settle_tol {
+        None => (method.flow(sys, 0.0, x0, t_settle, &fopts)?.x, None),
         Some(eps) => settle_early(sys, x0, method, opts.settle_turns, &fopts, eps)?,
     };
     // the window
@@ -307,7 +334,10 @@ where
     let mut end = win.x;
     let mut section = None;
     let rigorous = if opts.rigorous {
-        let (rc, x_end, z) = rigorous_classify_with_section(sys, end, opts)?;
+        let (rc, x_end, z) = match cycle {
+            Some(m) => rigorous_classify_seeded(sys, end, m, opts)?,
+            None => rigorous_classify_with_section(sys, end, opts)?,
+        };
         end = x_end;
         if opts.keep_samples {
             section = Some(z.iter().map(|v| [sys.reduce_angle(v[0]), v[1]]).collect());
@@ -341,7 +371,8 @@ where
 }
 
 /// Settles turn by turn; stops early when the states repeat with a period m ≤ 8 turns (to `eps`,
-/// over two consecutive cycles) and returns the state the full settling reaches on that cycle.
+/// over two consecutive cycles) and returns the state the full settling reaches on that cycle and
+/// m (`None`: no repetition, every turn integrated).
 fn settle_early<S: DrivenOscillator + ?Sized, M: FlowMethod<S> + ?Sized>(
     sys: &S,
     x0: [f64; 2],
@@ -349,7 +380,7 @@ fn settle_early<S: DrivenOscillator + ?Sized, M: FlowMethod<S> + ?Sized>(
     turns: usize,
     fopts: &FlowOptions,
     eps: f64,
-) -> Result<[f64; 2]> {
+) -> Result<([f64; 2], Option<usize>)> {
     const M_MAX: usize = 8;
     let period = sys.period();
     let mut hist: Vec<[f64; 2]> = Vec::with_capacity(turns + 1);
@@ -387,14 +418,36 @@ fn settle_early<S: DrivenOscillator + ?Sized, M: FlowMethod<S> + ?Sized>(
                     && cyl_dist(hist[c - m], hist[c - 2 * m], period) < eps
                 {
                     let i = c - m + (turns - c) % m;
-                    return Ok(hist[i]);
+                    return Ok((hist[i], Some(m)));
                 }
             }
         }
         x = fl.x;
         c0 = c1;
     }
-    Ok(x)
+    Ok((x, None))
+}
+
+/// The rigorous classification seeded by a cycle of `m` turns found while settling: the analysis
+/// runs over 2m turns (at least 2) instead of `analysis_turns` — enough to test every period that
+/// divides 2m half periods on the trajectory and to confirm it by Newton with its multipliers. If
+/// no period is confirmed there, the full analysis of [`rigorous_classify_with_section`] runs from
+/// the same state, so the verdict is never weaker than without the seed.
+fn rigorous_classify_seeded<S: DrivenOscillator + ?Sized>(
+    sys: &S,
+    x: [f64; 2],
+    m: usize,
+    opts: &ClassifyOptions,
+) -> Result<(RigorousClass, [f64; 2], Vec<[f64; 2]>)> {
+    let short = ClassifyOptions {
+        analysis_turns: (2 * m).clamp(2, opts.analysis_turns.max(2)),
+        ..opts.clone()
+    };
+    let seeded = rigorous_classify_with_section(sys, x, &short)?;
+    if matches!(seeded.0.dynamics, Dynamics::Periodic { .. }) {
+        return Ok(seeded);
+    }
+    rigorous_classify_with_section(sys, x, opts)
 }
 
 /// Distance on the cylinder: max(|Δβ mod 2π|, |Δω|·T/2π).
@@ -512,6 +565,12 @@ fn reduce(sym: Option<HalfPeriodSymmetry>, x: [f64; 2], j: usize) -> [f64; 2] {
     }
 }
 
+/// A confirmed orbit lies within this distance ([`cyl_dist`]) of the candidate point.
+const NEWTON_ACCEPT: f64 = 1e-2;
+/// Newton gives up once an iterate is this far from the candidate point on the lift (50× the
+/// acceptance distance).
+const NEWTON_TRUST: f64 = 0.5;
+
 /// Newton on Gᵏ(x) − x − (2πq, 0) = 0 (or P_T^{k/2} without the symmetry) from `x`; returns the
 /// periodic orbit if Newton converges close to `x` and the orbit is stable. Candidates are tried
 /// in increasing k, so the first confirmed one is the minimal period.
@@ -553,8 +612,18 @@ fn confirm_period<S: DrivenOscillator + ?Sized>(
             return Ok(None);
         }
         xi = [xi[0] + dx[0], xi[1] + dx[1]];
+        // a trust region: an iterate that leaves the neighbourhood of the candidate cannot end
+        // within the acceptance distance below, and far from it (β of order 1e9 after a step
+        // through a nearly singular G^k − I at a quasi-periodic point) every map costs thousands
+        // of steps
+        let lift_dist = (xi[0] - x[0])
+            .abs()
+            .max((xi[1] - x[1]).abs() * period / TAU);
+        if lift_dist > NEWTON_TRUST {
+            return Ok(None);
+        }
     }
-    if res >= 1e-7 || cyl_dist(xi, x, period) > 1e-2 {
+    if res >= 1e-7 || cyl_dist(xi, x, period) > NEWTON_ACCEPT {
         return Ok(None);
     }
     let mu = multipliers(&jac);

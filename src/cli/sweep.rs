@@ -73,6 +73,11 @@ pub struct Args {
     /// (e.g. 1e-8; in (0, 1)); default: integrate every settling turn as the paper did.
     #[arg(long)]
     settle_tol: Option<f64>,
+    /// Settling turns of a semi-static point that follows a non-periodic (quasi-periodic or
+    /// chaotic) point, whose start already lies on the neighbouring attractor (e.g. 100; 1 to the
+    /// settling turns); default: the full settling for every point.
+    #[arg(long, value_name = "TURNS")]
+    settle_nonperiodic: Option<usize>,
     /// Compute only shard i of N (0 <= i < N; rows r with r mod N = i), e.g. `--shard
     /// $SLURM_ARRAY_TASK_ID/8`; combine the shards' --out directories with `gearbif sweep merge`.
     #[arg(long, value_name = "i/N")]
@@ -188,6 +193,7 @@ pub fn spec(a: &Args) -> Result<SweepSpec> {
     }
     s.classify.record_turns = a.record;
     s.classify.settle_tol = a.settle_tol;
+    s.classify.settle_after_nonperiodic = a.settle_nonperiodic;
     s.classify.tol = a.tol;
     if a.analysis == 0 || a.rk4 {
         s.classify.rigorous = false;
@@ -309,6 +315,9 @@ fn check_args(a: &Args) -> Result<()> {
     }
     if let Some(n) = a.settle {
         count("settle", n, 0, limits::TURNS_MAX)?;
+    }
+    if let Some(n) = a.settle_nonperiodic {
+        count("settle_nonperiodic", n, 1, limits::TURNS_MAX)?;
     }
     count("record", a.record, 1, 100_000)?;
     if a.analysis != 0 {
