@@ -7,7 +7,7 @@ use gearbif::campaign::generator::SetSize;
 use gearbif::campaign::metrics::{max_consistent_failures, Summary};
 use gearbif::campaign::rk4::Rk4Filippov;
 use gearbif::campaign::runner::{run_campaign, CampaignDoc, CampaignSpec};
-use gearbif::campaign::truth::{Drive, Stribeck, TruthModel};
+use gearbif::campaign::truth::{Drive, Stribeck, StribeckShape, TruthModel};
 use gearbif::integrator::{EventDriven, FlowMethod, FlowOptions};
 use gearbif::model::Gear;
 use std::f64::consts::TAU;
@@ -82,6 +82,7 @@ fn stick_rule_uses_the_static_friction_bound() {
     m.stribeck = Some(Stribeck {
         excess: 10.0,
         width: 0.5,
+        shape: StribeckShape::Gaussian,
     });
     let (stuck, _) = Rk4Filippov::default()
         .sample(&m, drive, 0.0, [0.1, 0.0], &times)
