@@ -1,15 +1,23 @@
 #!/usr/bin/env bash
-# Builds the Python package `gearbif` (PyO3 extension, python/) into a virtual environment and runs
-# its tests (python/tests, including the tutorial script docs/tutorial/theta25_diagram.py).
+# Builds the Python package `gearbif` (PyO3 extension, python/) and runs its tests (python/tests,
+# including the tutorial script docs/tutorial/theta25_diagram.py) in a virtual environment.
 #
 #   python/run_tests.sh [pytest arguments]
 #
-# The extension is built by `maturin develop` (dev profile) in the cargo target directory
-# ($CARGO_TARGET_DIR, default target/); a rebuild is incremental. It cannot reuse the artifacts of
-# `cargo test`: PyO3's proc macros unify other features of syn (so serde_derive, serde and every crate
-# deriving serde get new hashes), so its first build compiles the core and its dependencies once more
-# (without the CLI, plotting and diffsol). The venv lives in the target directory ($GEARBIF_VENV
-# overrides it); Python packages come from PyPI: maturin, numpy, pytest, matplotlib.
+# The extension is built by cargo in the cargo target directory ($CARGO_TARGET_DIR, default
+# target/), in one of two ways ($GEARBIF_PY_BUILD):
+#
+# - `alone` (default): the bindings' own package selection (what `maturin develop` builds; dev
+#   profile). PyO3's proc macros turn on other features of syn than `cargo test` does, hence new
+#   builds of serde_derive, serde and every crate deriving serde: the core and its dependencies are
+#   compiled a second time next to the artifacts of `cargo test`.
+# - `workspace`: the package selection, features and profile of
+#   `cargo test --workspace --all-features`, so after that command every compiled dependency is
+#   shared and only PyO3, numpy (the crate), ndarray and the bindings are compiled here.
+#
+# The built library is loaded from $target/python-ext; the venv lives in the target directory
+# ($GEARBIF_VENV overrides it) and gets numpy, pytest and matplotlib from PyPI. `pip install .`
+# (maturin) is the way to install the package; this script is the test loop.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 cd "$root"
@@ -19,11 +27,20 @@ python="${PYTHON:-python3}"
 if [ ! -x "$venv/bin/python" ]; then
     "$python" -m venv "$venv"
 fi
-"$venv/bin/python" -m pip install --quiet --disable-pip-version-check \
-    "maturin>=1.9,<2" numpy pytest matplotlib
+"$venv/bin/python" -m pip install --quiet --disable-pip-version-check numpy pytest matplotlib
 start=$(date +%s)
-VIRTUAL_ENV="$venv" PATH="$venv/bin:$PATH" CARGO_TARGET_DIR="$target" \
-    "$venv/bin/maturin" develop --manifest-path python/Cargo.toml
+export PYO3_PYTHON="$venv/bin/python" PYO3_BUILD_EXTENSION_MODULE=1 CARGO_TARGET_DIR="$target"
+case "${GEARBIF_PY_BUILD:-alone}" in
+    # --examples activates the dev-dependencies as `cargo test` does (their features are unified too)
+    workspace) cargo build --workspace --all-features --profile test --lib --examples ;;
+    alone) cargo build --manifest-path python/Cargo.toml --lib ;;
+    *) echo "GEARBIF_PY_BUILD must be alone or workspace" >&2; exit 2 ;;
+esac
+ext="$target/python-ext"
+mkdir -p "$ext"
+suffix="$("$venv/bin/python" -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')"
+cp "$target/debug/libgearbif_py.so" "$ext/gearbif.tmp"
+mv "$ext/gearbif.tmp" "$ext/gearbif$suffix"
 echo "== extension built in $(($(date +%s) - start)) s"
 # the tests cross-check against the CLI binary that `cargo test` built in the same target directory
-CARGO_TARGET_DIR="$target" "$venv/bin/python" -m pytest -q python/tests "$@"
+PYTHONPATH="$ext${PYTHONPATH:+:$PYTHONPATH}" "$venv/bin/python" -m pytest -q python/tests "$@"

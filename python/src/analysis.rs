@@ -1,51 +1,94 @@
 //! Classification of one point, two-parameter sweeps, synthetic recordings, fitting and diagnosis.
 
-use crate::convert::{state, to_python};
+use crate::convert::{count, floats, state, to_python};
+use crate::dynamics::check_tol;
 use crate::errors::{invalid, IntoPyResult};
-use crate::systems::{gear as as_gear, parse_convention, PyGearParams};
-use gearbif::analysis::{classify_point, ClassifyOptions};
+use crate::systems::{dispatch, parse_convention, PyGearParams, PySystem, System};
+use gearbif::analysis::{classify_point, ClassifyOptions, PointResult};
 use gearbif::identification::diagnose::{diagnose as run_diagnosis, DiagnoseOptions};
 use gearbif::identification::synth::{synthesize, SynthOptions};
 use gearbif::integrator::EventDriven;
 use gearbif::io::recordings::{read_set, write_set};
 use gearbif::io::with_schema;
+use gearbif::model::gear::GearParam;
+use gearbif::model::params::{Parameter, Parametrised};
 use gearbif::model::GearParams;
-use gearbif::sweep::{Axis, Method, Protocol, SweepOutcome, SweepRunner, SweepSpec};
+use gearbif::progress::Silent;
+use gearbif::sweep::{sweep_grid, Axis, Method, Protocol, SweepOutcome, SweepRunner, SweepSpec};
+use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyAny, PyDict};
 use std::path::PathBuf;
 
+/// Classification options from the Python arguments, validated.
+#[allow(clippy::too_many_arguments)]
+fn classify_options(
+    settle_turns: i64,
+    record_turns: i64,
+    samples_per_turn: i64,
+    rigorous: bool,
+    analysis_turns: i64,
+    tol: f64,
+    keep_samples: bool,
+) -> PyResult<ClassifyOptions> {
+    check_tol(tol)?;
+    let opts = ClassifyOptions {
+        settle_turns: count(settle_turns, "settle_turns", 0)?,
+        record_turns: count(record_turns, "record_turns", 1)?,
+        samples_per_turn: count(samples_per_turn, "samples_per_turn", 15)?,
+        rigorous: rigorous && analysis_turns > 0,
+        analysis_turns: count(analysis_turns, "analysis_turns", 0)?.max(2),
+        tol,
+        keep_samples,
+        ..ClassifyOptions::default()
+    };
+    opts.validate().py()?;
+    Ok(opts)
+}
+
+/// The default start: (π/2, 0) for the gear (the paper's Fig. 6 start β = 90°), the rest state
+/// (0, 0) otherwise.
+fn default_start(sys: &System) -> [f64; 2] {
+    match sys {
+        System::Gear(_) => [std::f64::consts::FRAC_PI_2, 0.0],
+        _ => [0.0, 0.0],
+    }
+}
+
 /// Classifies the attractor reached from x0: the paper's flowchart (7-harmonic fit of δ, RMS,
-/// THD) and the rigorous class (period and symmetry by Newton on the map, Lyapunov exponent).
+/// THD) and the rigorous class (period and symmetry by Newton on the map, Lyapunov exponent),
+/// for any system (Gear, CoulombOscillator, ForcedPendulum).
 ///
-/// classify(gear, x0=(π/2, 0), *, settle_turns=90, record_turns=10, samples_per_turn=50,
+/// classify(system, x0=None, *, settle_turns=90, record_turns=10, samples_per_turn=50,
 ///          rigorous=True, analysis_turns=60, tol=1e-9, keep_samples=False)
 ///
-/// x0 = (β [rad], ω [rad/s]) at t = 0 (drive phase α₀ of the gear). Returns the dict of
-/// `gearbif classify --json` (schema gearbif.classify/1, docs/formats.md): theta_deg, f_hz and
-/// event_driven = {paper metrics (rms, thd, class, …), rigorous class, agree, net_rotation_hz,
-/// end_state}.
+/// x0 = (β [rad], ω [rad/s]) at t = 0 (default (π/2, 0) for the gear, (0, 0) otherwise). δ is
+/// β − α for the gear (α the drive phase) and β itself for an oscillator. analysis_turns = 0
+/// skips the rigorous class. Returns the dict of `gearbif classify --json` (schema
+/// gearbif.classify/1, docs/formats.md): system (class name), params {name: value}, for the gear
+/// also theta_deg and f_hz, and event_driven = {paper metrics (rms, thd, class, …), rigorous class,
+/// agree, net_rotation_hz, end_state}.
 #[pyfunction]
-#[pyo3(signature = (gear, x0=None, *, settle_turns=90, record_turns=10, samples_per_turn=50, rigorous=true, analysis_turns=60, tol=1e-9, keep_samples=false))]
+#[pyo3(signature = (system, x0=None, *, settle_turns=90, record_turns=10, samples_per_turn=50, rigorous=true, analysis_turns=60, tol=1e-9, keep_samples=false))]
 #[allow(clippy::too_many_arguments)]
 fn classify<'py>(
     py: Python<'py>,
-    gear: &Bound<'py, PyAny>,
+    system: &Bound<'py, PyAny>,
     x0: Option<&Bound<'py, PyAny>>,
-    settle_turns: usize,
-    record_turns: usize,
-    samples_per_turn: usize,
+    settle_turns: i64,
+    record_turns: i64,
+    samples_per_turn: i64,
     rigorous: bool,
-    analysis_turns: usize,
+    analysis_turns: i64,
     tol: f64,
     keep_samples: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let g = as_gear(gear)?;
+    let sys = crate::systems::system(system)?;
     let x0 = match x0 {
         Some(x) => state(x, "x0")?,
-        None => [std::f64::consts::FRAC_PI_2, 0.0],
+        None => default_start(&sys),
     };
-    let opts = ClassifyOptions {
+    let opts = classify_options(
         settle_turns,
         record_turns,
         samples_per_turn,
@@ -53,22 +96,164 @@ fn classify<'py>(
         analysis_turns,
         tol,
         keep_samples,
-        ..ClassifyOptions::default()
-    };
+    )?;
     let r = py
-        .detach(|| classify_point(&g, x0, &EventDriven, &opts))
+        .detach(|| classify_point(sys.dynsys(), x0, &EventDriven, &opts))
         .py()?;
-    // the document of `gearbif classify --json` (one method: event_driven)
-    let doc = serde_json::json!({
+    let mut doc = serde_json::json!({
         "schema": "gearbif.classify/1",
-        "theta_deg": gearbif::model::params::Parametrised::param(
-            &g,
-            gearbif::model::gear::GearParam::ThetaDeg
-        ),
-        "f_hz": g.f,
+        "system": system.get_type().name()?.to_string(),
+        "params": dispatch!(&sys, s => params_json(s)),
         "event_driven": r,
     });
+    if let System::Gear(g) = &sys {
+        doc["theta_deg"] = Parametrised::param(g, GearParam::ThetaDeg).into();
+        doc["f_hz"] = g.f.into();
+    }
     to_python(py, &doc)
+}
+
+/// {name: value} of a system's parameters as JSON.
+fn params_json<S: Parametrised>(s: &S) -> serde_json::Value {
+    <S::Param as Parameter>::ALL
+        .iter()
+        .map(|&p| (p.name().to_string(), s.param(p).into()))
+        .collect::<serde_json::Map<_, _>>()
+        .into()
+}
+
+/// One generic sweep: the grid of classifications of `base` over (rows × cols), as JSON rows.
+#[allow(clippy::too_many_arguments)]
+fn sweep_system<S: PySystem>(
+    base: &S,
+    rows: (&str, &[f64]),
+    cols: (&str, &[f64]),
+    x0: [f64; 2],
+    protocol: Protocol,
+    opts: &ClassifyOptions,
+) -> gearbif::Result<Vec<Vec<PointResult>>> {
+    let r = (S::Param::from_name(rows.0)?, rows.1);
+    let c = (S::Param::from_name(cols.0)?, cols.1);
+    let grid = sweep_grid(&EventDriven, base, r, c, x0, protocol, opts, &Silent)?;
+    Ok(grid
+        .into_iter()
+        .map(|row| row.into_iter().map(|(_, p)| p).collect())
+        .collect())
+}
+
+fn protocol(name: &str) -> PyResult<Protocol> {
+    match name {
+        "fresh" => Ok(Protocol::Fresh),
+        "semi_static" => Ok(Protocol::SemiStatic),
+        p => Err(invalid(format!(
+            "protocol `{p}`: expected \"fresh\" or \"semi_static\""
+        ))),
+    }
+}
+
+/// An axis (name, values) of `sweep_grid`.
+fn grid_axis(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(String, Vec<f64>)> {
+    let (name, values): (String, Bound<'_, PyAny>) = obj
+        .extract()
+        .map_err(|_| invalid(format!("{what} must be (parameter name, values)")))?;
+    let values = floats(&values, what)?;
+    if values.is_empty() {
+        return Err(invalid(format!("{what}: no values")));
+    }
+    Ok((name, values))
+}
+
+/// A two-parameter sweep of any system (Gear, CoulombOscillator, ForcedPendulum): the attractor
+/// at every grid point classified as by `classify` (rows in parallel).
+///
+/// sweep_grid(system, rows, cols, *, x0=None, protocol="fresh", settle_turns=90, record_turns=10,
+///            samples_per_turn=50, analysis_turns=60, tol=1e-9)
+///
+/// rows, cols = (name, values): a parameter of system.params and its values (1-d sequence or numpy
+/// array, in the parameter's unit); the other parameters keep their values in `system`. protocol
+/// "fresh": every point starts at x0 (default as in `classify`); "semi_static": along a row the
+/// end state of one point starts the next. analysis_turns = 0 skips the rigorous class.
+///
+/// Returns a dict: row_param, row_values (numpy), col_param, col_values (numpy), label (list of
+/// lists of str: "T/2", "T", "3T", "QP", "chaos", "?" — the rigorous class, or the paper's class
+/// when analysis_turns = 0), rotation_number, net_rotation_hz, rms_delta_deg, lyapunov (numpy
+/// arrays of shape (rows, cols), NaN where not computed) and points (list of lists of the
+/// classification dicts).
+#[pyfunction]
+#[pyo3(name = "sweep_grid", signature = (system, rows, cols, *, x0=None, protocol="fresh", settle_turns=90, record_turns=10, samples_per_turn=50, analysis_turns=60, tol=1e-9))]
+#[allow(clippy::too_many_arguments)]
+fn sweep_grid_py<'py>(
+    py: Python<'py>,
+    system: &Bound<'py, PyAny>,
+    rows: &Bound<'py, PyAny>,
+    cols: &Bound<'py, PyAny>,
+    x0: Option<&Bound<'py, PyAny>>,
+    protocol: &str,
+    settle_turns: i64,
+    record_turns: i64,
+    samples_per_turn: i64,
+    analysis_turns: i64,
+    tol: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let sys = crate::systems::system(system)?;
+    let (rname, rvals) = grid_axis(rows, "rows")?;
+    let (cname, cvals) = grid_axis(cols, "cols")?;
+    let x0 = match x0 {
+        Some(x) => state(x, "x0")?,
+        None => default_start(&sys),
+    };
+    let protocol = self::protocol(protocol)?;
+    let opts = classify_options(
+        settle_turns,
+        record_turns,
+        samples_per_turn,
+        true,
+        analysis_turns,
+        tol,
+        false,
+    )?;
+    let grid = py
+        .detach(|| {
+            dispatch!(&sys, s => sweep_system(s, (&rname, &rvals), (&cname, &cvals), x0, protocol, &opts))
+        })
+        .py()?;
+    let (n, m) = (rvals.len(), cvals.len());
+    let field = |f: &dyn Fn(&PointResult) -> Option<f64>| {
+        crate::convert::rows(py, n, m, |i, j| f(&grid[i][j]).unwrap_or(f64::NAN))
+    };
+    let d = PyDict::new(py);
+    d.set_item("row_param", &rname)?;
+    d.set_item("row_values", PyArray1::from_slice(py, &rvals))?;
+    d.set_item("col_param", &cname)?;
+    d.set_item("col_values", PyArray1::from_slice(py, &cvals))?;
+    let labels: Vec<Vec<String>> = grid
+        .iter()
+        .map(|row| row.iter().map(point_label).collect())
+        .collect();
+    d.set_item("label", labels)?;
+    d.set_item(
+        "rotation_number",
+        field(&|p| p.rigorous.as_ref().map(|r| r.rotation_number)),
+    )?;
+    d.set_item("net_rotation_hz", field(&|p| Some(p.net_rotation_hz)))?;
+    d.set_item("rms_delta_deg", field(&|p| Some(p.paper.rms_delta_deg)))?;
+    d.set_item(
+        "lyapunov",
+        field(&|p| p.rigorous.as_ref().and_then(|r| r.lyapunov.per_period)),
+    )?;
+    d.set_item("points", to_python(py, &grid)?)?;
+    Ok(d)
+}
+
+/// The class label of a sweep point: the rigorous one, else the paper's.
+fn point_label(p: &PointResult) -> String {
+    match &p.rigorous {
+        Some(r) => r.label.clone(),
+        None => serde_json::to_value(p.paper.class)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_owned))
+            .unwrap_or_default(),
+    }
 }
 
 fn axis(obj: Option<&Bound<'_, PyAny>>, default: &str) -> PyResult<Axis> {
@@ -115,35 +300,27 @@ fn sweep<'py>(
     alpha0_deg: f64,
     beta0_deg: f64,
     convention: &str,
-    settle_turns: Option<usize>,
-    record_turns: usize,
-    analysis_turns: usize,
+    settle_turns: Option<i64>,
+    record_turns: i64,
+    analysis_turns: i64,
     tol: f64,
     out_dir: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let protocol = match protocol {
-        "fresh" => Protocol::Fresh,
-        "semi_static" => Protocol::SemiStatic,
-        p => {
-            return Err(invalid(format!(
-                "protocol `{p}`: expected \"fresh\" or \"semi_static\""
-            )))
-        }
-    };
-    let mut classify = ClassifyOptions {
-        settle_turns: settle_turns.unwrap_or(match protocol {
-            Protocol::Fresh => 90,
-            Protocol::SemiStatic => 1000,
-        }),
+    let protocol = self::protocol(protocol)?;
+    let settle = settle_turns.unwrap_or(match protocol {
+        Protocol::Fresh => 90,
+        Protocol::SemiStatic => 1000,
+    });
+    let defaults = ClassifyOptions::default();
+    let classify = classify_options(
+        settle,
         record_turns,
+        defaults.samples_per_turn as i64,
+        true,
+        analysis_turns,
         tol,
-        ..ClassifyOptions::default()
-    };
-    if analysis_turns == 0 {
-        classify.rigorous = false;
-    } else {
-        classify.analysis_turns = analysis_turns;
-    }
+        false,
+    )?;
     let spec = SweepSpec {
         gear: params.map(|p| p.inner).unwrap_or_else(GearParams::paper),
         f,
@@ -184,33 +361,36 @@ fn sweep<'py>(
 /// (`gearbif synth --list` gives the meaning of size). f_range [Hz], fps [1/s], noise_deg [deg].
 /// Returns a dict: effect, size, g [1/s²], delta [1], zeta [1/s], eta [1/s²], latency_s [s].
 #[pyfunction]
-#[pyo3(signature = (out_dir, effect="none", size=0.0, *, ringdowns=12, driven=8, turns=80.0, f_range=(0.5, 2.5), samples_per_turn=50, fps=100.0, noise_deg=0.5, seed=1))]
+#[pyo3(signature = (out_dir, effect="none", size=0.0, *, ringdowns=12, driven=8, turns=80.0, f_range=None, samples_per_turn=50, fps=100.0, noise_deg=0.5, seed=1))]
 #[allow(clippy::too_many_arguments)]
 fn synth<'py>(
     py: Python<'py>,
     out_dir: PathBuf,
     effect: &str,
     size: f64,
-    ringdowns: usize,
-    driven: usize,
+    ringdowns: i64,
+    driven: i64,
     turns: f64,
-    f_range: (f64, f64),
-    samples_per_turn: usize,
+    f_range: Option<&Bound<'py, PyAny>>,
+    samples_per_turn: i64,
     fps: f64,
     noise_deg: f64,
-    seed: u64,
+    seed: i64,
 ) -> PyResult<Bound<'py, PyDict>> {
     let opts = SynthOptions {
         effect: effect.to_owned(),
         size,
-        ringdowns,
-        driven,
+        ringdowns: count(ringdowns, "ringdowns", 0)?,
+        driven: count(driven, "driven", 0)?,
         turns,
-        f_range,
-        samples_per_turn,
+        f_range: match f_range {
+            Some(r) => crate::convert::range(r, "f_range")?,
+            None => (0.5, 2.5),
+        },
+        samples_per_turn: count(samples_per_turn, "samples_per_turn", 1)?,
         fps,
         noise_deg,
-        seed,
+        seed: count(seed, "seed", 0)? as u64,
         ..SynthOptions::default()
     };
     let truth = py
@@ -296,6 +476,7 @@ fn diagnose<'py>(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(classify, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_grid_py, m)?)?;
     m.add_function(wrap_pyfunction!(synth, m)?)?;
     m.add_function(wrap_pyfunction!(fit, m)?)?;
     m.add_function(wrap_pyfunction!(diagnose, m)?)?;

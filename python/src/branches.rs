@@ -1,15 +1,17 @@
-//! Continuation of periodic orbits of the gear with special points, branch switching, and the
-//! lock-loss boundary f_c(Θ).
+//! Continuation of periodic orbits of any system of the module with special points, branch
+//! switching, and the gear's lock-loss boundary f_c(Θ). One generic code path: a branch of any
+//! system is held as a [`AnyBranch`] trait object.
 
-use crate::convert::{complex2, rows, state, to_python, vec2};
+use crate::convert::{complex2, count, range as parse_range, rows, state, to_python, vec2};
 use crate::dynamics::{orbit_dict, orbit_spec, shooting, spec_dict};
 use crate::errors::{invalid, IntoPyResult};
-use crate::systems::{gear as as_gear, PyGear};
+use crate::systems::{dispatch, gear as as_gear, PySystem, System};
 use gearbif::continuation::{
-    switch_branch as switch, Branch, Continuation, ContinuationOptions, SpecialPoint,
+    switch_branch as switch, Branch, BranchPoint, Continuation, ContinuationOptions, SpecialPoint,
+    StopReason,
 };
-use gearbif::model::gear::GearParam;
-use gearbif::model::params::{Parameter, Parametrised};
+use gearbif::model::params::Parameter;
+use gearbif::orbits::{OrbitSpec, PeriodicOrbit};
 use numpy::{Complex64, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyAny, PyDict, PyList};
@@ -106,70 +108,158 @@ impl PySpecialPoint {
     }
 }
 
-/// A branch of periodic orbits of the gear, as numpy arrays, with its special points.
+/// A branch of any system, seen through what Python reads from it.
+pub trait AnyBranch: Send + Sync {
+    /// The points, in continuation order.
+    fn points(&self) -> &[BranchPoint];
+    /// The located special points.
+    fn specials(&self) -> &[SpecialPoint];
+    /// Why the continuation stopped.
+    fn stop(&self) -> &StopReason;
+    /// The orbit problem.
+    fn spec(&self) -> &OrbitSpec;
+    /// Map evaluations.
+    fn map_evaluations(&self) -> usize;
+    /// Name of the continuation parameter.
+    fn param_name(&self) -> &'static str;
+    /// The system at the first point, as its Python object.
+    fn system_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>>;
+    /// The branch as JSON (one entry of `branches` in `gearbif continue --json`).
+    fn to_json(&self) -> gearbif::Result<serde_json::Value>;
+    /// Switches at `sp` and continues the new branch with `opts`.
+    fn switch(
+        &self,
+        sp: &SpecialPoint,
+        dparam: f64,
+        opts: ContinuationOptions,
+    ) -> gearbif::Result<(Box<dyn AnyBranch>, SwitchInfo)>;
+}
+
+/// The start of a switched branch: its first orbit, the distance from the old branch and the
+/// parameter value.
+pub struct SwitchInfo {
+    pub orbit: PeriodicOrbit,
+    pub separation: f64,
+    pub param: f64,
+}
+
+impl<S: PySystem> AnyBranch for Branch<S> {
+    fn points(&self) -> &[BranchPoint] {
+        &self.points
+    }
+    fn specials(&self) -> &[SpecialPoint] {
+        &self.specials
+    }
+    fn stop(&self) -> &StopReason {
+        &self.stop
+    }
+    fn spec(&self) -> &OrbitSpec {
+        &self.spec
+    }
+    fn map_evaluations(&self) -> usize {
+        self.map_evaluations
+    }
+    fn param_name(&self) -> &'static str {
+        self.param.name()
+    }
+    fn system_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.system.to_object(py)
+    }
+    fn to_json(&self) -> gearbif::Result<serde_json::Value> {
+        serde_json::to_value(self).map_err(|e| gearbif::Error::InvalidInput(e.to_string()))
+    }
+    fn switch(
+        &self,
+        sp: &SpecialPoint,
+        dparam: f64,
+        opts: ContinuationOptions,
+    ) -> gearbif::Result<(Box<dyn AnyBranch>, SwitchInfo)> {
+        let sw = switch(self, sp, dparam, &opts.shooting)?;
+        let nb =
+            Continuation::from_orbit(sw.system.clone(), self.param, &sw.orbit, opts)?.run(None)?;
+        let info = SwitchInfo {
+            param: sw.system.param(self.param),
+            orbit: sw.orbit,
+            separation: sw.separation,
+        };
+        Ok((Box::new(nb), info))
+    }
+}
+
+/// A branch of periodic orbits, as numpy arrays, with its special points.
 ///
 /// Attributes (n points in continuation order): param_name; param (n,) in the parameter's unit
-/// (f [Hz], theta [deg], g [1/s²], zeta [1/s], eta [1/s²], delta [1]); x (n, 2) = (β [rad],
-/// ω [rad/s]) on the section at t = 0; beta, omega (n,); stable (n,) bool; multipliers (n, 2)
-/// complex (of the orbit's map: G for symmetric orbits, P_T^k otherwise); events (n, 3) int
-/// (crossings, sticks, grazes per application of the map); arclength (n,); specials (list of
-/// SpecialPoint); stop (why it stopped, dict); spec (section, iterations, winding);
-/// map_evaluations; gear (the Gear at the first point).
+/// (for the gear f [Hz], theta [deg], g [1/s²], zeta [1/s], eta [1/s²], delta [1]; for the other
+/// systems the unit of their parameter); x (n, 2) = (β [rad], ω [rad/s]) on the section at t = 0;
+/// beta, omega (n,); stable (n,) bool; multipliers (n, 2) complex (of the orbit's map: G for
+/// symmetric orbits, P_T^k otherwise); events (n, 3) int (crossings, sticks, grazes per
+/// application of the map); arclength (n,); specials (list of SpecialPoint); stop (why it stopped,
+/// dict); spec (section, iterations, winding); map_evaluations; system (the system at the first
+/// point; `gear` is the same for the gear).
 #[pyclass(name = "Branch", module = "gearbif", frozen)]
 pub struct PyBranch {
-    pub inner: Branch,
+    pub inner: Box<dyn AnyBranch>,
     pub opts: ContinuationOptions,
+}
+
+impl PyBranch {
+    fn column<'py>(
+        &self,
+        py: Python<'py>,
+        f: impl Fn(&BranchPoint) -> f64,
+    ) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.inner.points().iter().map(f).collect())
+    }
 }
 
 #[pymethods]
 impl PyBranch {
-    /// Name of the continuation parameter (f, g, zeta, eta, delta, theta).
+    /// Name of the continuation parameter.
     #[getter]
     fn param_name(&self) -> &'static str {
-        self.inner.param.name()
+        self.inner.param_name()
     }
     /// Parameter values (n,).
     #[getter]
     fn param<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_vec(py, self.inner.points.iter().map(|p| p.param).collect())
+        self.column(py, |p| p.param)
     }
     /// States (n, 2): β [rad], ω [rad/s].
     #[getter]
     fn x<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let p = &self.inner.points;
+        let p = self.inner.points();
         rows(py, p.len(), 2, |i, j| p[i].x[j])
     }
     /// β [rad] (n,).
     #[getter]
     fn beta<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_vec(py, self.inner.points.iter().map(|p| p.x[0]).collect())
+        self.column(py, |p| p.x[0])
     }
     /// ω [rad/s] (n,).
     #[getter]
     fn omega<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_vec(py, self.inner.points.iter().map(|p| p.x[1]).collect())
+        self.column(py, |p| p.x[1])
     }
     /// Stability of each point (n,) bool.
     #[getter]
     fn stable<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
-        PyArray1::from_vec(py, self.inner.points.iter().map(|p| p.stable).collect())
+        PyArray1::from_vec(py, self.inner.points().iter().map(|p| p.stable).collect())
     }
     /// Multipliers (n, 2) complex, largest modulus first.
     #[getter]
     fn multipliers<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<Complex64>>> {
-        let flat: Vec<Complex64> = self
-            .inner
-            .points
+        use numpy::PyArrayMethods;
+        let p = self.inner.points();
+        let flat: Vec<Complex64> = p
             .iter()
             .flat_map(|p| p.floquet.multipliers.map(|z| Complex64::new(z[0], z[1])))
             .collect();
-        use numpy::PyArrayMethods;
-        PyArray1::from_vec(py, flat).reshape([self.inner.points.len(), 2])
+        PyArray1::from_vec(py, flat).reshape([p.len(), 2])
     }
     /// Events per application of the orbit's map (n, 3): crossings, sticks, grazes.
     #[getter]
     fn events<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let p = &self.inner.points;
+        let p = self.inner.points();
         rows(py, p.len(), 3, |i, j| {
             let e = p[i].events;
             [e.crossings, e.sticks, e.grazes][j] as f64
@@ -178,13 +268,13 @@ impl PyBranch {
     /// Arclength from the first point (n,).
     #[getter]
     fn arclength<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        PyArray1::from_vec(py, self.inner.points.iter().map(|p| p.arclength).collect())
+        self.column(py, |p| p.arclength)
     }
     /// The located special points, in continuation order.
     #[getter]
     fn specials(&self) -> Vec<PySpecialPoint> {
         self.inner
-            .specials
+            .specials()
             .iter()
             .enumerate()
             .map(|(index, s)| PySpecialPoint {
@@ -196,119 +286,151 @@ impl PyBranch {
     /// Why the continuation stopped: {"reason": ..., "detail": ...}.
     #[getter]
     fn stop<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_python(py, &self.inner.stop)
+        to_python(py, self.inner.stop())
     }
     /// The orbit problem: section, iterations, winding.
     #[getter]
     fn spec<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        spec_dict(py, &self.inner.spec)
+        spec_dict(py, self.inner.spec())
     }
     /// Number of map evaluations (integrations with sensitivities).
     #[getter]
     fn map_evaluations(&self) -> usize {
-        self.inner.map_evaluations
+        self.inner.map_evaluations()
     }
-    /// The gear at the first point.
+    /// The system at the first point (Gear, CoulombOscillator or ForcedPendulum).
     #[getter]
-    fn gear(&self) -> PyGear {
-        PyGear {
-            inner: self.inner.system,
-        }
+    fn system<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.inner.system_object(py)
+    }
+    /// The gear at the first point (the same as `system`, for branches of the gear).
+    #[getter]
+    fn gear<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        self.inner.system_object(py)
     }
     /// The branch as a dict: one entry of `branches` in `gearbif continue --json`
     /// (schema gearbif.branches/1, docs/formats.md).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        to_python(py, &self.inner)
+        let v = self.inner.to_json().py()?;
+        to_python(py, &v)
     }
     fn __len__(&self) -> usize {
-        self.inner.points.len()
+        self.inner.points().len()
     }
     fn __repr__(&self) -> String {
-        let (lo, hi) = self.inner.param_range().unwrap_or((f64::NAN, f64::NAN));
+        let p = self.inner.points();
+        let lo = p.iter().map(|q| q.param).fold(f64::INFINITY, f64::min);
+        let hi = p.iter().map(|q| q.param).fold(f64::NEG_INFINITY, f64::max);
+        let spec = self.inner.spec();
         format!(
             "Branch(param=\"{}\", points={}, range=[{lo:.6}, {hi:.6}], specials={}, section={:?}, iterations={}, winding={})",
-            self.inner.param.name(),
-            self.inner.points.len(),
-            self.inner.specials.len(),
-            self.inner.spec.section,
-            self.inner.spec.iterations,
-            self.inner.spec.winding
+            self.inner.param_name(),
+            p.len(),
+            self.inner.specials().len(),
+            spec.section,
+            spec.iterations,
+            spec.winding
         )
     }
 }
 
-fn parse_range(range: (f64, f64)) -> PyResult<(f64, f64)> {
-    let (lo, hi) = range;
-    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        return Err(invalid(format!(
-            "range must be (lo, hi) with lo < hi, got ({lo}, {hi})"
-        )));
-    }
-    Ok((lo, hi))
+/// Continues from `x0` in the parameter named `param` of `sys` (any system of the module).
+fn continue_system<S: PySystem>(
+    sys: S,
+    param: &str,
+    spec: OrbitSpec,
+    x0: [f64; 2],
+    opts: ContinuationOptions,
+) -> gearbif::Result<Box<dyn AnyBranch>> {
+    let p = S::Param::from_name(param)?;
+    Ok(Box::new(
+        Continuation::new(sys, p, spec, x0, opts)?.run(None)?,
+    ))
 }
 
-/// Pseudo-arclength continuation of a periodic orbit of the gear in one parameter, with
-/// detection and location of folds, flips, symmetry-breaking, Neimark–Sacker and nonsmooth points.
+/// The start state: x0, or the gear's analytic lock orbit ("stable" or "unstable").
+fn start_state(
+    sys: &System,
+    x0: Option<&Bound<'_, PyAny>>,
+    lock: Option<&str>,
+) -> PyResult<[f64; 2]> {
+    match (x0, lock) {
+        (Some(x), None) => state(x, "x0"),
+        (None, Some(which)) => {
+            let System::Gear(g) = sys else {
+                return Err(crate::errors::UnsupportedError::new_err(
+                    "lock= is the gear's analytic lock orbit; give x0 for other systems",
+                ));
+            };
+            let lb = g.lock_branch().py()?;
+            match which {
+                "stable" => Ok(lb.stable.state),
+                "unstable" => Ok(lb.unstable.state),
+                _ => Err(invalid("lock must be \"stable\" or \"unstable\"")),
+            }
+        }
+        _ => Err(invalid("give exactly one of x0 and lock")),
+    }
+}
+
+/// Pseudo-arclength continuation of a periodic orbit of any system (Gear, CoulombOscillator,
+/// ForcedPendulum) in one parameter, with detection and location of folds, flips,
+/// symmetry-breaking, Neimark–Sacker and nonsmooth points.
 ///
-/// continuation(gear, x0=None, *, param="f", range, lock=None, section="half_period",
-///              iterations=1, winding=1, ds=0.02, ds_max=0.1, ds_min=1e-7, max_steps=2000,
+/// continuation(system, x0=None, *, param="f", range, lock=None, section="half_period",
+///              iterations=1, winding=None, ds=0.02, ds_max=0.1, ds_min=1e-7, max_steps=2000,
 ///              tol=1e-11, newton_tol=1e-9, max_multiplier=1e4, locate_tol=1e-8)
 ///
-/// The start orbit is shot from x0 = (β [rad], ω [rad/s]) at the gear's parameter value, or taken
-/// from the analytic lock (lock = "stable" or "unstable", Δ = ±1 only). param: f [Hz], theta [deg],
-/// g [1/s²], zeta [1/s], eta [1/s²] or delta [1]; range = (lo, hi) in that unit — the continuation
-/// stops on its bounds; the sign of ds sets the initial direction (+: up). tol: integrator
-/// tolerance; locate_tol: bracket width to which special points are located.
+/// The start orbit is shot from x0 = (β [rad], ω [rad/s]) at the system's parameter value, or (the
+/// gear only) taken from the analytic lock (lock = "stable" or "unstable", Δ = ±1 only). param: a
+/// name of system.params (the gear: f [Hz], theta [deg], g [1/s²], zeta [1/s], eta [1/s²],
+/// delta [1]); range = (lo, hi) in that unit — the continuation stops on its bounds; the sign of
+/// ds sets the initial direction (+: up). section "half_period" needs a system with a half-period
+/// symmetry (all three have one); winding counts turns of β per period (default 1 for the gear,
+/// 0 for the oscillators). tol: integrator tolerance; locate_tol: bracket width to which special
+/// points are located.
 ///
-/// Returns a Branch. Raises NewtonError if the start orbit is not found, ContinuationError,
-/// InvalidInputError for bad options.
+/// Returns a Branch. Raises NewtonError if the start orbit is not found, InvalidParameterError or
+/// InvalidInputError for bad options, ContinuationError if the continuation cannot proceed.
 #[pyfunction]
-#[pyo3(signature = (gear, x0=None, *, param="f", range, lock=None, section="half_period", iterations=1, winding=1, ds=0.02, ds_max=0.1, ds_min=1e-7, max_steps=2000, tol=1e-11, newton_tol=1e-9, max_multiplier=1e4, locate_tol=1e-8))]
+#[pyo3(signature = (system, x0=None, *, param="f", range, lock=None, section="half_period", iterations=1, winding=None, ds=0.02, ds_max=0.1, ds_min=1e-7, max_steps=2000, tol=1e-11, newton_tol=1e-9, max_multiplier=1e4, locate_tol=1e-8))]
 #[allow(clippy::too_many_arguments)]
 fn continuation(
     py: Python<'_>,
-    gear: &Bound<'_, PyAny>,
+    system: &Bound<'_, PyAny>,
     x0: Option<&Bound<'_, PyAny>>,
     param: &str,
-    range: (f64, f64),
+    range: &Bound<'_, PyAny>,
     lock: Option<&str>,
     section: &str,
-    iterations: usize,
-    winding: i32,
+    iterations: i64,
+    winding: Option<i32>,
     ds: f64,
     ds_max: f64,
     ds_min: f64,
-    max_steps: usize,
+    max_steps: i64,
     tol: f64,
     newton_tol: f64,
     max_multiplier: f64,
     locate_tol: f64,
 ) -> PyResult<PyBranch> {
-    let g = as_gear(gear)?;
-    let param = GearParam::from_name(param).py()?;
-    let (lo, hi) = parse_range(range)?;
+    let sys = crate::systems::system(system)?;
+    let (lo, hi) = parse_range(range, "range")?;
     let sh = shooting(tol, newton_tol, 30)?;
-    let spec = orbit_spec(section, iterations, winding)?;
-    let x0 = match (x0, lock) {
-        (Some(x), None) => state(x, "x0")?,
-        (None, Some(which)) => {
-            let lb = g.lock_branch().py()?;
-            match which {
-                "stable" => lb.stable.state,
-                "unstable" => lb.unstable.state,
-                _ => return Err(invalid("lock must be \"stable\" or \"unstable\"")),
-            }
-        }
-        _ => return Err(invalid("give exactly one of x0 and lock")),
-    };
-    if !(max_multiplier > 1.0 && locate_tol > 0.0) {
-        return Err(invalid("need max_multiplier > 1 and locate_tol > 0"));
+    let spec = orbit_spec(
+        section,
+        iterations,
+        winding.unwrap_or(sys.default_winding()),
+    )?;
+    let x0 = start_state(&sys, x0, lock)?;
+    if max_multiplier.is_nan() || max_multiplier <= 1.0 {
+        return Err(invalid("need max_multiplier > 1"));
     }
     let opts = ContinuationOptions {
         ds,
         ds_min,
         ds_max,
-        max_steps,
+        max_steps: count(max_steps, "max_steps", 1)?,
         param_min: lo,
         param_max: hi,
         max_multiplier,
@@ -316,8 +438,9 @@ fn continuation(
         locate_tol,
         ..Default::default()
     };
+    opts.validate().py()?;
     let b = py
-        .detach(|| Continuation::new(g, param, spec, x0, opts)?.run(None))
+        .detach(|| dispatch!(sys, s => continue_system(s, param, spec, x0, opts)))
         .py()?;
     Ok(PyBranch { inner: b, opts })
 }
@@ -332,28 +455,37 @@ fn continuation(
 /// from x* ± εv at param* + dparam (then −dparam, ±10·dparam); its continuation starts in the
 /// direction of sign(ds) (default: −sign(dparam)·|branch ds|/4) and uses the branch's options
 /// otherwise. Returns (Branch, start) where start is the new orbit as a dict with its
-/// `separation` from the old branch. Raises ContinuationError if no new orbit is found,
-/// UnsupportedError at other kinds of points.
+/// `separation` from the old branch and its `param`. Raises ContinuationError if no new orbit is
+/// found, UnsupportedError at other kinds of points.
 #[pyfunction]
 #[pyo3(signature = (branch, special, *, dparam=-1e-3, ds=None, ds_max=None, max_steps=None, range=None))]
 #[allow(clippy::too_many_arguments)]
 fn switch_branch<'py>(
     py: Python<'py>,
-    branch: &PyBranch,
+    branch: &Bound<'py, PyAny>,
     special: &Bound<'py, PyAny>,
     dparam: f64,
     ds: Option<f64>,
     ds_max: Option<f64>,
-    max_steps: Option<usize>,
-    range: Option<(f64, f64)>,
+    max_steps: Option<i64>,
+    range: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(PyBranch, Bound<'py, PyDict>)> {
-    let sp = if let Ok(i) = special.extract::<usize>() {
-        branch.inner.specials.get(i).cloned().ok_or_else(|| {
-            invalid(format!(
-                "special point {i}: the branch has {}",
-                branch.inner.specials.len()
-            ))
-        })?
+    let branch = branch
+        .cast::<PyBranch>()
+        .map_err(|_| invalid("branch must be a gearbif.Branch"))?
+        .get();
+    let specials = branch.inner.specials();
+    let sp = if let Ok(i) = special.extract::<i64>() {
+        usize::try_from(i)
+            .ok()
+            .and_then(|i| specials.get(i))
+            .cloned()
+            .ok_or_else(|| {
+                invalid(format!(
+                    "special point {i}: the branch has {}",
+                    specials.len()
+                ))
+            })?
     } else if let Ok(s) = special.cast::<PySpecialPoint>() {
         s.get().inner.clone()
     } else {
@@ -365,35 +497,31 @@ fn switch_branch<'py>(
     let mut opts = branch.opts;
     opts.ds = ds.unwrap_or(-dparam.signum() * 0.25 * opts.ds.abs());
     opts.ds_max = ds_max.unwrap_or(opts.ds_max);
-    opts.max_steps = max_steps.unwrap_or(opts.max_steps);
-    if let Some(r) = range {
-        let (lo, hi) = parse_range(r)?;
-        opts.param_min = lo;
-        opts.param_max = hi;
+    if let Some(n) = max_steps {
+        opts.max_steps = count(n, "max_steps", 1)?;
     }
+    if let Some(r) = range {
+        (opts.param_min, opts.param_max) = parse_range(r, "range")?;
+    }
+    opts.validate().py()?;
     let b = &branch.inner;
-    let (start, nb) = py
-        .detach(|| {
-            let sw = switch(b, &sp, dparam, &opts.shooting)?;
-            let nb = Continuation::from_orbit(sw.system, b.param, &sw.orbit, opts)?.run(None)?;
-            Ok::<_, gearbif::Error>((sw, nb))
-        })
-        .py()?;
+    let (nb, start) = py.detach(|| b.switch(&sp, dparam, opts)).py()?;
     let d = orbit_dict(py, &start.orbit)?;
     d.set_item("separation", start.separation)?;
-    d.set_item("param", start.system.param(b.param))?;
+    d.set_item("param", start.param)?;
     Ok((PyBranch { inner: nb, opts }, d))
 }
 
-/// The lock-loss boundary f_c(Θ) for parallel shafts: the fold curves of the forward lock
-/// (winding +1, from Θ = 0) and of the reversed lock (winding −1, from Θ = 54.74°), each started
-/// at the analytic f_c and followed by Newton on the augmented system (fold condition).
+/// The lock-loss boundary f_c(Θ) of the gear for parallel shafts: the fold curves of the forward
+/// lock (winding +1, from Θ = 0) and of the reversed lock (winding −1, from Θ = 54.74°), each
+/// started at the analytic f_c and followed by Newton on the augmented system (fold condition).
 ///
 /// lock_loss_boundary(gear=None, *, step_deg=2.0, tol=1e-11)
 ///
-/// gear: a Gear or GearParams (default: the paper's gear; only g, ζ, η matter, Θ is swept).
-/// Returns a list of dicts: label, winding, theta_deg (numpy, deg), f_c (numpy, Hz), precision
-/// (numpy, Hz), x (n, 2) states, stopped (why the curve ended early, or None).
+/// gear: a Gear or GearParams (default: the paper's gear; only g, ζ, η matter, Θ is swept);
+/// step_deg in (0, 90]. Returns a list of dicts: label, winding, theta_deg (numpy, deg), f_c
+/// (numpy, Hz), precision (numpy, Hz), x (n, 2) states, stopped (why the curve ended early, or
+/// None).
 #[pyfunction]
 #[pyo3(signature = (gear=None, *, step_deg=2.0, tol=1e-11))]
 fn lock_loss_boundary<'py>(
@@ -412,6 +540,13 @@ fn lock_loss_boundary<'py>(
             }
         }
     };
+    if !(step_deg > 0.0 && step_deg <= 90.0) {
+        return Err(crate::errors::to_py(gearbif::Error::InvalidParameter {
+            name: "step_deg",
+            value: step_deg,
+            reason: "must be in (0, 90]",
+        }));
+    }
     let sh = shooting(tol, 1e-9, 30)?;
     let curves = py
         .detach(|| gearbif::continuation::two_param::lock_loss_boundary(&base, step_deg, &sh))
@@ -422,18 +557,12 @@ fn lock_loss_boundary<'py>(
         d.set_item("label", label)?;
         d.set_item("winding", c.spec.winding)?;
         let p = &c.points;
-        d.set_item(
-            "theta_deg",
-            PyArray1::from_vec(py, p.iter().map(|q| q.along).collect()),
-        )?;
-        d.set_item(
-            "f_c",
-            PyArray1::from_vec(py, p.iter().map(|q| q.free).collect()),
-        )?;
-        d.set_item(
-            "precision",
-            PyArray1::from_vec(py, p.iter().map(|q| q.precision).collect()),
-        )?;
+        let col = |f: fn(&gearbif::continuation::two_param::CurvePoint) -> f64| {
+            PyArray1::from_vec(py, p.iter().map(f).collect())
+        };
+        d.set_item("theta_deg", col(|q| q.along))?;
+        d.set_item("f_c", col(|q| q.free))?;
+        d.set_item("precision", col(|q| q.precision))?;
         d.set_item("x", rows(py, p.len(), 2, |i, j| p[i].x[j]))?;
         d.set_item("stopped", c.stopped.as_ref().map(|s| s.to_string()))?;
         out.append(d)?;

@@ -60,3 +60,34 @@ pub fn rows<'py>(
         .reshape([n, m])
         .expect("n·m elements reshape to (n, m)")
 }
+
+/// A (lo, hi) pair of finite floats with lo < hi, from any sequence of two numbers.
+pub fn range(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(f64, f64)> {
+    let v = floats(obj, what)?;
+    match v[..] {
+        [lo, hi] if lo < hi => Ok((lo, hi)),
+        _ => Err(invalid(format!(
+            "{what} must be (lo, hi) with lo < hi, got {v:?}"
+        ))),
+    }
+}
+
+/// A list of finite floats from any sequence of numbers (list, tuple, 1-d numpy array).
+pub fn floats(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
+    let v: Vec<f64> = obj
+        .extract()
+        .map_err(|_| invalid(format!("{what} must be a sequence of floats")))?;
+    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+        return Err(invalid(format!("{what} must be finite, got {x}")));
+    }
+    Ok(v)
+}
+
+/// A count (number of iterations, turns, steps) from a Python int: negative values are an
+/// InvalidInputError, not an OverflowError.
+pub fn count(n: i64, what: &str, min: usize) -> PyResult<usize> {
+    usize::try_from(n)
+        .ok()
+        .filter(|&k| k >= min)
+        .ok_or_else(|| invalid(format!("{what} must be an integer >= {min}, got {n}")))
+}

@@ -1,12 +1,12 @@
 //! Simulation, Poincaré maps with Jacobians, and periodic orbits by shooting.
 
-use crate::convert::{complex2, mat2, rows, state, to_python, vec2};
+use crate::convert::{complex2, count, floats, mat2, rows, state, to_python, vec2};
 use crate::errors::{invalid, IntoPyResult};
-use crate::systems::{param_names, system, System};
+use crate::systems::{param_names, system as extract_system, System};
 use gearbif::integrator::{EventDriven, FlowMethod, FlowOptions, Mode, Sensitivity};
 use gearbif::maps::{poincare_map as map, Section};
 use gearbif::orbits::{OrbitSpec, PeriodicOrbit, ShootingOptions};
-use numpy::{PyArray1, PyReadonlyArray2};
+use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyAny, PyDict};
 
@@ -37,7 +37,8 @@ fn mode_name(m: Mode) -> &'static str {
     }
 }
 
-fn check_tol(tol: f64) -> PyResult<()> {
+/// Checks an integrator tolerance: in (0, 1).
+pub fn check_tol(tol: f64) -> PyResult<()> {
     if tol > 0.0 && tol < 1.0 {
         Ok(())
     } else {
@@ -71,11 +72,11 @@ fn simulate<'py>(
     x0: &Bound<'py, PyAny>,
     t_end: f64,
     t0: f64,
-    samples_per_period: usize,
-    sample_times: Option<Vec<f64>>,
+    samples_per_period: i64,
+    sample_times: Option<&Bound<'py, PyAny>>,
     tol: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let sys = system_of(system)?;
+    let sys = extract_system(system)?;
     let x0 = state(x0, "x0")?;
     check_tol(tol)?;
     if !(t0.is_finite() && t_end.is_finite() && t_end >= t0) {
@@ -84,12 +85,16 @@ fn simulate<'py>(
         )));
     }
     let times = match sample_times {
-        Some(v) => v,
-        None => {
-            if samples_per_period == 0 {
-                return Err(invalid("samples_per_period must be >= 1"));
+        Some(v) => {
+            let v = floats(v, "sample_times")?;
+            if v.windows(2).any(|w| w[0] > w[1]) {
+                return Err(invalid("sample_times must be sorted"));
             }
-            let dt = sys.dynsys().period() / samples_per_period as f64;
+            v
+        }
+        None => {
+            let per = count(samples_per_period, "samples_per_period", 1)?;
+            let dt = sys.dynsys().period() / per as f64;
             let n = ((t_end - t0) / dt + 1e-9).floor() as usize;
             if n > 50_000_000 {
                 return Err(invalid("more than 5e7 samples requested"));
@@ -128,10 +133,6 @@ fn simulate<'py>(
     Ok(d)
 }
 
-fn system_of(obj: &Bound<'_, PyAny>) -> PyResult<System> {
-    system(obj)
-}
-
 /// Applies a Poincaré map `iterations` times, with its Jacobians (variational equations with
 /// saltation matrices at every event).
 ///
@@ -151,13 +152,14 @@ fn poincare_map<'py>(
     system: &Bound<'py, PyAny>,
     x: &Bound<'py, PyAny>,
     section: &str,
-    iterations: usize,
+    iterations: i64,
     tol: f64,
     jacobians: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let sys = system_of(system)?;
+    let sys = extract_system(system)?;
     let x = state(x, "x")?;
     let section = parse_section(section)?;
+    let iterations = count(iterations, "iterations", 1)?;
     check_tol(tol)?;
     let opts = FlowOptions::with_tol(tol)
         .record_events(true)
@@ -188,21 +190,23 @@ fn poincare_map<'py>(
     Ok(d)
 }
 
-/// Eigenvalues (Floquet multipliers) of a 2×2 map Jacobian, largest modulus first, as a complex
-/// numpy array (computed from trace and determinant without cancellation).
+/// Eigenvalues (Floquet multipliers) of a 2×2 map Jacobian (numpy array or nested sequence),
+/// largest modulus first, as a complex numpy array (computed from trace and determinant without
+/// cancellation). Raises InvalidInputError unless the Jacobian is a finite 2×2 matrix.
 #[pyfunction]
 fn multipliers<'py>(
     py: Python<'py>,
-    jac: PyReadonlyArray2<'py, f64>,
+    jac: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray1<numpy::Complex64>>> {
-    let a = jac.as_array();
-    if a.shape() != [2, 2] {
-        return Err(invalid(format!(
-            "the Jacobian must be 2×2, got {:?}",
-            a.shape()
-        )));
+    let bad = || invalid("the Jacobian must be a finite 2×2 matrix");
+    let a: Vec<Vec<f64>> = jac.extract().map_err(|_| bad())?;
+    if a.len() != 2
+        || a.iter()
+            .any(|r| r.len() != 2 || !r.iter().all(|x| x.is_finite()))
+    {
+        return Err(bad());
     }
-    let m = nalgebra::Matrix2::new(a[[0, 0]], a[[0, 1]], a[[1, 0]], a[[1, 1]]);
+    let m = nalgebra::Matrix2::new(a[0][0], a[0][1], a[1][0], a[1][1]);
     Ok(complex2(py, gearbif::orbits::Floquet::of(&m).multipliers))
 }
 
@@ -236,10 +240,8 @@ pub fn spec_dict<'py>(py: Python<'py>, s: &OrbitSpec) -> PyResult<Bound<'py, PyD
 }
 
 /// The orbit problem: `section` with `iterations` and `winding`.
-pub fn orbit_spec(section: &str, iterations: usize, winding: i32) -> PyResult<OrbitSpec> {
-    if iterations == 0 {
-        return Err(invalid("iterations must be >= 1"));
-    }
+pub fn orbit_spec(section: &str, iterations: i64, winding: i32) -> PyResult<OrbitSpec> {
+    let iterations = count(iterations, "iterations", 1)?;
     Ok(match parse_section(section)? {
         Section::Stroboscopic => OrbitSpec::stroboscopic(iterations, winding),
         Section::HalfPeriod => OrbitSpec {
@@ -251,8 +253,9 @@ pub fn orbit_spec(section: &str, iterations: usize, winding: i32) -> PyResult<Or
 }
 
 /// Shooting options, validated.
-pub fn shooting(tol: f64, newton_tol: f64, max_iter: usize) -> PyResult<ShootingOptions> {
+pub fn shooting(tol: f64, newton_tol: f64, max_iter: i64) -> PyResult<ShootingOptions> {
     check_tol(tol)?;
+    let max_iter = count(max_iter, "max_iter", 0)?;
     if !(newton_tol > 0.0 && newton_tol.is_finite()) {
         return Err(invalid("newton_tol must be > 0"));
     }
@@ -265,33 +268,39 @@ pub fn shooting(tol: f64, newton_tol: f64, max_iter: usize) -> PyResult<Shooting
 
 /// A periodic orbit by Newton shooting on a Poincaré map: a zero of F(x) = Pᵏ(x) − x − (s, 0).
 ///
-/// shoot(system, x0, *, section="half_period", iterations=1, winding=1, tol=1e-11,
+/// shoot(system, x0, *, section="half_period", iterations=1, winding=None, tol=1e-11,
 ///       newton_tol=1e-9, max_iter=30)
 ///
 /// section "half_period": a symmetric orbit, fixed point of G with `winding` turns of β per drive
 /// period (s = π·winding − π for the gear); "stroboscopic": a period-`iterations` orbit of P_T
-/// with `winding` turns over the `iterations` periods (s = 2π·winding). x0 = (β [rad], ω [rad/s]).
+/// with `winding` turns over the `iterations` periods (s = 2π·winding). winding defaults to 1 for
+/// the gear (the lock) and 0 for the oscillators (x → −x symmetric orbits have winding 0).
+/// x0 = (β [rad], ω [rad/s]).
 /// tol: integrator tolerance; newton_tol: residual and step norm at convergence.
 ///
 /// Returns a dict (see `orbit_dict`): x, multipliers, stroboscopic_multipliers, stable, trace,
 /// det, events, residual, newton_iterations, spec. Raises NewtonError if Newton fails.
 #[pyfunction]
-#[pyo3(signature = (system, x0, *, section="half_period", iterations=1, winding=1, tol=1e-11, newton_tol=1e-9, max_iter=30))]
+#[pyo3(signature = (system, x0, *, section="half_period", iterations=1, winding=None, tol=1e-11, newton_tol=1e-9, max_iter=30))]
 #[allow(clippy::too_many_arguments)]
 fn shoot<'py>(
     py: Python<'py>,
     system: &Bound<'py, PyAny>,
     x0: &Bound<'py, PyAny>,
     section: &str,
-    iterations: usize,
-    winding: i32,
+    iterations: i64,
+    winding: Option<i32>,
     tol: f64,
     newton_tol: f64,
-    max_iter: usize,
+    max_iter: i64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let sys = system_of(system)?;
+    let sys = extract_system(system)?;
     let x0 = state(x0, "x0")?;
-    let spec = orbit_spec(section, iterations, winding)?;
+    let spec = orbit_spec(
+        section,
+        iterations,
+        winding.unwrap_or(sys.default_winding()),
+    )?;
     let opts = shooting(tol, newton_tol, max_iter)?;
     let o = py
         .detach(|| gearbif::orbits::shoot(sys.dynsys(), &spec, x0, &opts))

@@ -10,6 +10,7 @@ use gearbif::model::{
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use serde::Serialize;
 
 /// The gear as built: dipole moments, centre distance, inertia, shaft angles, friction (SI units).
 ///
@@ -210,10 +211,15 @@ impl PyGear {
     /// A copy with one parameter changed: name in f [Hz], g [1/s²], zeta [1/s], eta [1/s²],
     /// delta [1], theta [deg] (parallel shafts, sets Δ = cos²Θ − 2 sin²Θ).
     fn with_param(&self, name: &str, value: f64) -> PyResult<Self> {
-        let p = GearParam::from_name(name).py()?;
         Ok(Self {
-            inner: Parametrised::with_param(&self.inner, p, value).py()?,
+            inner: with_named_param(&self.inner, name, value)?,
         })
+    }
+    /// The parameters as a dict {name: value}: f [Hz], g [1/s²], zeta [1/s], eta [1/s²],
+    /// delta [1], theta [deg].
+    #[getter]
+    fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        params_dict(py, &self.inner)
     }
 
     /// Coupling g [1/s²].
@@ -277,7 +283,7 @@ impl PyGear {
     /// The analytic locked orbits at Δ = ±1 (stable and unstable): a dict with `stable` and
     /// `unstable` entries (phase [rad], state (β [rad], ω [rad/s]) as numpy array, winding,
     /// multipliers of P_T as complex numpy array, stable) and `load` = (2πfζ + η)/g.
-    /// Raises UnsupportedError unless Δ = ±1, InvalidParameterError beyond f_c.
+    /// Raises UnsupportedError unless Δ = ±1 and f < f_c.
     fn lock_branch<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let lb = self.inner.lock_branch().py()?;
         let d = PyDict::new(py);
@@ -299,9 +305,8 @@ impl PyGear {
     }
     /// The forces (a, r) at (t [s], β [rad], ω [rad/s]): smooth acceleration a and dry-friction
     /// magnitude r, both [1/s²], in β̈ = a − sgn(ω) r.
-    fn forces(&self, t: f64, beta: f64, omega: f64) -> (f64, f64) {
-        let f = self.inner.forces(t, beta, omega);
-        (f.a, f.r)
+    fn forces(&self, t: f64, beta: f64, omega: f64) -> PyResult<(f64, f64)> {
+        forces(&self.inner, t, beta, omega)
     }
     fn __repr__(&self) -> String {
         let g = &self.inner;
@@ -318,94 +323,169 @@ impl PyGear {
     }
 }
 
-/// A Coulomb-damped, harmonically forced linear oscillator (Den Hartog's problem):
-///
-///   ẍ + 2ξω₀ẋ + ω₀²x + μ sgn(ẋ) = F cos(2π f t)
-///
-/// CoulombOscillator(omega0, xi, mu, force, f): omega0 [rad/s], xi [1], mu and force
-/// [acceleration units, e.g. m/s² for x in m], f [Hz]. The state is (x, ẋ).
-/// Parameter columns of the map Jacobians: (f, omega0, xi, mu, force).
-#[pyclass(name = "CoulombOscillator", module = "gearbif", frozen)]
-#[derive(Clone)]
-pub struct PyCoulomb {
-    pub inner: CoulombOscillator,
+/// Defines the Python class of a built-in oscillator with a parameter lens: the constructor takes
+/// the parameters by name (validated by the Rust constructor), one getter per parameter, and the
+/// methods every system shares (`period`, `param_names`, `params`, `with_param`, `forces`).
+macro_rules! oscillator_class {
+    ($(#[$doc:meta])* $py_ty:ident, $py_name:literal, $sys:ty, $variant:ident, ($($arg:ident: $arg_doc:literal),+)) => {
+        $(#[$doc])*
+        #[pyclass(name = $py_name, module = "gearbif", frozen)]
+        #[derive(Clone)]
+        pub struct $py_ty {
+            pub inner: $sys,
+        }
+
+        #[pymethods]
+        impl $py_ty {
+            #[new]
+            #[pyo3(signature = ($($arg),+))]
+            fn new($($arg: f64),+) -> PyResult<Self> {
+                Ok(Self {
+                    inner: <$sys>::new($($arg),+).py()?,
+                })
+            }
+            $(
+                #[doc = $arg_doc]
+                #[getter]
+                fn $arg(&self) -> f64 {
+                    self.inner.$arg
+                }
+            )+
+            /// Drive period T = 1/f [s].
+            #[getter]
+            fn period(&self) -> f64 {
+                self.inner.period()
+            }
+            /// Names of the parameter columns of the map Jacobians.
+            #[getter]
+            fn param_names(&self) -> Vec<&'static str> {
+                param_names(&self.inner)
+            }
+            /// The parameters as a dict {name: value} (the names of `with_param`).
+            #[getter]
+            fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+                params_dict(py, &self.inner)
+            }
+            /// A copy with one parameter (a name of `params`) changed, validated.
+            fn with_param(&self, name: &str, value: f64) -> PyResult<Self> {
+                Ok(Self {
+                    inner: with_named_param(&self.inner, name, value)?,
+                })
+            }
+            /// The forces (a, r) at (t [s], state, velocity), in ẍ = a − sgn(ẋ) r.
+            fn forces(&self, t: f64, x: f64, v: f64) -> PyResult<(f64, f64)> {
+                forces(&self.inner, t, x, v)
+            }
+            fn __repr__(&self) -> String {
+                repr($py_name, &self.inner)
+            }
+        }
+
+        impl PySystem for $sys {
+            fn to_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+                Ok(Bound::new(py, $py_ty { inner: *self })?.into_any())
+            }
+            fn into_system(self) -> System {
+                System::$variant(self)
+            }
+        }
+    };
 }
 
-#[pymethods]
-impl PyCoulomb {
-    #[new]
-    fn new(omega0: f64, xi: f64, mu: f64, force: f64, f: f64) -> PyResult<Self> {
-        Ok(Self {
-            inner: CoulombOscillator::new(omega0, xi, mu, force, f).py()?,
-        })
+oscillator_class!(
+    /// A Coulomb-damped, harmonically forced linear oscillator (Den Hartog's problem):
+    ///
+    ///   ẍ + 2ξω₀ẋ + ω₀²x + μ sgn(ẋ) = F cos(2π f t)
+    ///
+    /// CoulombOscillator(omega0, xi, mu, force, f): omega0 [rad/s], xi [1], mu and force
+    /// [acceleration units, e.g. m/s² for x in m], f [Hz]. The state is (x, ẋ).
+    /// Parameters (and Jacobian columns): f, omega0, xi, mu, force. Raises InvalidParameterError
+    /// for a non-finite or out-of-range value (omega0, f > 0; xi, mu >= 0).
+    PyCoulomb,
+    "CoulombOscillator",
+    CoulombOscillator,
+    Coulomb,
+    (
+        omega0: "Natural angular frequency ω₀ [rad/s].",
+        xi: "Viscous damping ratio ξ [1].",
+        mu: "Coulomb friction μ [acceleration units].",
+        force: "Forcing amplitude F [acceleration units].",
+        f: "Forcing frequency f [Hz]."
+    )
+);
+
+oscillator_class!(
+    /// A forced pendulum with viscous and dry friction:
+    ///
+    ///   θ̈ + γθ̇ + μ sgn(θ̇) + ω₀² sin θ = A cos(2π f t)
+    ///
+    /// ForcedPendulum(omega0, gamma, mu, amplitude, f): omega0 [rad/s], gamma [1/s], mu and
+    /// amplitude [1/s²], f [Hz]. The state is (θ [rad], θ̇ [rad/s]).
+    /// Parameters (and Jacobian columns): f, omega0, gamma, mu, amplitude. Raises
+    /// InvalidParameterError for a non-finite or out-of-range value (omega0, f > 0; gamma, mu >= 0).
+    PyPendulum,
+    "ForcedPendulum",
+    ForcedPendulum,
+    Pendulum,
+    (
+        omega0: "Small-amplitude angular frequency ω₀ [rad/s].",
+        gamma: "Viscous damping γ [1/s].",
+        mu: "Dry friction μ [1/s²].",
+        amplitude: "Forcing amplitude A [1/s²].",
+        f: "Forcing frequency f [Hz]."
+    )
+);
+
+/// A system of the module: converts back to its Python class and into [`System`].
+pub trait PySystem: Parametrised + Serialize + 'static {
+    /// The Python object (Gear, CoulombOscillator, ForcedPendulum) of this system.
+    fn to_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>>;
+    /// The owned system as the module's enum.
+    fn into_system(self) -> System;
+}
+
+impl PySystem for Gear {
+    fn to_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        Ok(Bound::new(py, PyGear { inner: *self })?.into_any())
     }
-    /// Drive period T = 1/f [s].
-    #[getter]
-    fn period(&self) -> f64 {
-        self.inner.period()
-    }
-    /// Names of the parameter columns of the map Jacobians.
-    #[getter]
-    fn param_names(&self) -> Vec<&'static str> {
-        param_names(&self.inner)
-    }
-    /// The forces (a, r) at (t, x, ẋ), in ẍ = a − sgn(ẋ) r.
-    fn forces(&self, t: f64, x: f64, v: f64) -> (f64, f64) {
-        let f = self.inner.forces(t, x, v);
-        (f.a, f.r)
-    }
-    fn __repr__(&self) -> String {
-        let o = &self.inner;
-        format!(
-            "CoulombOscillator(omega0={}, xi={}, mu={}, force={}, f={})",
-            o.omega0, o.xi, o.mu, o.force, o.f
-        )
+    fn into_system(self) -> System {
+        System::Gear(self)
     }
 }
 
-/// A forced pendulum with viscous and dry friction:
-///
-///   θ̈ + γθ̇ + μ sgn(θ̇) + ω₀² sin θ = A cos(2π f t)
-///
-/// ForcedPendulum(omega0, gamma, mu, amplitude, f): omega0 [rad/s], gamma [1/s], mu and amplitude
-/// [1/s²], f [Hz]. The state is (θ [rad], θ̇ [rad/s]).
-/// Parameter columns of the map Jacobians: (f, omega0, gamma, mu, amplitude).
-#[pyclass(name = "ForcedPendulum", module = "gearbif", frozen)]
-#[derive(Clone)]
-pub struct PyPendulum {
-    pub inner: ForcedPendulum,
+/// The parameters of a system as a dict {name: value}, in the order of its parameter type.
+pub fn params_dict<'py, S: Parametrised>(py: Python<'py>, s: &S) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for &p in <S::Param as Parameter>::ALL {
+        d.set_item(p.name(), s.param(p))?;
+    }
+    Ok(d)
 }
 
-#[pymethods]
-impl PyPendulum {
-    #[new]
-    fn new(omega0: f64, gamma: f64, mu: f64, amplitude: f64, f: f64) -> PyResult<Self> {
-        Ok(Self {
-            inner: ForcedPendulum::new(omega0, gamma, mu, amplitude, f).py()?,
-        })
+/// `with_param` by name, validated.
+pub fn with_named_param<S: Parametrised>(s: &S, name: &str, value: f64) -> PyResult<S> {
+    let p = S::Param::from_name(name).py()?;
+    s.with_param(p, value).py()
+}
+
+/// The forces (a, r) at a finite point.
+fn forces<S: DrivenOscillator>(s: &S, t: f64, x: f64, v: f64) -> PyResult<(f64, f64)> {
+    if !(t.is_finite() && x.is_finite() && v.is_finite()) {
+        return Err(invalid(format!(
+            "forces: t, x, v must be finite, got ({t}, {x}, {v})"
+        )));
     }
-    /// Drive period T = 1/f [s].
-    #[getter]
-    fn period(&self) -> f64 {
-        self.inner.period()
-    }
-    /// Names of the parameter columns of the map Jacobians.
-    #[getter]
-    fn param_names(&self) -> Vec<&'static str> {
-        param_names(&self.inner)
-    }
-    /// The forces (a, r) at (t, θ, θ̇), in θ̈ = a − sgn(θ̇) r.
-    fn forces(&self, t: f64, theta: f64, v: f64) -> (f64, f64) {
-        let f = self.inner.forces(t, theta, v);
-        (f.a, f.r)
-    }
-    fn __repr__(&self) -> String {
-        let o = &self.inner;
-        format!(
-            "ForcedPendulum(omega0={}, gamma={}, mu={}, amplitude={}, f={})",
-            o.omega0, o.gamma, o.mu, o.amplitude, o.f
-        )
-    }
+    let f = s.forces(t, x, v);
+    Ok((f.a, f.r))
+}
+
+/// `Name(p1=v1, p2=v2, …)` over the system's parameters.
+fn repr<S: Parametrised>(name: &str, s: &S) -> String {
+    let args: Vec<String> = <S::Param as Parameter>::ALL
+        .iter()
+        .map(|&p| format!("{}={}", p.name(), s.param(p)))
+        .collect();
+    format!("{name}({})", args.join(", "))
 }
 
 /// The names of a system's parameter columns.
@@ -420,13 +500,29 @@ pub enum System {
     Pendulum(ForcedPendulum),
 }
 
+/// Runs `$body` with `$s` bound to the concrete system inside a [`System`] (one generic code path
+/// for every system).
+macro_rules! dispatch {
+    ($sys:expr, $s:ident => $body:expr) => {
+        match $sys {
+            $crate::systems::System::Gear($s) => $body,
+            $crate::systems::System::Coulomb($s) => $body,
+            $crate::systems::System::Pendulum($s) => $body,
+        }
+    };
+}
+pub(crate) use dispatch;
+
 impl System {
     /// The system as the library's trait object.
     pub fn dynsys(&self) -> &dyn DrivenOscillator {
+        dispatch!(self, s => s)
+    }
+    /// The default winding of an orbit: 1 for the gear (the lock), 0 for the oscillators.
+    pub fn default_winding(&self) -> i32 {
         match self {
-            System::Gear(g) => g,
-            System::Coulomb(c) => c,
-            System::Pendulum(p) => p,
+            System::Gear(_) => 1,
+            _ => 0,
         }
     }
 }
@@ -448,7 +544,8 @@ pub fn system(obj: &Bound<'_, PyAny>) -> PyResult<System> {
     )))
 }
 
-/// Extracts a gear (the continuation and the classification are for the gear only).
+/// Extracts a gear (for the gear's own functions: the lock, the lock-loss boundary, the paper's
+/// sweep protocol).
 pub fn gear(obj: &Bound<'_, PyAny>) -> PyResult<Gear> {
     match system(obj)? {
         System::Gear(g) => Ok(g),

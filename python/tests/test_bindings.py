@@ -38,54 +38,6 @@ def test_gear_params_reduce_to_g_delta_and_fc():
     assert gear.with_param("theta", 25.0).delta == pytest.approx(gear.delta, abs=1e-15)
 
 
-def test_bad_input_raises_typed_exceptions(tmp_path):
-    with pytest.raises(gearbif.InvalidParameterError) as e:
-        gearbif.Gear.paper(25.0, -1.0)
-    assert e.value.name == "f" and e.value.value == -1.0
-    with pytest.raises(gearbif.InvalidParameterError):
-        gearbif.GearParams(inertia=0.0)
-    with pytest.raises(gearbif.InvalidParameterError):
-        gearbif.CoulombOscillator(omega0=1.0, xi=0.1, mu=-1.0, force=1.0, f=1.0)
-    gear = gearbif.Gear.paper(25.0, 2.7)
-    with pytest.raises(gearbif.InvalidInputError):
-        gearbif.simulate(gear, [0.0, float("nan")], 1.0)
-    with pytest.raises(gearbif.InvalidInputError):
-        gearbif.poincare_map(gear, [1.0, 2.0, 3.0])
-    with pytest.raises(gearbif.InvalidInputError):
-        gearbif.poincare_map(gear, [1.0, 2.0], section="quarter")
-    with pytest.raises(gearbif.InvalidInputError):
-        gearbif.simulate("not a system", [0.0, 0.0], 1.0)
-    with pytest.raises(gearbif.UnsupportedError):
-        gear.lock_branch()  # Δ ≠ ±1
-    osc = gearbif.CoulombOscillator(omega0=2.0, xi=0.05, mu=0.1, force=1.0, f=0.5)
-    with pytest.raises(gearbif.UnsupportedError):
-        gearbif.continuation(osc, [0.0, 0.0], range=(0.1, 1.0))
-    with pytest.raises(gearbif.NewtonError):
-        gearbif.shoot(gear, [3.0, 1.0], max_iter=0)
-    with pytest.raises(gearbif.InvalidInputError):
-        gearbif.continuation(gear, [2.98, 0.6], range=(3.0, 1.5))
-    with pytest.raises(gearbif.GearbifError):  # a missing recording set
-        gearbif.diagnose(tmp_path / "missing")
-    bad = tmp_path / "bad"
-    bad.mkdir()
-    (bad / "experiment.toml").write_text("[gear]\nnot toml at all = = 1\n")
-    with pytest.raises(gearbif.RecordingError) as e:
-        gearbif.fit(bad)
-    assert "experiment.toml" in e.value.file
-    for cls in (
-        gearbif.InvalidParameterError,
-        gearbif.InvalidInputError,
-        gearbif.IntegrationError,
-        gearbif.NewtonError,
-        gearbif.ContinuationError,
-        gearbif.GearbifIOError,
-        gearbif.UnsupportedError,
-        gearbif.NoPeriodError,
-        gearbif.RecordingError,
-    ):
-        assert issubclass(cls, gearbif.GearbifError)
-
-
 # ---------------------------------------------------------------- simulation
 
 

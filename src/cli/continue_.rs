@@ -11,22 +11,82 @@ use crate::maps::Section;
 use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};
 
+/// The arguments `continue` and `diagram` share: the gear, the parameter and its range, the
+/// integrator tolerance and the outputs.
+#[derive(Debug, clap::Args)]
+pub struct BranchArgs {
+    #[command(flatten)]
+    pub gear: GearArgs,
+    /// Continuation parameter: f [Hz], theta (parallel shafts) [deg], delta [1], zeta [1/s],
+    /// eta [1/s²] or g [1/s²].
+    #[arg(long, default_value = "f")]
+    pub param: String,
+    /// Parameter range `lo:hi` in the parameter's unit (finite, lo < hi); the continuation stops
+    /// on its bounds.
+    #[arg(long, allow_hyphen_values = true)]
+    pub range: String,
+    /// Integrator tolerance, in (0, 1).
+    #[arg(long, default_value_t = 1e-11)]
+    pub tol: f64,
+    /// Write the result (JSON) to this file.
+    #[arg(long)]
+    pub out: Option<std::path::PathBuf>,
+    /// Branch diagram (.svg or .png).
+    #[arg(long)]
+    pub plot: Option<std::path::PathBuf>,
+    /// Print JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl BranchArgs {
+    /// The parameter and its range; checks the tolerance and the output files.
+    pub fn parse(&self) -> Result<(GearParam, (f64, f64))> {
+        let param = GearParam::from_name(&self.param)?;
+        let range = parse_range(&self.range)?;
+        tolerance("tol", self.tol)?;
+        if let Some(p) = &self.out {
+            output_file("--out", p, false)?;
+        }
+        if let Some(p) = &self.plot {
+            output_file("--plot", p, true)?;
+        }
+        Ok((param, range))
+    }
+
+    /// Checks the continuation steps: 0 < |ds| <= ds_max (finite), 1 <= max_steps.
+    pub fn check_steps(ds: f64, ds_max: f64, max_steps: usize) -> Result<()> {
+        within("ds-max", ds_max, f64::MIN_POSITIVE, f64::MAX, "must be > 0")?;
+        if ds == 0.0 || !ds.is_finite() || ds.abs() > ds_max {
+            return Err(Error::InvalidInput(format!(
+                "--ds = {ds} must be finite, nonzero and at most --ds-max = {ds_max}"
+            )));
+        }
+        count("max-steps", max_steps, 1, limits::TURNS_MAX)?;
+        Ok(())
+    }
+
+    /// Draws `branches` to --plot, if given.
+    pub fn save_plot<S: Parametrised>(&self, title: String, branches: &[Branch<S>]) -> Result<()> {
+        let Some(p) = &self.plot else { return Ok(()) };
+        let fig = crate::plotting::branch::BranchDiagram {
+            title,
+            branches: branches.to_vec(),
+            paper_convention: self.gear.convention() == crate::model::Convention::Paper,
+            ..Default::default()
+        };
+        crate::plotting::save(&fig, p)
+    }
+}
+
 /// Arguments of `gearbif continue`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    gear: GearArgs,
+    common: BranchArgs,
     /// Drive frequency f [Hz] of the start orbit, in [1e-3, 1e4].
     #[arg(long)]
     f: f64,
-    /// Continuation parameter: f [Hz], theta (parallel shafts) [deg], delta [1], zeta [1/s],
-    /// eta [1/s²] or g [1/s²].
-    #[arg(long, default_value = "f")]
-    param: String,
-    /// Parameter range `lo:hi` in the parameter's unit (finite, lo < hi); the continuation stops
-    /// on its bounds.
-    #[arg(long, allow_hyphen_values = true)]
-    range: String,
     /// Initial direction: up or down in the parameter.
     #[arg(long, default_value = "up")]
     direction: String,
@@ -61,9 +121,6 @@ pub struct Args {
     /// Largest number of steps, 1 to 1000000.
     #[arg(long, default_value_t = 2000)]
     max_steps: usize,
-    /// Integrator tolerance, in (0, 1).
-    #[arg(long, default_value_t = 1e-11)]
-    tol: f64,
     /// Single shooting is trusted up to this multiplier modulus (finite, > 1); beyond it the branch
     /// is continued by multiple shooting (or stops, with --no-multiple-shooting).
     #[arg(long, default_value_t = 1e4)]
@@ -75,18 +132,9 @@ pub struct Args {
     /// continue the new branch too, on the side of the point where it exists (away from the point).
     #[arg(long)]
     switch_at: Option<usize>,
-    /// Write the branch (JSON) to this file.
-    #[arg(long)]
-    out: Option<std::path::PathBuf>,
-    /// Branch diagram (.svg or .png).
-    #[arg(long)]
-    plot: Option<std::path::PathBuf>,
     /// Multipliers in the complex plane (.svg or .png).
     #[arg(long)]
     plot_multipliers: Option<std::path::PathBuf>,
-    /// Print JSON (all branches) on stdout.
-    #[arg(long)]
-    json: bool,
 }
 
 /// Schema id of the branch document written by `--json` and `--out`.
@@ -230,10 +278,9 @@ fn summary(b: &Branch) -> String {
 /// Runs `gearbif continue`.
 pub fn run(a: Args) -> Result<()> {
     check_frequency(a.f)?;
-    let params = a.gear.params()?;
+    let params = a.common.gear.params()?;
     let gear = params.driven(a.f)?;
-    let param = GearParam::from_name(&a.param)?;
-    let (lo, hi) = parse_range(&a.range)?;
+    let (param, (lo, hi)) = a.common.parse()?;
     let sign = match a.direction.as_str() {
         "up" => 1.0,
         "down" => -1.0,
@@ -241,7 +288,7 @@ pub fn run(a: Args) -> Result<()> {
     };
     check_args(&a)?;
     let shooting = ShootingOptions {
-        tol: a.tol,
+        tol: a.common.tol,
         ..Default::default()
     };
     let orbit = start_orbit(&a, &gear, &shooting)?;
@@ -290,18 +337,11 @@ pub fn run(a: Args) -> Result<()> {
     }
     // one document for --out and --json: {"schema": "gearbif.branches/1", "branches": [...]}
     let tagged = serde_json::json!({ "schema": BRANCHES_SCHEMA, "branches": &branches });
-    if let Some(p) = &a.out {
+    if let Some(p) = &a.common.out {
         crate::io::write_json_atomic(p, &tagged)?;
     }
-    if let Some(p) = &a.plot {
-        let fig = crate::plotting::branch::BranchDiagram {
-            title: format!("continuation in {}", param.name()),
-            branches: branches.clone(),
-            paper_convention: a.gear.convention() == crate::model::Convention::Paper,
-            ..Default::default()
-        };
-        crate::plotting::save(&fig, p)?;
-    }
+    a.common
+        .save_plot(format!("continuation in {}", param.name()), &branches)?;
     if let Some(p) = &a.plot_multipliers {
         let fig = crate::plotting::branch::MultiplierPlot {
             title: format!(
@@ -312,28 +352,17 @@ pub fn run(a: Args) -> Result<()> {
         };
         crate::plotting::save(&fig, p)?;
     }
-    Output { json: a.json }.emit(&tagged, || {
+    Output {
+        json: a.common.json,
+    }
+    .emit(&tagged, || {
         branches.iter().map(summary).collect::<Vec<_>>().join("")
     })
 }
 
 /// The domain checks of `continue`, all before any orbit is computed.
 fn check_args(a: &Args) -> Result<()> {
-    tolerance("tol", a.tol)?;
-    within(
-        "ds-max",
-        a.ds_max,
-        f64::MIN_POSITIVE,
-        f64::MAX,
-        "must be > 0",
-    )?;
-    if a.ds == 0.0 || !a.ds.is_finite() || a.ds.abs() > a.ds_max {
-        return Err(Error::InvalidInput(format!(
-            "--ds = {} must be finite, nonzero and at most --ds-max = {}",
-            a.ds, a.ds_max
-        )));
-    }
-    count("max-steps", a.max_steps, 1, limits::TURNS_MAX)?;
+    BranchArgs::check_steps(a.ds, a.ds_max, a.max_steps)?;
     count("period", a.period, 1, 1000)?;
     within(
         "max-multiplier",
@@ -356,16 +385,8 @@ fn check_args(a: &Args) -> Result<()> {
     if let Some(s) = &a.state {
         parse_state(s)?;
     }
-    if let Some(p) = &a.out {
-        output_file("--out", p, false)?;
-    }
-    for (flag, p) in [
-        ("--plot", &a.plot),
-        ("--plot-multipliers", &a.plot_multipliers),
-    ] {
-        if let Some(p) = p {
-            output_file(flag, p, true)?;
-        }
+    if let Some(p) = &a.plot_multipliers {
+        output_file("--plot-multipliers", p, true)?;
     }
     Ok(())
 }

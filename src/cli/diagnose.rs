@@ -22,6 +22,19 @@ pub struct Args {
     /// Skip the figures.
     #[arg(long)]
     no_figures: bool,
+    /// Add the process CPU time and the number of window simulations to every progress line.
+    #[arg(long)]
+    timing: bool,
+}
+
+/// CPU time (user + system) of this process, s, from /proc/self/stat (Linux; `None` elsewhere).
+fn cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // the fields after the command name (which is in parentheses and may hold spaces)
+    let rest = &s[s.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
 }
 
 /// Runs `gearbif diagnose`.
@@ -34,7 +47,16 @@ pub fn run(a: Args) -> Result<()> {
         ..DiagnoseOptions::default()
     };
     let d = diagnose(&set, &opts, &|s| {
-        eprintln!("[{:6.1} s] {s}", t0.elapsed().as_secs_f64())
+        if a.timing {
+            eprintln!(
+                "[{:6.1} s, cpu {:6.1} s, {:8} sims] {s}",
+                t0.elapsed().as_secs_f64(),
+                cpu_seconds().unwrap_or(f64::NAN),
+                crate::identification::predict::simulations()
+            )
+        } else {
+            eprintln!("[{:6.1} s] {s}", t0.elapsed().as_secs_f64())
+        }
     })?;
     let title = a
         .set

@@ -2,10 +2,8 @@
 //! from simulations and analytic branches, continuation, switching at every flip and
 //! symmetry-breaking point, branches recognised modulo symmetry, lift and map).
 
-use super::common::{
-    check_frequency, count, frequency, limits, output_file, tolerance, within, GearArgs, Output,
-};
-use super::continue_::parse_range;
+use super::common::{check_frequency, count, frequency, limits, Output};
+use super::continue_::BranchArgs;
 use crate::continuation::diagram::{diagram, lock_seeds, Diagram, DiagramOptions};
 use crate::continuation::multiple_shooting::MultipleShootingOptions;
 use crate::continuation::ContinuationOptions;
@@ -17,13 +15,7 @@ use crate::orbits::ShootingOptions;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     #[command(flatten)]
-    gear: GearArgs,
-    /// The parameter: f, theta (parallel shafts, deg), delta, zeta, eta or g.
-    #[arg(long, default_value = "f")]
-    param: String,
-    /// Parameter range `lo:hi`.
-    #[arg(long, allow_hyphen_values = true)]
-    range: String,
+    common: BranchArgs,
     /// Drive frequency [Hz] when the parameter is not f.
     #[arg(long, default_value_t = 2.0)]
     f: f64,
@@ -45,18 +37,6 @@ pub struct Args {
     /// Largest number of steps per continuation run.
     #[arg(long, default_value_t = 600)]
     max_steps: usize,
-    /// Integrator tolerance.
-    #[arg(long, default_value_t = 1e-11)]
-    tol: f64,
-    /// Write the diagram (JSON, schema gearbif.diagram/1) to this file.
-    #[arg(long)]
-    out: Option<std::path::PathBuf>,
-    /// The diagram as a figure (.svg or .png).
-    #[arg(long)]
-    plot: Option<std::path::PathBuf>,
-    /// Print the diagram as JSON on stdout.
-    #[arg(long)]
-    json: bool,
 }
 
 fn summary(d: &Diagram) -> String {
@@ -121,37 +101,22 @@ fn summary(d: &Diagram) -> String {
 
 /// The domain checks of `diagram`, all before any orbit is computed.
 fn check_args(a: &Args) -> Result<()> {
-    tolerance("tol", a.tol)?;
-    within(
-        "ds-max",
-        a.ds_max,
-        f64::MIN_POSITIVE,
-        f64::MAX,
-        "must be > 0",
-    )?;
-    if !(a.ds.is_finite() && a.ds > 0.0 && a.ds <= a.ds_max) {
+    BranchArgs::check_steps(a.ds, a.ds_max, a.max_steps)?;
+    if a.ds < 0.0 {
         return Err(Error::InvalidInput(format!(
-            "--ds = {} must be finite, > 0 and at most --ds-max = {}",
-            a.ds, a.ds_max
+            "--ds = {} must be > 0 (the diagram continues both ways)",
+            a.ds
         )));
     }
     count("grid", a.grid, 1, 1000)?;
     count("max-period", a.max_period, 1, 64)?;
     count("relax", a.relax, 1, limits::TURNS_MAX)?;
-    count("max-steps", a.max_steps, 1, limits::TURNS_MAX)?;
-    if let Some(p) = &a.out {
-        output_file("--out", p, false)?;
-    }
-    if let Some(p) = &a.plot {
-        output_file("--plot", p, true)?;
-    }
     Ok(())
 }
 
 /// Runs `gearbif diagram`.
 pub fn run(a: Args) -> Result<()> {
-    let param = GearParam::from_name(&a.param)?;
-    let (lo, hi) = parse_range(&a.range)?;
+    let (param, (lo, hi)) = a.common.parse()?;
     let f = if param == GearParam::F {
         frequency("f", lo)?;
         frequency("f", hi)?;
@@ -161,9 +126,9 @@ pub fn run(a: Args) -> Result<()> {
     };
     check_frequency(f)?;
     check_args(&a)?;
-    let gear = a.gear.params()?.driven(f)?;
+    let gear = a.common.gear.params()?.driven(f)?;
     let shooting = ShootingOptions {
-        tol: a.tol,
+        tol: a.common.tol,
         ..Default::default()
     };
     let opts = DiagramOptions {
@@ -183,21 +148,20 @@ pub fn run(a: Args) -> Result<()> {
     opts.continuation.validate()?;
     let seeds = lock_seeds(&gear, &shooting);
     let d = diagram(&gear, &opts, seeds)?;
-    if let Some(p) = &a.out {
+    if let Some(p) = &a.common.out {
         crate::io::write_json_atomic(p, &crate::io::with_schema("gearbif.diagram/1", &d))?;
     }
-    if let Some(p) = &a.plot {
-        let fig = crate::plotting::branch::BranchDiagram {
-            title: format!(
-                "bifurcation diagram in {} (automatic, {} runs)",
-                param.name(),
-                d.branches.len()
-            ),
-            branches: d.branches.iter().map(|b| b.branch.clone()).collect(),
-            paper_convention: a.gear.convention() == crate::model::Convention::Paper,
-            ..Default::default()
-        };
-        crate::plotting::save(&fig, p)?;
+    let branches: Vec<_> = d.branches.iter().map(|b| b.branch.clone()).collect();
+    a.common.save_plot(
+        format!(
+            "bifurcation diagram in {} (automatic, {} runs)",
+            param.name(),
+            d.branches.len()
+        ),
+        &branches,
+    )?;
+    Output {
+        json: a.common.json,
     }
-    Output { json: a.json }.emit_tagged("gearbif.diagram/1", &d, || summary(&d))
+    .emit_tagged("gearbif.diagram/1", &d, || summary(&d))
 }

@@ -24,7 +24,9 @@ use super::regression::{build, fit, Design, LinFit, Term, WeakOptions, BASE_TERM
 use super::report::{Baseline, Finding, Mismatch, Report, RunRms, SCHEMA};
 use super::ringdown::{fit_kappa, fit_ringdown, KappaFit, RingdownFit};
 use super::select::{select, ModelState, SelectCtx, Tried};
-use super::shooting::{choose_windows, mask_windows, refit, ShootingOptions, SimModel, Win};
+use super::shooting::{
+    choose_windows, mask_windows, par_map, refit, ShootingOptions, SimModel, Win,
+};
 use crate::error::{Error, Result};
 use crate::io::recordings::{RecordingSet, RunKind};
 use serde_json::json;
@@ -483,25 +485,23 @@ fn report(
         fit_latency: false,
         eta_static_excess: 0.0,
     };
-    let base_pred: Vec<Prediction> = (0..nr)
-        .map(|r| {
-            predict(
-                &runs[r],
-                &base_model.coefficients(&base_theta, r),
-                &base.geo,
-                0.0,
-            )
-        })
-        .collect();
+    let base_pred: Vec<Prediction> = par_map(nr, |r| {
+        predict(
+            &runs[r],
+            &base_model.coefficients(&base_theta, r),
+            &base.geo,
+            0.0,
+        )
+    });
     let base_coef = base_model.coefficients(&base_theta, 0);
     let (aug_pred, augmented, latency) = match &final_state {
         Some(st) if !st.effects.is_empty() || excess > 0.0 => {
             let mut m = st.model(runs, &base.geo);
             m.eta_static_excess = excess;
             let lat = st.latency();
-            let p = (0..nr)
-                .map(|r| predict(&runs[r], &m.coefficients(&st.fit.theta, r), &base.geo, lat))
-                .collect();
+            let p = par_map(nr, |r| {
+                predict(&runs[r], &m.coefficients(&st.fit.theta, r), &base.geo, lat)
+            });
             let c = super::spec::coefficients(&st.terms, &st.fit.theta[..st.terms.len()]);
             (
                 p,

@@ -7,6 +7,7 @@ use super::preprocess::CleanRun;
 use super::regression::{delta_bic, fit, Design, LinFit, Term};
 use super::report::Mismatch;
 use super::ringdown::KappaFit;
+use crate::numerics::least_squares::{weighted, DEFAULT_RCOND};
 use serde_json::json;
 use std::collections::BTreeMap;
 
@@ -52,21 +53,14 @@ fn fingerprint_group(
     if n <= p + 2 {
         return None;
     }
-    let mut a = nalgebra::DMatrix::<f64>::zeros(p, p);
-    let mut b = nalgebra::DVector::<f64>::zeros(p);
-    for i in 0..n {
-        let w = 1.0 / (sigma[i] * sigma[i]);
-        for k in 0..p {
-            b[k] += w * regs[k][i] * r[i];
-            for l in 0..p {
-                a[(k, l)] += w * regs[k][i] * regs[l][i];
-            }
-        }
-    }
-    let inv = a.clone().try_inverse()?;
-    let x = &inv * &b;
-    let dchi = (x.transpose() * &b)[(0, 0)] / infl;
-    Some((x.norm(), dchi, p))
+    let rows: Vec<usize> = (0..n).collect();
+    let w = |i: usize| 1.0 / (sigma[i] * sigma[i]);
+    let s = weighted(&rows, p, |i, k| regs[k][i], |i| r[i], w, DEFAULT_RCOND).ok()?;
+    // Δχ² = χ²(r) − χ²(r − Xx), the χ² the group explains
+    let chi0: f64 = (0..n).map(|i| w(i) * r[i] * r[i]).sum();
+    let chi1: f64 = s.resid.iter().map(|e| e * e).sum();
+    let norm = s.x.iter().map(|v| v * v).sum::<f64>().sqrt();
+    Some((norm, (chi0 - chi1) / infl, p))
 }
 
 /// Thresholds of [`locate`].

@@ -8,6 +8,7 @@ use super::lm::{least_squares, LsqFit};
 use super::model::{AugmentedGear, Coefficients, Geometry};
 use super::preprocess::CleanRun;
 use crate::integrator::{EventDriven, FlowMethod, FlowOptions};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Samples per prediction window (at most).
 pub const WINDOW: usize = 30;
@@ -77,8 +78,18 @@ pub fn window_system(
     }
 }
 
+/// Window simulations run by this process (all threads): the unit of work of the diagnosis,
+/// a load-independent measure of its cost.
+static SIMULATIONS: AtomicU64 = AtomicU64::new(0);
+
+/// The number of window simulations ([`simulate`]) run so far by this process.
+pub fn simulations() -> u64 {
+    SIMULATIONS.load(Ordering::Relaxed)
+}
+
 /// β of `sys` from the state `x0` at `t0`, at `times` (exact Filippov flow, tolerance 1e-8).
 pub fn simulate(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<f64>> {
+    SIMULATIONS.fetch_add(1, Ordering::Relaxed);
     let t1 = *times.last()?;
     let opts = FlowOptions::with_tol(1e-8).samples(times.to_vec());
     let f = EventDriven.flow(sys, t0, x0, t1, &opts).ok()?;

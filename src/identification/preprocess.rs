@@ -44,12 +44,20 @@ pub fn poly_weights(x: &[f64], deg: usize, d: usize) -> Option<Vec<f64>> {
     }
     let scale = x.iter().fold(0.0f64, |a, &b| a.max(b.abs())).max(1e-300);
     let a = DMatrix::from_fn(n, m, |i, k| (x[i] / scale).powi(k as i32));
-    let ata = a.transpose() * &a;
-    let inv = ata.try_inverse()?;
-    // row d of (AᵀA)⁻¹Aᵀ, times d!/scale^d
-    let pinv = inv * a.transpose();
+    // row d of the pseudo-inverse A⁺ = R⁻¹Qᵀ (thin QR, no normal equations): w = Q R⁻ᵀ e_d,
+    // times d!/scale^d
+    let qr = a.qr();
+    let r = qr.r();
+    let rmax = (0..m).map(|k| r[(k, k)].abs()).fold(0.0, f64::max);
+    if rmax.is_nan() || (0..m).any(|k| r[(k, k)].abs() <= 1e-12 * rmax) {
+        return None;
+    }
+    let mut ed = nalgebra::DVector::zeros(m);
+    ed[d] = 1.0;
+    let z = r.transpose().solve_lower_triangular(&ed)?;
+    let w = qr.q() * z;
     let fact = if d == 1 { 1.0 / scale } else { 1.0 };
-    Some((0..n).map(|j| pinv[(d, j)] * fact).collect())
+    Some((0..n).map(|j| w[j] * fact).collect())
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -195,4 +203,24 @@ pub fn velocity(t: &[f64], b: &[f64], dt: f64) -> (Vec<f64>, f64) {
         }
     }
     (v, median(&mut gains))
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn polynomial_weights_reproduce_a_cubic_and_its_slope() {
+        // uneven abscissae around 0; y = 0.4 − 1.5x + 0.8x² + 2x³: p(0) = 0.4, p'(0) = −1.5
+        let x = [-0.031, -0.019, -0.01, 0.012, 0.02, 0.033, 0.041];
+        let y: Vec<f64> = x
+            .iter()
+            .map(|x| 0.4 - 1.5 * x + 0.8 * x * x + 2.0 * x * x * x)
+            .collect();
+        for (d, want) in [(0, 0.4), (1, -1.5)] {
+            let w = super::poly_weights(&x, 3, d).unwrap();
+            let got: f64 = w.iter().zip(&y).map(|(a, b)| a * b).sum();
+            assert!((got - want).abs() < 1e-11, "d = {d}: {got}");
+        }
+        // three distinct points cannot carry a cubic
+        assert!(super::poly_weights(&x[..3], 3, 0).is_none());
+    }
 }

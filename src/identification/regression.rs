@@ -8,14 +8,15 @@
 //! by ∫φ and so reads as a local mean acceleration in rad/s². Windows that contain a gap or a
 //! stick phase (where the sliding equation does not hold) are skipped.
 //!
-//! The rows are fitted by weighted least squares (weights 1/σ_y² from the propagated camera noise)
+//! The rows are fitted by weighted least squares by column-pivoted QR (weights 1/σ_y² from the propagated camera noise)
 //! with Huber reweighting (robust loss, k = 2.5 robust σ). Rows overlap and residuals are
 //! correlated: the effective sample size n_eff = Σ_runs n_run / τ_run, with τ the integrated
 //! autocorrelation time of the standardised residuals, scales the covariance and the BIC.
 
 use super::model::{force_shape, Geometry};
 use super::preprocess::CleanRun;
-use nalgebra::{DMatrix, DVector};
+use crate::numerics::least_squares::{weighted, LeastSquaresError, DEFAULT_RCOND};
+use nalgebra::DMatrix;
 
 /// A term of the equation of motion (a column of the regression).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -653,66 +654,45 @@ pub fn autocorr_time(e: &[f64]) -> f64 {
     tau.max(1.0)
 }
 
-fn normal_eq(
+/// Weighted least squares of the design's columns `cols` on the rows `rows` (weights `w`), by
+/// column-pivoted QR: (θ, (XᵀWX)⁻¹).
+fn solve(
     d: &Design,
     cols: &[usize],
     w: &[f64],
-    rows: impl Iterator<Item = usize>,
-) -> (DMatrix<f64>, DVector<f64>) {
-    let p = cols.len();
-    let mut a = DMatrix::zeros(p, p);
-    let mut b = DVector::zeros(p);
-    let mut xr = vec![0.0; p];
-    for i in rows {
-        for (k, &c) in cols.iter().enumerate() {
-            xr[k] = d.at(i, c);
-        }
-        let wi = w[i];
-        for k in 0..p {
-            b[k] += wi * xr[k] * d.y[i];
-            for l in 0..=k {
-                a[(k, l)] += wi * xr[k] * xr[l];
-            }
-        }
-    }
-    for k in 0..p {
-        for l in 0..k {
-            a[(l, k)] = a[(k, l)];
-        }
-    }
-    (a, b)
+    rows: &[usize],
+) -> Result<(Vec<f64>, DMatrix<f64>), LeastSquaresError> {
+    let s = weighted(
+        rows,
+        cols.len(),
+        |i, k| d.at(i, cols[k]),
+        |i| d.y[i],
+        |i| w[i],
+        DEFAULT_RCOND,
+    )?;
+    Ok((s.x, s.cov_unit))
 }
 
-fn solve(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
-    // equilibrate for conditioning
-    let p = a.nrows();
-    let s: Vec<f64> = (0..p)
-        .map(|k| 1.0 / a[(k, k)].abs().sqrt().max(1e-300))
-        .collect();
-    let sa = DMatrix::from_fn(p, p, |i, j| a[(i, j)] * s[i] * s[j]);
-    let inv = sa.clone().try_inverse()?;
-    let inv = DMatrix::from_fn(p, p, |i, j| inv[(i, j)] * s[i] * s[j]);
-    let x = &inv * b;
-    if x.iter().all(|v| v.is_finite()) {
-        Some((x, inv))
-    } else {
-        None
-    }
-}
-
-/// Fits columns `cols` of the design (Huber IRLS); `None` if singular or no rows.
+/// Fits columns `cols` of the design (Huber IRLS); `None` if the columns are dependent or there
+/// are too few rows ([`fit_checked`] says which).
 pub fn fit(d: &Design, cols: &[usize]) -> Option<LinFit> {
+    fit_checked(d, cols).ok()
+}
+
+/// [`fit`] with the reason of a failure: too few rows, or columns that are linearly dependent on
+/// the rows (named by their index in `cols`).
+pub fn fit_checked(d: &Design, cols: &[usize]) -> Result<LinFit, LeastSquaresError> {
     let n = d.rows();
     let p = cols.len();
     if n <= p + 2 {
-        return None;
+        return Err(LeastSquaresError::TooFewRows { rows: n, cols: p });
     }
+    let all: Vec<usize> = (0..n).collect();
     let base_w: Vec<f64> = d.sigma.iter().map(|s| 1.0 / (s * s).max(1e-300)).collect();
     let mut w = base_w.clone();
     let mut sol = None;
     for _ in 0..8 {
-        let (a, b) = normal_eq(d, cols, &w, 0..n);
-        let (x, inv) = solve(&a, &b)?;
+        let (x, inv) = solve(d, cols, &w, &all)?;
         let resid: Vec<f64> = (0..n)
             .map(|i| {
                 d.y[i]
@@ -744,7 +724,7 @@ pub fn fit(d: &Design, cols: &[usize]) -> Option<LinFit> {
             break;
         }
     }
-    let (x, inv, resid) = sol?;
+    let (x, inv, resid) = sol.ok_or(LeastSquaresError::TooFewRows { rows: n, cols: p })?;
     let rss: f64 = (0..n).map(|i| w[i] * resid[i] * resid[i]).sum();
     let chi2: f64 = (0..n).map(|i| (resid[i] / d.sigma[i]).powi(2)).sum();
     // effective n from the autocorrelation of standardised residuals, run by run
@@ -763,9 +743,9 @@ pub fn fit(d: &Design, cols: &[usize]) -> Option<LinFit> {
     let s2 = rss / (n - p) as f64;
     let cov = inv * (s2 * n as f64 / n_eff);
     let rms = (resid.iter().map(|r| r * r).sum::<f64>() / n as f64).sqrt();
-    Some(LinFit {
+    Ok(LinFit {
         cols: cols.to_vec(),
-        coef: x.iter().copied().collect(),
+        coef: x.to_vec(),
         cov,
         resid,
         w,
@@ -783,15 +763,14 @@ pub fn fit(d: &Design, cols: &[usize]) -> Option<LinFit> {
 /// rows give 0) and their sum.
 pub fn loro(d: &Design, full: &LinFit, nruns: usize) -> (Vec<f64>, f64) {
     let cols = &full.cols;
-    let (a, b) = normal_eq(d, cols, &full.w, 0..d.rows());
     let mut per = vec![0.0; nruns];
     for (r, per_r) in per.iter_mut().enumerate() {
         let rows: Vec<usize> = (0..d.rows()).filter(|&i| d.run[i] == r).collect();
         if rows.is_empty() {
             continue;
         }
-        let (ar, br) = normal_eq(d, cols, &full.w, rows.iter().copied());
-        let Some((x, _)) = solve(&(&a - ar), &(&b - br)) else {
+        let others: Vec<usize> = (0..d.rows()).filter(|&i| d.run[i] != r).collect();
+        let Ok((x, _)) = solve(d, cols, &full.w, &others) else {
             *per_r = f64::INFINITY;
             continue;
         };
@@ -813,7 +792,6 @@ pub fn loro(d: &Design, full: &LinFit, nruns: usize) -> (Vec<f64>, f64) {
 
 /// Coefficients fitted without run `r` (for held-out predictions), in the order of `full.cols`.
 pub fn coef_without(d: &Design, full: &LinFit, r: usize) -> Option<Vec<f64>> {
-    let cols = &full.cols;
-    let (a, b) = normal_eq(d, cols, &full.w, (0..d.rows()).filter(|&i| d.run[i] != r));
-    solve(&a, &b).map(|(x, _)| x.iter().copied().collect())
+    let rows: Vec<usize> = (0..d.rows()).filter(|&i| d.run[i] != r).collect();
+    solve(d, &full.cols, &full.w, &rows).ok().map(|(x, _)| x)
 }

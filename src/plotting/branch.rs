@@ -129,16 +129,15 @@ impl<S: Parametrised> BranchDiagram<S> {
 }
 
 fn range(v: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for x in v.filter(|x| x.is_finite()) {
-        lo = lo.min(x);
-        hi = hi.max(x);
-    }
-    if lo > hi {
-        return (0.0, 1.0);
-    }
-    let d = if hi > lo { 0.05 * (hi - lo) } else { 1.0 };
-    (lo - d, hi + d)
+    super::finite_range(v, false).unwrap_or((0.0, 1.0))
+}
+
+/// A special point as drawn: kind, parameter, y value; its number in the list is its index + 1.
+#[derive(Debug, Clone, Copy)]
+struct Mark {
+    kind: SpecialKind,
+    param: f64,
+    y: f64,
 }
 
 /// Draws a run of points of one stability, solid (stable) or dashed (unstable).
@@ -168,9 +167,116 @@ fn draw_run<DB: DrawingBackend, CT: CoordTranslate<From = (f64, f64)>>(
     Ok(())
 }
 
+impl<S: Parametrised> BranchDiagram<S> {
+    /// The distinct legend labels, and for each branch the index of its label (its colour):
+    /// branches of one kind (e.g. several runs of the automatic diagram) share one entry.
+    fn label_groups(&self) -> (Vec<String>, Vec<usize>) {
+        let mut labels: Vec<String> = Vec::new();
+        let idx = self
+            .branches
+            .iter()
+            .enumerate()
+            .map(|(bi, b)| {
+                let l = self
+                    .labels
+                    .get(bi)
+                    .cloned()
+                    .unwrap_or_else(|| branch_label(b));
+                labels.iter().position(|k| *k == l).unwrap_or_else(|| {
+                    labels.push(l);
+                    labels.len() - 1
+                })
+            })
+            .collect();
+        (labels, idx)
+    }
+
+    /// The special points of all branches, each once (the same point found on several runs is
+    /// drawn and listed once), in order of the parameter.
+    fn marks(&self, x_span: f64, y_span: f64) -> Vec<Mark> {
+        let mut v: Vec<Mark> = Vec::new();
+        for s in self.branches.iter().flat_map(|b| b.specials.iter()) {
+            let m = Mark {
+                kind: s.kind,
+                param: s.param,
+                y: self.y(s.x),
+            };
+            let dup = v.iter().any(|o| {
+                o.kind == m.kind
+                    && (o.param - m.param).abs() <= 1e-4 * x_span
+                    && (o.y - m.y).abs() <= 1e-3 * y_span
+            });
+            if !dup {
+                v.push(m);
+            }
+        }
+        v.sort_by(|a, b| a.param.total_cmp(&b.param));
+        v
+    }
+
+    /// Height of the side panel's content: the legend, then one row per special point.
+    fn panel_height(&self) -> u32 {
+        let (labels, _) = self.label_groups();
+        let n = self.marks(1.0, 1.0).len();
+        (60 + 20 * labels.len() + 30 + 17 * n) as u32
+    }
+
+    /// Draws the side panel: the branch legend, then the numbered special points.
+    fn draw_panel<DB: DrawingBackend>(
+        &self,
+        side: &DrawingArea<DB, Shift>,
+        labels: &[String],
+        marks: &[Mark],
+        pname: &str,
+    ) -> Result<()> {
+        let font = ("sans-serif", 14).into_font();
+        let small = ("sans-serif", 13).into_font();
+        let mut y = 20;
+        side.draw(&Text::new(
+            "solid: stable, dashed: unstable",
+            (5, y),
+            font.clone(),
+        ))
+        .map_err(plot_err)?;
+        y += 25;
+        for (li, l) in labels.iter().enumerate() {
+            let col = Palette99::pick(li).to_rgba();
+            side.draw(&PathElement::new(
+                vec![(8, y + 7), (30, y + 7)],
+                col.stroke_width(3),
+            ))
+            .map_err(plot_err)?;
+            side.draw(&Text::new(l.as_str(), (36, y), font.clone()))
+                .map_err(plot_err)?;
+            y += 20;
+        }
+        if marks.is_empty() {
+            return Ok(());
+        }
+        y += 10;
+        side.draw(&Text::new("special points", (5, y), font.clone()))
+            .map_err(plot_err)?;
+        y += 20;
+        for (i, m) in marks.iter().enumerate() {
+            side.draw(&Text::new(format!("{:>2}", i + 1), (5, y), small.clone()))
+                .map_err(plot_err)?;
+            side.draw(&(EmptyElement::at((38, y + 7)) + kind_marker::<DB>(m.kind, (0, 0))))
+                .map_err(plot_err)?;
+            side.draw(&Text::new(
+                format!("{} {pname} = {:.4}", m.kind.label(), m.param),
+                (52, y),
+                small.clone(),
+            ))
+            .map_err(plot_err)?;
+            y += 17;
+        }
+        Ok(())
+    }
+}
+
 impl<S: Parametrised> Figure for BranchDiagram<S> {
     fn size(&self) -> (u32, u32) {
-        (1150, 640)
+        (1150, self.panel_height().max(640))
     }
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         root.fill(&WHITE).map_err(plot_err)?;
@@ -198,8 +304,9 @@ impl<S: Parametrised> Figure for BranchDiagram<S> {
             .axis_desc_style(("sans-serif", 15))
             .draw()
             .map_err(plot_err)?;
+        let (labels, color_of) = self.label_groups();
         for (bi, b) in self.branches.iter().enumerate() {
-            let col = Palette99::pick(bi).to_rgba();
+            let col = Palette99::pick(color_of[bi]).to_rgba();
             // runs of equal stability; break runs where β wraps around
             let mut run: Vec<(f64, f64)> = Vec::new();
             let mut stable = b.points.first().map(|p| p.stable).unwrap_or(true);
@@ -223,54 +330,36 @@ impl<S: Parametrised> Figure for BranchDiagram<S> {
             }
             draw_run(&mut chart, &run, stable, col)?;
         }
-        for b in &self.branches {
-            chart
-                .draw_series(b.specials.iter().map(|s| {
-                    EmptyElement::at((s.param, self.y(s.x))) + kind_marker::<DB>(s.kind, (0, 0))
-                }))
-                .map_err(plot_err)?;
-        }
-        // the legend sits in the side panel, not over the data: each branch with its special
-        // points in order of the parameter
-        let mut y = 40;
-        let font = ("sans-serif", 14).into_font();
-        side.draw(&Text::new(
-            "solid: stable, dashed: unstable",
-            (5, y - 25),
-            font.clone(),
-        ))
-        .map_err(plot_err)?;
-        for (bi, b) in self.branches.iter().enumerate() {
-            let col = Palette99::pick(bi).to_rgba();
-            side.draw(&PathElement::new(
-                vec![(8, y + 7), (30, y + 7)],
-                col.stroke_width(3),
+        let marks = self.marks(x1 - x0, y1 - y0);
+        chart
+            .draw_series(
+                marks
+                    .iter()
+                    .map(|m| EmptyElement::at((m.param, m.y)) + kind_marker::<DB>(m.kind, (0, 0))),
+            )
+            .map_err(plot_err)?;
+        // the numbers next to the markers, placed so that none covers another or a marker
+        let anchors: Vec<(i32, i32)> = marks
+            .iter()
+            .map(|m| chart.backend_coord(&(m.param, m.y)))
+            .collect();
+        let sizes: Vec<(i32, i32)> = (1..=marks.len())
+            .map(|k| (8 * k.to_string().len() as i32, 12))
+            .collect();
+        let area = chart.plotting_area().get_pixel_range();
+        let bounds = (area.0.start, area.1.start, area.0.end, area.1.end);
+        let placed = super::place_labels(&anchors, &sizes, bounds);
+        for (k, (&(px, py), m)) in placed.iter().zip(&marks).enumerate() {
+            let c = kind_color(m.kind);
+            main.draw(&Text::new(
+                (k + 1).to_string(),
+                (px, py),
+                ("sans-serif", 13).into_font().color(&c),
             ))
             .map_err(plot_err)?;
-            let label = self
-                .labels
-                .get(bi)
-                .cloned()
-                .unwrap_or_else(|| branch_label(b));
-            side.draw(&Text::new(label, (36, y), font.clone()))
-                .map_err(plot_err)?;
-            y += 20;
-            let mut sp: Vec<_> = b.specials.iter().collect();
-            sp.sort_by(|a, b| a.param.total_cmp(&b.param));
-            for s in sp {
-                side.draw(&(EmptyElement::at((46, y + 7)) + kind_marker::<DB>(s.kind, (0, 0))))
-                    .map_err(plot_err)?;
-                side.draw(&Text::new(
-                    format!("{} {pname} = {:.4}", s.kind.label(), s.param),
-                    (60, y),
-                    ("sans-serif", 13).into_font(),
-                ))
-                .map_err(plot_err)?;
-                y += 18;
-            }
-            y += 8;
         }
-        Ok(())
+        // the legend and the list of special points sit in the side panel, not over the data
+        self.draw_panel(&side, &labels, &marks, pname)
     }
 }
 

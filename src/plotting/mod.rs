@@ -160,7 +160,9 @@ pub struct Series {
     pub color: usize,
 }
 
-fn finite_range(v: impl Iterator<Item = f64>, log: bool) -> Option<(f64, f64)> {
+/// The range of the finite values (positive ones for a log axis) with a margin: 5 % of the span
+/// (linear) or a factor 1.2 (log); `None` if there are none.
+pub(crate) fn finite_range(v: impl Iterator<Item = f64>, log: bool) -> Option<(f64, f64)> {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
     for x in v {
@@ -215,6 +217,67 @@ pub fn legend_corner(
         Some((0, pos)) => (pos, 0.0),
         _ => (SeriesLabelPosition::UpperRight, h / (1.0 - h)),
     }
+}
+
+/// Places text labels of pixel sizes `sizes` (w, h) next to their anchors (pixels) so that no
+/// label covers another label or any anchor's marker (a 12 px box), inside `bounds` (x0, y0, x1, y1):
+/// a greedy pass over candidate offsets around each anchor, nearest first. Returns the top-left
+/// corner of each label; a label that fits nowhere free takes the candidate with the least overlap.
+pub fn place_labels(
+    anchors: &[(i32, i32)],
+    sizes: &[(i32, i32)],
+    bounds: (i32, i32, i32, i32),
+) -> Vec<(i32, i32)> {
+    type Rect = (i32, i32, i32, i32);
+    let overlap = |a: &Rect, b: &Rect| {
+        let w = (a.2.min(b.2) - a.0.max(b.0)).max(0);
+        let h = (a.3.min(b.3) - a.1.max(b.1)).max(0);
+        w * h
+    };
+    let markers: Vec<Rect> = anchors
+        .iter()
+        .map(|&(x, y)| (x - 6, y - 6, x + 6, y + 6))
+        .collect();
+    let mut placed: Vec<Rect> = Vec::with_capacity(anchors.len());
+    for (&(x, y), &(w, h)) in anchors.iter().zip(sizes) {
+        let mut best: Option<(i32, Rect)> = None;
+        for r in [1, 2, 3, 5] {
+            let (dx, dy) = (8 * r, 7 * r);
+            for (ox, oy) in [
+                (dx, -dy - h / 2),
+                (dx, dy - h / 2),
+                (-dx - w, -dy - h / 2),
+                (-dx - w, dy - h / 2),
+                (-w / 2, -dy - h),
+                (-w / 2, dy),
+                (dx, -h / 2),
+                (-dx - w, -h / 2),
+            ] {
+                let rect = (x + ox, y + oy, x + ox + w, y + oy + h);
+                if rect.0 < bounds.0 || rect.1 < bounds.1 || rect.2 > bounds.2 || rect.3 > bounds.3
+                {
+                    continue;
+                }
+                let cost: i32 = placed
+                    .iter()
+                    .chain(&markers)
+                    .map(|o| overlap(&rect, o))
+                    .sum();
+                if best.is_none_or(|b| cost < b.0) {
+                    best = Some((cost, rect));
+                }
+                if cost == 0 {
+                    break;
+                }
+            }
+            if best.is_some_and(|b| b.0 == 0) {
+                break;
+            }
+        }
+        let rect = best.map(|b| b.1).unwrap_or((x + 8, y - h, x + 8 + w, y));
+        placed.push(rect);
+    }
+    placed.iter().map(|r| (r.0, r.1)).collect()
 }
 
 /// Draws the points of one marker series (and its legend entry if `label` is not empty).
@@ -399,6 +462,35 @@ impl Figure for LinePlot {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn labels_of_a_dense_cluster_do_not_overlap() {
+        // twelve markers within 30 px (the period-doubling cascade of a diagram), labels "1".."12"
+        let anchors: Vec<(i32, i32)> = (0..12).map(|k| (300 + 3 * k, 200 + 2 * (k % 4))).collect();
+        let sizes: Vec<(i32, i32)> = (1..=12)
+            .map(|k: i32| (8 * k.to_string().len() as i32, 12))
+            .collect();
+        let at = place_labels(&anchors, &sizes, (0, 0, 800, 600));
+        let rects: Vec<_> = at
+            .iter()
+            .zip(&sizes)
+            .map(|(p, s)| (p.0, p.1, p.0 + s.0, p.1 + s.1))
+            .collect();
+        for (i, a) in rects.iter().enumerate() {
+            assert!(a.0 >= 0 && a.1 >= 0 && a.2 <= 800 && a.3 <= 600);
+            for b in &rects[i + 1..] {
+                let apart = a.2 <= b.0 || b.2 <= a.0 || a.3 <= b.1 || b.3 <= a.1;
+                assert!(apart, "{a:?} overlaps {b:?}");
+            }
+            for &(x, y) in &anchors {
+                let clear = a.2 <= x - 6 || x + 6 <= a.0 || a.3 <= y - 6 || y + 6 <= a.1;
+                assert!(clear, "{a:?} covers the marker at ({x}, {y})");
+            }
+        }
+        // and near the plot's edge they stay inside
+        let at = place_labels(&[(795, 5)], &[(16, 12)], (0, 0, 800, 600));
+        assert!(at[0].0 + 16 <= 800 && at[0].1 >= 0);
+    }
 
     #[test]
     fn legend_goes_to_an_empty_corner_or_above_the_data() {
