@@ -370,14 +370,30 @@ fn synth_fit_diagnose_round_trip() {
     let (amp, amp_err) = (num(f, "amplitude"), num(f, "amplitude_err"));
     let size = truth["size"].as_f64().unwrap();
     let st = &truth["static_torque"];
-    let phase_true = st[1].as_f64().unwrap().atan2(st[0].as_f64().unwrap()).to_degrees();
-    assert!((amp - size).abs() <= 3.0 * amp_err, "amplitude {amp} ± {amp_err} vs {size}");
-    assert!(amp_err < 0.05 * size, "amplitude σ {amp_err} for a size of {size}");
+    let phase_true = st[1]
+        .as_f64()
+        .unwrap()
+        .atan2(st[0].as_f64().unwrap())
+        .to_degrees();
+    assert!(
+        (amp - size).abs() <= 3.0 * amp_err,
+        "amplitude {amp} ± {amp_err} vs {size}"
+    );
+    assert!(
+        amp_err < 0.05 * size,
+        "amplitude σ {amp_err} for a size of {size}"
+    );
     let (ph, ph_err) = (num(f, "phase_deg"), num(f, "phase_err_deg"));
-    assert!((ph - phase_true).abs() <= 3.0 * ph_err, "phase {ph} ± {ph_err} vs {phase_true}");
+    assert!(
+        (ph - phase_true).abs() <= 3.0 * ph_err,
+        "phase {ph} ± {ph_err} vs {phase_true}"
+    );
     let base = &rep["baseline"]["params"];
     let (gd, gd_err) = (num(base, "g"), num(base, "g_err"));
-    assert!((gd - g_true).abs() <= 3.0 * gd_err, "g {gd} ± {gd_err} vs {g_true}");
+    assert!(
+        (gd - g_true).abs() <= 3.0 * gd_err,
+        "g {gd} ± {gd_err} vs {g_true}"
+    );
     // --list names every catalogued effect the generator knows
     let l = gearbif(&["synth", "--list"]);
     let text = String::from_utf8_lossy(&l.stdout);
