@@ -214,3 +214,88 @@ fn pendulum_fold_curve_passes_a_cusp_confirmed_by_the_fold_pair() {
     );
     assert!(delta0.abs() < 2e-3, "{delta0}");
 }
+
+/// The two symmetry-breaking curves of the T window are one curve by pseudo-arclength, turning in Θ
+/// where they meet. Independent check: at fixed Θ = Θ* + δ the two symmetry-breaking points located
+/// by the determinant-based augmented Newton are Δf apart with Δf² linear in δ to leading order; the
+/// meeting angle extrapolated from three δ agrees with the located turning point.
+#[test]
+fn symmetry_breaking_curves_meet_at_a_located_turning_point_in_theta() {
+    let (f0, x0) = (2.0777402, [2.98464, 8.79534]);
+    let g = Gear::paper(25.0, f0).unwrap();
+    let opts = CurveOptions {
+        ds: -0.2,
+        ds_max: 0.5,
+        along_range: (10.0, 25.0),
+        ..Default::default()
+    };
+    let spec = OrbitSpec::symmetric(1);
+    let c = continue_curve(
+        &EventDriven,
+        &g,
+        &spec,
+        SpecialKind::SymmetryBreaking,
+        GearParam::F,
+        GearParam::ThetaDeg,
+        x0,
+        f0,
+        &opts,
+    )
+    .unwrap();
+    let t = codim2(&c, Codim2Kind::TurningAlong)[0];
+    assert!((t.along - 16.3).abs() < 0.1, "{t:?}");
+    // back at Θ = 25° on the other branch: the supercritical point 2.5013844 Hz (docs/continuation.md)
+    let end = c.points.last().unwrap();
+    assert!(
+        (end.along - 25.0).abs() < 1e-12 && (end.free - 2.501384436).abs() < 1e-7,
+        "{end:?}"
+    );
+    let sh = ShootingOptions::default();
+    let ds = [0.02, 0.04, 0.08];
+    let w: Vec<f64> = ds
+        .iter()
+        .map(|d| {
+            let th = t.along + d;
+            let gt = base_at(th);
+            let pair: Vec<f64> = [-1.0, 1.0]
+                .iter()
+                .map(|s| {
+                    let guess = t.free + s * 0.02 * (d / 0.02f64).sqrt();
+                    locate_augmented(
+                        &gt.with_param(GearParam::F, guess).unwrap(),
+                        &spec,
+                        SpecialKind::SymmetryBreaking,
+                        GearParam::F,
+                        t.x,
+                        guess,
+                        &sh,
+                    )
+                    .unwrap()
+                    .free
+                })
+                .collect();
+            assert!((pair[1] - pair[0]).abs() > 1e-4, "Θ = {th}: {pair:?}");
+            (pair[1] - pair[0]).powi(2)
+        })
+        .collect();
+    let (d1, d2, d3) = (ds[0], ds[1], ds[2]);
+    let b = ((w[2] - w[1]) / (d3 - d2) - (w[1] - w[0]) / (d2 - d1)) / (d3 - d1);
+    let a = (w[1] - w[0]) / (d2 - d1) - b * (d1 + d2);
+    let c0 = w[0] - a * d1 - b * d1 * d1;
+    let delta0 = if b.abs() > 1e-12 {
+        (-a + (a * a - 4.0 * b * c0).sqrt()) / (2.0 * b)
+    } else {
+        -c0 / a
+    };
+    println!(
+        "SB curves meet at Θ = {:.9}°, f = {:.9} Hz; pair extrapolation Θ* = {:.9}° ({delta0:.1e})",
+        t.along,
+        t.free,
+        t.along + delta0
+    );
+    assert!(delta0.abs() < 1e-5, "{delta0}");
+}
+
+fn base_at(theta_deg: f64) -> Gear {
+    Gear::paper(theta_deg, 2.5).unwrap()
+}

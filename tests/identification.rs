@@ -147,14 +147,18 @@ fn quadratic_drag_is_named_and_sized() {
     o.samples_per_turn = 55;
     let (set, _) = synthesize(&o).unwrap();
     let d = run_set(&set);
+    // the drag family with its exponent fitted: the quadratic member, p = 2
     assert_eq!(
-        d.report.verdict, "quadratic_drag",
+        d.report.verdict, "power_law_drag",
         "{:#?}",
         d.report.findings
     );
     findings_improve_heldout(&d);
-    let s = d.report.findings[0].size.as_ref().unwrap();
-    within(s.value, s.sigma, 0.025, 3.0);
+    let f = &d.report.findings[0];
+    let s = f.size.as_ref().unwrap();
+    assert_eq!((s.name.as_str(), s.unit.as_str()), ("exponent", "1"));
+    within(s.value, s.sigma, 2.0, 3.0);
+    within(f.params["q"], f.params["q_err"], 0.025, 3.0);
 }
 
 #[test]
@@ -348,7 +352,7 @@ fn vector_load_friction_is_not_named_a_drag() {
     let d = run_set(&set);
     findings_improve_heldout(&d);
     assert_ne!(
-        d.report.verdict, "quadratic_drag",
+        d.report.verdict, "power_law_drag",
         "{:#?}",
         d.report.findings
     );

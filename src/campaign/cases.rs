@@ -6,7 +6,9 @@
 use super::generator::{generate, Measurement, SetSize};
 use super::rk4::Rk4Filippov;
 use super::rng::Rng;
-use super::truth::{weight_over_force, PowerDrag, Stribeck, TruthModel, VectorLoad};
+use super::truth::{
+    weight_over_force, PowerDrag, Stribeck, StribeckShape, TanhDrag, TruthModel, VectorLoad,
+};
 use crate::error::{Error, Result};
 use crate::io::recordings::{GearSetup, RecordingSet};
 use serde::{Deserialize, Serialize};
@@ -92,10 +94,10 @@ pub const EFFECTS: &[EffectSpec] = &[
     },
     EffectSpec {
         id: "power_law_drag",
-        expected: &["quadratic_drag"],
+        expected: &["power_law_drag"],
         reference: 0.2,
         unit: "rad^-0.5 s^-0.5",
-        form: "−c |β̇|^1.5 sgn β̇, c = size",
+        form: "−c |β̇|^1.5 sgn β̇, c = size; headline: the exponent 1.5",
     },
     EffectSpec {
         id: "vector_load_friction",
@@ -104,7 +106,7 @@ pub const EFFECTS: &[EffectSpec] = &[
         unit: "1",
         form: "η[(1 − λ) + λ |P(W + F)|/|W|], λ = size (capped at 1): W the shaft weight (0.32 kg), \
                F the dipole–dipole force on the output magnet, P the projection perpendicular to \
-               the output shaft",
+               the output shaft; headline: λ",
     },
     EffectSpec {
         id: "stribeck",
@@ -112,7 +114,31 @@ pub const EFFECTS: &[EffectSpec] = &[
         reference: 0.5,
         unit: "1",
         form: "friction η + Δη_s exp(−(β̇/w)²), Δη_s = size·η, w = 0.5 rad/s; at rest the bound is \
-               η + Δη_s",
+               η + Δη_s; headline: Δη_s/η",
+    },
+    EffectSpec {
+        id: "tanh_drag",
+        expected: &["power_law_drag"],
+        reference: 0.4,
+        unit: "s^-1",
+        form: "−c tanh(β̇/v₀)|β̇|, v₀ = 2 rad/s, c = size: quadratic below v₀, linear above; outside \
+               the drag family (nearest member: an exponent between 1 and 2)",
+    },
+    EffectSpec {
+        id: "lorentz_stribeck",
+        expected: &["static_friction"],
+        reference: 0.5,
+        unit: "1",
+        form: "friction η + Δη_s/(1 + (β̇/w)²), Δη_s = size·η, w = 0.5 rad/s: a Stribeck decay of \
+               another shape than the family's",
+    },
+    EffectSpec {
+        id: "tilted_load_friction",
+        expected: &["load_dependent_friction"],
+        reference: 0.5,
+        unit: "1",
+        form: "`vector_load_friction` with the set-up tilted by 30° about the output shaft (the \
+               weight not vertical in the frame of the magnets): a load geometry outside the family",
     },
     EffectSpec {
         id: "latency",
@@ -290,20 +316,47 @@ pub fn build_case(
             truth.power_drag = Some(PowerDrag {
                 coef: s,
                 exponent: 1.5,
-            })
+            });
+            truths.push(TruthSize {
+                effect: "power_law_drag".into(),
+                value: 1.5,
+                unit: "1".into(),
+            });
         }
-        "vector_load_friction" => {
+        "vector_load_friction" | "tilted_load_friction" => {
+            let tilted = spec.id == "tilted_load_friction";
             truth.load = Some(VectorLoad {
                 fraction: s.min(1.0),
                 weight_over_force: weight_over_force(stated.shaft_mass.unwrap_or(0.32), m1, m2, r),
-            })
+                tilt: if tilted { 30f64.to_radians() } else { 0.0 },
+            });
+            if !tilted {
+                truths.push(TruthSize {
+                    effect: "load_dependent_friction".into(),
+                    value: s.min(1.0),
+                    unit: "1".into(),
+                });
+            }
         }
-        "stribeck" => {
+        "stribeck" | "lorentz_stribeck" => {
             truth.stribeck = Some(Stribeck {
                 excess: s * truth.eta,
                 width: 0.5,
-            })
+                shape: if spec.id == "stribeck" {
+                    StribeckShape::Gaussian
+                } else {
+                    StribeckShape::Lorentzian
+                },
+            });
+            if spec.id == "stribeck" {
+                truths.push(TruthSize {
+                    effect: "static_friction".into(),
+                    value: s,
+                    unit: "1".into(),
+                });
+            }
         }
+        "tanh_drag" => truth.tanh_drag = Some(TanhDrag { coef: s, v0: 2.0 }),
         "latency" => {
             meas.latency_s = s;
             truths.push(TruthSize {

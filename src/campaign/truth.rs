@@ -1,7 +1,8 @@
 //! The campaign's truth model: the gear's equation of motion with composable extra terms in forms
 //! the diagnosis catalog does not contain. Per unit output inertia (all terms in s⁻²):
 //!
-//! β̈ = g B(α_m, β) + Σ_k A_k sin(k β − φ_k) − ζ β̇ − c |β̇|^p sgn β̇ − sgn(β̇) R(α_m, β, β̇),
+//! β̈ = g B(α_m, β) + Σ_k A_k sin(k β − φ_k) − ζ β̇ − c |β̇|^p sgn β̇ − c_t tanh(β̇/v₀) |β̇|
+//!      − sgn(β̇) R(α_m, β, β̇),
 //!
 //! - B(α, β) = −sin α cos β + Δ cos α sin β, Δ = cos Θ cos Φ − 2 sin Θ sin Φ (eq. `tauax`, with
 //!   the true shaft angles, which may be non-parallel);
@@ -11,7 +12,9 @@
 //! - R = η [(1 − λ) + λ |P(W + F(α_m, β))| / |W|] (1 + ε cos 2β) + Δη_s exp(−(β̇/w)²): Coulomb
 //!   friction with a fraction λ proportional to the radial bearing load (weight W plus the
 //!   dipole–dipole force F on the output magnet, added as vectors, projected perpendicular to the
-//!   output shaft by P), modulated by angle (ε), and a Stribeck breakaway excess Δη_s of width w.
+//!   output shaft by P; with the set-up tilted by ψ about the output shaft the weight points along
+//!   −(cos ψ ẑ + sin ψ n̂), n̂ = ẑ × e), modulated by angle (ε), and a Stribeck breakaway excess
+//!   Δη_s of width w (Gaussian exp(−(β̇/w)²), or Lorentzian 1/(1 + (β̇/w)²)).
 //!   At rest the friction bound is R(α_m, β, 0) (Filippov stick rule |smooth part| ≤ R).
 
 use std::f64::consts::PI;
@@ -26,6 +29,26 @@ pub struct VectorLoad {
     pub fraction: f64,
     /// |W| / F₀ with F₀ = 3 μ0 m1 m2 / (4π r⁴), the scale of the dipole force.
     pub weight_over_force: f64,
+    /// Tilt ψ of the set-up about the output shaft axis, rad (0: shafts horizontal).
+    pub tilt: f64,
+}
+
+/// Shape of the Stribeck decay.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StribeckShape {
+    /// exp(−(β̇/w)²).
+    Gaussian,
+    /// 1/(1 + (β̇/w)²).
+    Lorentzian,
+}
+
+/// Drag c_t tanh(β̇/v₀) |β̇|: quadratic below v₀, linear above.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TanhDrag {
+    /// Coefficient c_t, s⁻¹.
+    pub coef: f64,
+    /// Crossover speed v₀, rad/s.
+    pub v0: f64,
 }
 
 /// Stribeck breakaway: extra friction Δη_s exp(−(β̇/w)²).
@@ -35,6 +58,8 @@ pub struct Stribeck {
     pub excess: f64,
     /// Decay width w, rad/s.
     pub width: f64,
+    /// Shape of the decay.
+    pub shape: StribeckShape,
 }
 
 /// Power-law drag c |β̇|^p sgn β̇.
@@ -63,6 +88,8 @@ pub struct TruthModel {
     pub harmonics: Vec<(u32, f64, f64)>,
     /// Power-law drag.
     pub power_drag: Option<PowerDrag>,
+    /// tanh drag.
+    pub tanh_drag: Option<TanhDrag>,
     /// Load-dependent friction.
     pub load: Option<VectorLoad>,
     /// Stribeck breakaway.
@@ -100,6 +127,7 @@ impl TruthModel {
             eta,
             harmonics: Vec::new(),
             power_drag: None,
+            tanh_drag: None,
             load: None,
             stribeck: None,
             angle_modulation: 0.0,
@@ -144,6 +172,9 @@ impl TruthModel {
         if let Some(pd) = self.power_drag {
             a -= pd.coef * omega.abs().powf(pd.exponent) * omega.signum();
         }
+        if let Some(td) = self.tanh_drag {
+            a -= td.coef * (omega / td.v0).tanh() * omega.abs();
+        }
         a
     }
 
@@ -151,12 +182,18 @@ impl TruthModel {
     pub fn friction(&self, alpha_m: f64, beta: f64, omega: f64) -> f64 {
         let mut coulomb = self.eta;
         if let Some(l) = self.load {
-            let ratio = self.radial_load(alpha_m, beta, l.weight_over_force) / l.weight_over_force;
+            let ratio =
+                self.radial_load(alpha_m, beta, l.weight_over_force, l.tilt) / l.weight_over_force;
             coulomb *= (1.0 - l.fraction) + l.fraction * ratio;
         }
         coulomb *= 1.0 + self.angle_modulation * (2.0 * beta).cos();
         if let Some(s) = self.stribeck {
-            coulomb += s.excess * (-(omega / s.width).powi(2)).exp();
+            let x = (omega / s.width).powi(2);
+            coulomb += s.excess
+                * match s.shape {
+                    StribeckShape::Gaussian => (-x).exp(),
+                    StribeckShape::Lorentzian => 1.0 / (1.0 + x),
+                };
         }
         coulomb.max(0.0)
     }
@@ -182,12 +219,16 @@ impl TruthModel {
     }
 
     /// |P(W + F)| / F₀: the radial bearing load in units of the dipole force scale, shafts in the
-    /// horizontal x-y plane, weight along −ẑ, P the projection perpendicular to the output shaft
-    /// axis e = (cos Φ, sin Φ, 0).
-    pub fn radial_load(&self, alpha_m: f64, beta: f64, weight_over_force: f64) -> f64 {
+    /// x-y plane, weight along −(cos ψ ẑ + sin ψ n̂) with n̂ = ẑ × e = (−sin Φ, cos Φ, 0) (ψ = 0:
+    /// horizontal shafts), P the projection perpendicular to the output shaft axis
+    /// e = (cos Φ, sin Φ, 0).
+    pub fn radial_load(&self, alpha_m: f64, beta: f64, weight_over_force: f64, tilt: f64) -> f64 {
         let mut l = self.dipole_force(alpha_m, beta);
-        l[2] -= weight_over_force;
         let (sp, cp) = self.phi.sin_cos();
+        let (st, ct) = tilt.sin_cos();
+        l[0] += weight_over_force * st * sp;
+        l[1] -= weight_over_force * st * cp;
+        l[2] -= weight_over_force * ct;
         let le = l[0] * cp + l[1] * sp;
         let p = [l[0] - le * cp, l[1] - le * sp, l[2]];
         (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()

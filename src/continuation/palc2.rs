@@ -15,7 +15,9 @@
 //! bordering vectors are reset to the left and right null vectors at every accepted point. The
 //! tangent solves [J W⁻¹; t_prevᵀ] t = e₄. Step control as in [`super::palc`]. Codimension-two points
 //! ([`super::codim2`]) are located between two points by an Illinois secant on the scaled arclength,
-//! each trial point corrected on the hyperplane t_a·(W u − W u_a) = σ.
+//! each trial point corrected on the hyperplane t_a·(W u − W u_a) = σ; a bracket whose test function
+//! does not fall below 1e-3 of its end values is a jump (a nonsmooth point), not a zero, and is
+//! dropped.
 
 use super::codim2::{test_functions, Codim2Kind, Codim2Point, CurveLocal};
 use super::minaug::{bordered_test, critical_multiplier, linearise_map, unit, MapLinearisation};
@@ -111,6 +113,15 @@ struct Node {
     step: f64,
 }
 
+/// The scalar equation that makes the orbit special.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Test {
+    /// The bordered test function of M − σI.
+    Bordered(f64),
+    /// det M − 1 (Neimark–Sacker).
+    UnitDeterminant,
+}
+
 /// The augmented system of one curve.
 struct System<'a, S: Parametrised, M> {
     method: &'a M,
@@ -118,7 +129,7 @@ struct System<'a, S: Parametrised, M> {
     spec: OrbitSpec,
     kind: SpecialKind,
     params: [S::Param; 2],
-    sigma: Option<f64>,
+    test: Test,
     b: [f64; 2],
     c: [f64; 2],
     opts: CurveOptions,
@@ -143,12 +154,12 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
             &self.params,
             &self.opts.shooting,
         )?;
-        let (g, v, w) = match self.sigma {
-            Some(s) => {
+        let (g, v, w) = match self.test {
+            Test::Bordered(s) => {
                 let t = bordered_test(&lin.jac, s, self.b, self.c)?;
                 (t.g, t.v, t.w)
             }
-            None => (lin.floquet().ns_test(), [0.0; 2], [0.0; 2]),
+            Test::UnitDeterminant => (lin.floquet().ns_test(), [0.0; 2], [0.0; 2]),
         };
         Ok((lin, g, v, w))
     }
@@ -261,7 +272,7 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
 
     /// Resets the bordering vectors to the null vectors at `node` (a no-op for NS curves).
     fn rebord(&mut self, node: &Node) {
-        if self.sigma.is_some() {
+        if matches!(self.test, Test::Bordered(_)) {
             self.b = unit(node.w);
             self.c = unit(node.v);
         }
@@ -318,9 +329,9 @@ pub fn continue_curve<S: Parametrised, M: FlowMethod<S>>(
     if !(x0.iter().all(|z| z.is_finite()) && free0.is_finite()) {
         return Err(Error::InvalidInput("non-finite start of a curve".into()));
     }
-    let sigma = match kind {
-        SpecialKind::NeimarkSacker => None,
-        k => Some(critical_multiplier(k)?),
+    let test = match kind {
+        SpecialKind::NeimarkSacker => Test::UnitDeterminant,
+        k => Test::Bordered(critical_multiplier(k)?),
     };
     let along0 = sys.param(along);
     let mut s = System {
@@ -329,13 +340,13 @@ pub fn continue_curve<S: Parametrised, M: FlowMethod<S>>(
         spec: *spec,
         kind,
         params: [free, along],
-        sigma,
+        test,
         b: [1.0, 0.0],
         c: [1.0, 0.0],
         opts: *opts,
     };
     // bordering vectors from the multiplier nearest σ at the start
-    if let Some(sg) = sigma {
+    if let Test::Bordered(sg) = test {
         let (lin, ..) = s.eval(&Vector4::new(x0[0], x0[1], free0, along0))?;
         let m = lin.jac - sg * nalgebra::Matrix2::identity();
         let svd = m.svd(true, true);
@@ -531,6 +542,14 @@ fn locate_one<S: Parametrised, M: FlowMethod<S>>(
         best = Some((n, f));
     }
     let (n, f) = best.ok_or_else(|| Error::Continuation("empty codim-2 bracket".into()))?;
+    // a sign change across a discontinuity (e.g. where the orbit starts to touch ω = 0) is no zero
+    if f.abs() > 1e-3 * fa.abs().max(fb.abs()) {
+        return Err(Error::Continuation(format!(
+            "the {} test function jumps instead of vanishing ({fa:.2e} → {fb:.2e}, {f:.2e} at the \
+             bracket)",
+            kind.label()
+        )));
+    }
     Ok(Codim2Point {
         kind,
         free: n.u[2],

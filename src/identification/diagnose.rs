@@ -213,7 +213,7 @@ pub fn fit_base(
         .flat_map(|e| e.terms)
         .chain(super::catalog::dictionary())
     {
-        if !terms.contains(&t) {
+        if !terms.contains(&t) && !matches!(t, Term::Shape(_)) {
             terms.push(t);
         }
     }
@@ -317,9 +317,13 @@ pub fn diagnose(
             before = t.state.as_ref().expect("accepted state");
         }
         progress("static friction (stick phases), judged on held-out runs");
-        if let Some((f, cmp, stands, ex)) =
+        let stribeck_found = findings.iter().any(|f| f.effect == "static_friction");
+        let judged = if stribeck_found {
+            None
+        } else {
             breakaway::judge(runs, &fin, &base.geo, &base.wins, &folds)
-        {
+        };
+        if let Some((f, cmp, stands, ex)) = judged {
             if stands {
                 mismatch.push(Mismatch {
                     where_: "stick phases: the output stays at rest beyond the sliding friction \
@@ -608,7 +612,8 @@ fn fingerprints(
     let d0 = &base.design;
     let final_resid: Vec<f64> = match fin {
         Some(st) if !st.effects.is_empty() => {
-            let d = build(runs, &base.geo, &st.terms, weak, latency);
+            let cols = super::propose::weak_columns(&st.terms, &st.fit.theta);
+            let d = build(runs, &base.geo, &cols, weak, latency);
             (0..d.rows())
                 .map(|i| {
                     d.y[i]

@@ -3,6 +3,7 @@
 
 use super::catalog::{effect_params, Effect};
 use super::judge::{rms_rad, Comparison};
+use super::model::{Shape, DRAG_REFERENCE_SPEED};
 use super::preprocess::CleanRun;
 use super::regression::Term;
 use super::report::{EffectSize, Finding};
@@ -38,9 +39,11 @@ pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<Effec
     };
     match effect.id {
         "static_torque" => mk("amplitude", "amplitude", "amplitude_err", "s^-2"),
-        "quadratic_drag" => mk("q", "q", "q_err", "rad^-1"),
+        "power_law_drag" => mk("exponent", "exponent", "exponent_err", "1"),
         "corotating_drag" => mk("c", "c", "c_err", "s^-1"),
-        "load_dependent_friction" => mk("k", "k", "k_err", "1"),
+        "load_dependent_friction" => {
+            mk("fraction", "fraction", "fraction_err", "1").or_else(|| mk("k", "k", "k_err", "1"))
+        }
         "sensor_latency" => mk("latency", "tau_s", "tau_err_s", "s"),
         "input_compliance" => mk(
             "lag_at_peak_torque",
@@ -111,8 +114,70 @@ pub fn params_of(effect: &Effect, st: &ModelState) -> BTreeMap<String, f64> {
             })
             .flatten()
             .collect(),
+        "power_law_drag" => {
+            let mut p = effect_params(effect, &map, base_values(&map));
+            if let Some((q, e)) = drag_coefficient(st) {
+                p.insert("q".into(), q);
+                p.insert("q_err".into(), e);
+            }
+            p
+        }
+        "load_dependent_friction" => {
+            let mut p = effect_params(effect, &map, base_values(&map));
+            if let Some((l, e)) = load_fraction(st) {
+                p.insert("fraction".into(), l);
+                p.insert("fraction_err".into(), e);
+            }
+            p
+        }
         _ => effect_params(effect, &map, base_values(&map)),
     }
+}
+
+/// The drag family's coefficient in SI form, q_SI = q V^(−p) of −q_SI |β̇|^p sgn β̇
+/// (rad^(1−p) s^(p−2); rad⁻¹ for p = 2), with its 1σ from the refit's covariance (first order).
+pub fn drag_coefficient(st: &ModelState) -> Option<(f64, f64)> {
+    let at = |t: Term| st.terms.iter().position(|&x| x == t);
+    let (iq, ip) = (at(Term::Quad)?, at(Term::Shape(Shape::DragExponent))?);
+    let (q, p) = (st.fit.theta[iq], st.fit.theta[ip]);
+    let v = DRAG_REFERENCE_SPEED;
+    let qs = q * v.powf(-p);
+    let grad = [(iq, v.powf(-p)), (ip, -qs * v.ln())];
+    let mut var = 0.0;
+    for &(a, ga) in &grad {
+        for &(b, gb) in &grad {
+            var += ga * gb * st.fit.cov[(a, b)];
+        }
+    }
+    Some((qs, var.max(0.0).sqrt()))
+}
+
+/// The load-dependent fraction λ = η_L ρ / (η + η_L ρ) of the friction η + η_L L (catalog.rs,
+/// `load_dependent_friction`) with its 1σ from the refit's covariance (first order).
+pub fn load_fraction(st: &ModelState) -> Option<(f64, f64)> {
+    let at = |t: Term| st.terms.iter().position(|&x| x == t);
+    let i_eta = at(Term::Eta)?;
+    let i_load = at(Term::LoadFric).or(at(Term::RadialLoadFric))?;
+    let i_rho = at(Term::Shape(Shape::LoadWeight))?;
+    let th = &st.fit.theta;
+    let (eta, el, rho) = (th[i_eta], th[i_load], th[i_rho]);
+    let n = el * rho;
+    let d = eta + n;
+    if !(rho > 0.0 && d > 0.0) {
+        return None;
+    }
+    let grad = [
+        (i_eta, -n / (d * d)),
+        (i_load, rho * eta / (d * d)),
+        (i_rho, el * eta / (d * d)),
+    ];
+    let mut var = 0.0;
+    for &(a, ga) in &grad {
+        for &(b, gb) in &grad {
+            var += ga * gb * st.fit.cov[(a, b)];
+        }
+    }
+    Some((n / d, var.max(0.0).sqrt()))
 }
 
 /// The judgement's numbers as evidence.
@@ -231,6 +296,8 @@ pub fn rivals(t: &Tried, tried: &[Tried]) -> Vec<String> {
     tried
         .iter()
         .filter(|o| o.round == t.round && !o.accepted)
+        // the family's other members are not rivals: the judge chose among them
+        .filter(|o| o.candidate.effect.id != t.candidate.effect.id)
         .filter_map(|o| {
             let c = o.cmp?;
             (c.z >= o.z_crit).then(|| {
@@ -271,6 +338,7 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                 "heldout_chi2_gain": t.cmp.map(|m| m.gain),
                 "heldout_rms_before_rad": t.cmp.map(|m| m.rms_before),
                 "heldout_rms_after_rad": t.cmp.map(|m| m.rms_after),
+                "member_z_against_smaller": t.member_z,
                 "reason": match t.cmp {
                     None => match t.screen {
                         Some(s) => format!(
@@ -282,6 +350,9 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                     },
                     Some(m) if m.z < t.z_crit => format!(
                         "held-out improvement not significant (z = {:.2} < {:.2})", m.z, t.z_crit),
+                    Some(_) if t.member_z.is_some_and(|z| z < t.z_crit) => format!(
+                        "a smaller member of the family predicts as well (held-out z of this \
+                         member against it {:.2} < {:.2})", t.member_z.unwrap_or(0.0), t.z_crit),
                     Some(_) => "significant, but another candidate of the round gained more"
                         .to_string(),
                 },

@@ -5,8 +5,8 @@
 //! ```text
 //! β̈ = −ζ β̇ − s (η + η_L h(α, β))
 //!     + c_sc sin α cos β + c_cs cos α sin β + c_cc cos α cos β + c_ss sin α sin β   (coupling)
-//!     + A sin β + B cos β                                  (static_torque, lab-fixed)
-//!     − q β̇|β̇|                                            (quadratic_drag)
+//!     + A sin β + B cos β + Σ_{k=2,3} (A_k sin kβ + B_k cos kβ)   (static_torque, lab-fixed)
+//!     − q (|β̇|/V)^p sgn β̇                                 (power_law_drag; V = 4 rad/s)
 //!     − c_r (β̇ − α̇)                                       (corotating_drag)
 //! ```
 //! with α(t) = α₀ + α̇ t (α̇ = 0 for a ring-down) in the coupling replaced by the input magnet's
@@ -56,6 +56,41 @@ pub enum ExtraTerm {
     },
 }
 
+/// A shape parameter of a catalog family: a nonlinear parameter fitted by simulation next to the
+/// family's linear coefficients (its θ entry is the parameter's value itself).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Shape {
+    /// Exponent p of the power-law drag −q |β̇|^p sgn β̇ (`power_law_drag`; p = 2 is the
+    /// quadratic drag).
+    DragExponent,
+    /// Weight-to-force ratio ρ = |W|/F₀ of the load-dependent friction's bearing load
+    /// |F − ρ ẑ| ([`load_shape`]; ρ = 0 is the dipole force alone).
+    LoadWeight,
+    /// Width w of the Stribeck decay of the breakaway excess, Δη_s exp(−(|β̇|/w)²) in the
+    /// sliding friction (`static_friction`; w → 0 is the excess at rest only).
+    StribeckWidth,
+}
+
+impl Shape {
+    /// Name of the parameter.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Shape::DragExponent => "drag_exponent",
+            Shape::LoadWeight => "load_weight_over_force",
+            Shape::StribeckWidth => "stribeck_width",
+        }
+    }
+    /// Range the simulation clamps the parameter to (outside it the family member is not
+    /// physical or not distinguishable from another term: p → 1 is the viscous ζ).
+    pub fn range(&self) -> (f64, f64) {
+        match self {
+            Shape::DragExponent => (0.5, 4.0),
+            Shape::LoadWeight => (-50.0, 50.0),
+            Shape::StribeckWidth => (1e-3, 20.0),
+        }
+    }
+}
+
 /// Slots for [`ExtraTerm`]s in [`Coefficients::extra`] (the field is written with the literal 4).
 pub const MAX_EXTRA: usize = 4;
 
@@ -78,12 +113,21 @@ pub struct Coefficients {
     pub st_a: f64,
     /// Static torque B cos β, s⁻².
     pub st_b: f64,
-    /// Quadratic drag q, rad⁻¹.
+    /// Static torque harmonics k = 2, 3: (A_k, B_k) of A_k sin kβ + B_k cos kβ, s⁻².
+    pub st_harmonics: [(f64, f64); 2],
+    /// Drag coefficient: q of −q β̇|β̇| (rad⁻¹) without an exponent, the drag at the reference
+    /// speed q of −q (|β̇|/V)^p sgn β̇ (s⁻², [`drag`]) with one.
     pub quad: f64,
+    /// Drag exponent p (`None`: 2, the quadratic drag), clamped to [`Shape::range`].
+    pub drag_exponent: Option<f64>,
     /// Corotating drag c_r, s⁻¹.
     pub corot: f64,
-    /// Load-dependent dry friction η_L, s⁻² per unit force shape.
+    /// Load-dependent dry friction η_L, s⁻² per unit bearing load ([`load_shape`]).
     pub eta_load: f64,
+    /// Weight-to-force ratio ρ of the bearing load (0: the dipole force alone).
+    pub load_weight: f64,
+    /// Only the radial part of the bearing load (perpendicular to the output shaft) counts.
+    pub load_radial: bool,
     /// Input compliance χ = I/k_in, s²: the input magnet sits at α + χ τ_in(α, β), τ_in the
     /// coupling torque on it per output inertia (solved by fixed-point iteration).
     pub compliance: f64,
@@ -96,8 +140,29 @@ pub struct Coefficients {
     /// Breakaway (static) friction above the sliding friction, s⁻²: an output at rest stays stuck
     /// until |a| exceeds the sliding friction plus this excess (0: static = sliding friction).
     pub eta_static_excess: f64,
+    /// Width w of the Stribeck decay, rad/s: the sliding friction carries the excess as
+    /// η_Δs exp(−(|β̇|/w)^[`STRIBECK_POWER`]) (0: the excess acts at rest only).
+    pub stribeck_width: f64,
     /// Terms of the sparse search (`unexplained`) with their coefficients.
     pub extra: [(ExtraTerm, f64); 4],
+}
+
+/// The exponent δ of the Stribeck decay exp(−(|β̇|/w)^δ): fixed at 2, the Gaussian form of the
+/// Stribeck curve (Armstrong-Hélouvry); with w the only shape parameter fitted (δ and w are
+/// not separately identifiable from stick–slip recordings at the camera's velocity noise).
+pub const STRIBECK_POWER: i32 = 2;
+
+/// The Stribeck part of the sliding friction, e exp(−(|ω|/w)²), and its ω-derivative
+/// (0 for w = 0).
+pub fn stribeck(excess: f64, width: f64, omega: f64) -> (f64, f64) {
+    if width <= 0.0 || excess == 0.0 {
+        return (0.0, 0.0);
+    }
+    let (lo, hi) = Shape::StribeckWidth.range();
+    let w = width.clamp(lo, hi);
+    let x = omega / w;
+    let v = excess * (-x.powi(STRIBECK_POWER)).exp();
+    (v, -2.0 * x / w * v)
 }
 
 impl Coefficients {
@@ -130,9 +195,10 @@ pub struct Geometry {
     pub phi: f64,
 }
 
-/// |F| / (3 μ0 m1 m2 / (4π r⁴)): the magnitude of the dipole–dipole force for unit moments at unit
-/// distance along x̂, F ∝ (u1·x̂) u2 + (u2·x̂) u1 + (u1·u2) x̂ − 5 (u1·x̂)(u2·x̂) x̂.
-pub fn force_shape(geo: &Geometry, alpha: f64, beta: f64) -> f64 {
+/// F / (3 μ0 m1 m2 / (4π r⁴)): the dipole–dipole force on the output magnet for unit moments at
+/// unit distance along x̂, F = (u1·x̂) u2 + (u2·x̂) u1 + (u1·u2) x̂ − 5 (u1·x̂)(u2·x̂) x̂ (shafts in
+/// the horizontal x-y plane, ẑ up).
+pub fn dipole_force(geo: &Geometry, alpha: f64, beta: f64) -> [f64; 3] {
     let u1 = [
         -alpha.cos() * geo.theta.sin(),
         alpha.cos() * geo.theta.cos(),
@@ -149,7 +215,55 @@ pub fn force_shape(geo: &Geometry, alpha: f64, beta: f64) -> f64 {
         f[k] = u1[0] * u2[k] + u2[0] * u1[k];
     }
     f[0] += d - 5.0 * u1[0] * u2[0];
-    (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt()
+    f
+}
+
+/// |F| / (3 μ0 m1 m2 / (4π r⁴)): the magnitude of the dipole–dipole force ([`dipole_force`]).
+pub fn force_shape(geo: &Geometry, alpha: f64, beta: f64) -> f64 {
+    load_shape(geo, alpha, beta, 0.0, false)
+}
+
+/// The bearing load of the load-dependent friction family in units of F₀ = 3 μ0 m1 m2/(4π r⁴):
+/// |F − ρ ẑ| (the shaft's weight ρF₀ and the dipole force added as vectors), or with `radial`
+/// |P(F − ρ ẑ)|, P the projection perpendicular to the output shaft axis (cos Φ, sin Φ, 0) (a
+/// radial bearing). ρ = 0 without projection is [`force_shape`].
+pub fn load_shape(geo: &Geometry, alpha: f64, beta: f64, rho: f64, radial: bool) -> f64 {
+    let mut l = dipole_force(geo, alpha, beta);
+    l[2] -= rho;
+    if radial {
+        let (sp, cp) = geo.phi.sin_cos();
+        let along = l[0] * cp + l[1] * sp;
+        l[0] -= along * cp;
+        l[1] -= along * sp;
+    }
+    (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt()
+}
+
+/// Reference speed V of the drag family, rad/s: the family's coefficient is the drag at V,
+/// −q (|β̇|/V)^p sgn β̇ (s⁻²), which keeps q and p nearly uncorrelated for output speeds of a
+/// few rad/s. A power of two, so that p = 2 reproduces the quadratic drag q_old β̇|β̇| with
+/// q = q_old V² bit for bit.
+pub const DRAG_REFERENCE_SPEED: f64 = 4.0;
+
+/// The drag shape and its ω-derivative: `None` (the quadratic drag) ω|ω| and 2|ω|; `Some(p)`
+/// (|ω|/V)^p sgn ω and (p/V)(|ω|/V)^(p−1), V = [`DRAG_REFERENCE_SPEED`], p clamped to
+/// [`Shape::range`].
+pub fn drag(exponent: Option<f64>, omega: f64) -> (f64, f64) {
+    match exponent {
+        None => (omega * omega.abs(), 2.0 * omega.abs()),
+        Some(p) => {
+            let (lo, hi) = Shape::DragExponent.range();
+            let p = p.clamp(lo, hi);
+            let x = omega / DRAG_REFERENCE_SPEED;
+            let w = x.abs();
+            if w == 0.0 {
+                let d0 = if p == 1.0 { 1.0 } else { 0.0 };
+                return (0.0, d0 / DRAG_REFERENCE_SPEED);
+            }
+            let wp = w.powf(p - 1.0);
+            (x * wp, p * wp / DRAG_REFERENCE_SPEED)
+        }
+    }
 }
 
 /// The augmented gear as a driven oscillator.
@@ -214,15 +328,27 @@ impl AugmentedGear {
             + c.c_ss * sa * sb
             + c.st_a * sb
             + c.st_b * cb
-            - c.quad * omega * omega.abs()
             - c.corot * (omega - self.alpha_rate);
         let a_beta = -c.c_sc * sa * sb + c.c_cs * ca * cb - c.c_cc * ca * sb
             + c.c_ss * sa * cb
             + c.st_a * cb
             - c.st_b * sb;
-        let a_omega = -c.zeta - 2.0 * c.quad * omega.abs() - c.corot;
+        let a_omega = -c.zeta - c.corot;
         let a_alpha = c.c_sc * ca * cb - c.c_cs * sa * sb - c.c_cc * sa * cb + c.c_ss * ca * sb;
         let (mut a, mut a_beta, mut a_omega, mut a_alpha) = (a, a_beta, a_omega, a_alpha);
+        if c.quad != 0.0 {
+            let (d, d_omega) = drag(c.drag_exponent, omega);
+            a -= c.quad * d;
+            a_omega -= c.quad * d_omega;
+        }
+        for (k, &(ak, bk)) in c.st_harmonics.iter().enumerate() {
+            if ak != 0.0 || bk != 0.0 {
+                let m = (k + 2) as f64;
+                let (s, co) = (m * beta).sin_cos();
+                a += ak * s + bk * co;
+                a_beta += m * (ak * co - bk * s);
+            }
+        }
         for &(term, th) in &c.extra {
             if th == 0.0 {
                 continue;
@@ -256,7 +382,9 @@ impl AugmentedGear {
     fn friction(&self, alpha: f64, beta: f64) -> f64 {
         let mut r = self.c.eta;
         if self.c.eta_load != 0.0 {
-            r += self.c.eta_load * force_shape(&self.geo, alpha, beta);
+            let (lo, hi) = Shape::LoadWeight.range();
+            let rho = self.c.load_weight.clamp(lo, hi);
+            r += self.c.eta_load * load_shape(&self.geo, alpha, beta, rho, self.c.load_radial);
         }
         for &(term, th) in &self.c.extra {
             match term {
@@ -270,6 +398,14 @@ impl AugmentedGear {
             }
         }
         r.max(0.0)
+    }
+    /// The Stribeck part of the sliding friction ([`stribeck`]) at ω.
+    fn stribeck_part(&self, omega: f64) -> (f64, f64) {
+        stribeck(
+            self.c.eta_static_excess.max(0.0),
+            self.c.stribeck_width,
+            omega,
+        )
     }
     fn friction_varies(&self) -> bool {
         self.c.eta_load != 0.0
@@ -295,16 +431,18 @@ impl DrivenOscillator for AugmentedGear {
         let al = self.alpha(t);
         Forces {
             a: self.smooth(al, beta, omega).0,
-            r: self.friction(al, beta),
+            r: (self.friction(al, beta) + self.stribeck_part(omega).0).max(0.0),
         }
     }
     fn forces_jet(&self, t: f64, beta: f64, omega: f64, _params: bool) -> ForcesJet {
         let al = self.alpha(t);
         let (a, a_beta, a_omega) = self.smooth(al, beta, omega);
-        let r = self.friction(al, beta);
+        let (sv, sv_omega) = self.stribeck_part(omega);
+        let r = (self.friction(al, beta) + sv).max(0.0);
         let mut j = ForcesJet::new(a, r);
         j.a_beta = a_beta;
         j.a_omega = a_omega;
+        j.r_omega = sv_omega;
         if self.friction_varies() {
             let h = 1e-6;
             j.r_beta = (self.friction(al, beta + h) - self.friction(al, beta - h)) / (2.0 * h);
@@ -499,5 +637,112 @@ mod tests {
         let j = s2.forces_jet(0.1, 0.7, 1.0, false);
         assert!((j.r - (20.0 + 2.0 * 0.7f64.cos())).abs() < 1e-12);
         assert!((j.r_beta + 2.0 * 0.7f64.sin()).abs() < 1e-6);
+    }
+
+    /// The drag family's member p = 2 is the quadratic drag exactly (bit for bit); other
+    /// exponents and the torque harmonics have Jacobians that match central differences.
+    #[test]
+    fn drag_family_and_torque_harmonics() {
+        let mut c = Coefficients::base(300.0, 0.2, 1.0, 20.0);
+        c.quad = 0.03;
+        let quad = driven_test_gear(c);
+        let v2 = DRAG_REFERENCE_SPEED * DRAG_REFERENCE_SPEED;
+        let two = driven_test_gear(Coefficients {
+            drag_exponent: Some(2.0),
+            quad: c.quad * v2,
+            ..c
+        });
+        for k in 0..12 {
+            let (t, b, w) = (0.11 * k as f64, 0.6 * k as f64 - 3.0, 9.0 - 1.7 * k as f64);
+            assert_eq!(
+                quad.forces_jet(t, b, w, false),
+                two.forces_jet(t, b, w, false)
+            );
+            let (d, _) = drag(Some(2.0), w);
+            assert_eq!(d * v2, w * w.abs());
+        }
+        c.drag_exponent = Some(1.5);
+        c.st_harmonics = [(2.5, -1.5), (0.0, 0.7)];
+        let sys = driven_test_gear(c);
+        let h = 1e-6;
+        for k in 0..12 {
+            let (t, b, w) = (0.13 * k as f64, 0.7 * k as f64 - 3.0, 5.0 - 0.9 * k as f64);
+            let j = sys.forces_jet(t, b, w, false);
+            let fb = (sys.forces(t, b + h, w).a - sys.forces(t, b - h, w).a) / (2.0 * h);
+            let fw = (sys.forces(t, b, w + h).a - sys.forces(t, b, w - h).a) / (2.0 * h);
+            assert!(
+                (j.a_beta - fb).abs() < 1e-6 * (1.0 + fb.abs()),
+                "{} {fb}",
+                j.a_beta
+            );
+            assert!(
+                (j.a_omega - fw).abs() < 1e-6 * (1.0 + fw.abs()),
+                "{} {fw}",
+                j.a_omega
+            );
+        }
+        // the value: −q |ω|^1.5 sgn ω + 2.5 sin 2β − 1.5 cos 2β + 0.7 cos 3β on top of the base
+        let base = driven_test_gear(Coefficients::base(300.0, 0.2, 1.0, 20.0));
+        let (t, b, w) = (0.2, 0.9, -2.0);
+        let extra = sys.forces(t, b, w).a - base.forces(t, b, w).a;
+        let want = 0.03 * (2.0 / DRAG_REFERENCE_SPEED).powf(1.5) + 2.5 * (1.8f64).sin()
+            - 1.5 * (1.8f64).cos()
+            + 0.7 * (2.7f64).cos();
+        assert!((extra - want).abs() < 1e-12, "{extra} vs {want}");
+    }
+
+    /// The Stribeck member: sliding friction η + η_Δs exp(−(ω/w)²) with ∂r/∂ω matching central
+    /// differences, the static bound η + η_Δs equal to its limit at rest; w = 0 leaves the
+    /// sliding friction at η.
+    #[test]
+    fn stribeck_friction_and_its_velocity_derivative() {
+        let mut c = Coefficients::base(300.0, 0.2, 1.0, 20.0);
+        c.eta_static_excess = 8.0;
+        c.stribeck_width = 0.4;
+        let sys = driven_test_gear(c);
+        let h = 1e-6;
+        for k in 0..10 {
+            let (t, b, w) = (0.1 * k as f64, 0.5 * k as f64, 1.2 - 0.27 * k as f64);
+            let j = sys.forces_jet(t, b, w, false);
+            assert!((j.r - (20.0 + 8.0 * (-(w / 0.4f64).powi(2)).exp())).abs() < 1e-12);
+            let fd = (sys.forces(t, b, w + h).r - sys.forces(t, b, w - h).r) / (2.0 * h);
+            assert!(
+                (j.r_omega - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+                "{} {fd}",
+                j.r_omega
+            );
+        }
+        assert!((sys.static_friction(0.3, 1.0) - sys.forces(0.3, 1.0, 0.0).r).abs() < 1e-12);
+        let at_rest_only = driven_test_gear(Coefficients {
+            stribeck_width: 0.0,
+            ..c
+        });
+        assert_eq!(at_rest_only.forces(0.3, 1.0, 0.01).r, 20.0);
+        assert_eq!(at_rest_only.static_friction(0.3, 1.0), 28.0);
+    }
+
+    /// The load family's bearing load: ρ = 0 without projection is the force magnitude; the
+    /// radial load is the force with its component along the output shaft removed, never larger
+    /// than the whole load; a weight ρ along −ẑ adds as a vector.
+    #[test]
+    fn load_shape_members() {
+        let geo = Geometry {
+            theta: 0.55,
+            phi: 0.5,
+        };
+        let e = [geo.phi.cos(), geo.phi.sin(), 0.0];
+        for k in 0..15 {
+            let (a, b) = (0.41 * k as f64, 2.0 - 0.37 * k as f64);
+            let f = dipole_force(&geo, a, b);
+            let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            assert_eq!(load_shape(&geo, a, b, 0.0, false), force_shape(&geo, a, b));
+            assert!((force_shape(&geo, a, b) - norm(f)).abs() < 1e-15);
+            let w = [f[0], f[1], f[2] - 2.2];
+            assert!((load_shape(&geo, a, b, 2.2, false) - norm(w)).abs() < 1e-12);
+            let along = w[0] * e[0] + w[1] * e[1];
+            let radial = norm([w[0] - along * e[0], w[1] - along * e[1], w[2]]);
+            assert!((load_shape(&geo, a, b, 2.2, true) - radial).abs() < 1e-12);
+            assert!(radial <= norm(w) + 1e-15);
+        }
     }
 }

@@ -2,10 +2,11 @@
 //! best dictionary terms, each with starting values for the refit by simulation. The weak form
 //! only proposes; [`super::judge`] decides by simulation on held-out runs.
 
-use super::catalog::{catalog, dictionary, same_slot, Effect};
-use super::model::Geometry;
+use super::catalog::{catalog, dictionary, judged_members, same_slot, Effect};
+use super::model::{Geometry, Shape};
 use super::preprocess::CleanRun;
 use super::regression::{build, delta_bic, fit, Design, LinFit, Term, WeakOptions};
+use super::spec::column_term;
 
 /// A candidate effect to judge.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,23 +57,142 @@ fn cols_of(d: &Design, terms: &[Term]) -> Vec<usize> {
     terms.iter().filter_map(|&t| d.col(t)).collect()
 }
 
+/// The terms with a weak-form column: shape parameters ([`Term::Shape`]) have none.
+pub fn weak_terms(terms: &[Term]) -> Vec<Term> {
+    terms
+        .iter()
+        .filter(|t| !matches!(t, Term::Shape(_)))
+        .copied()
+        .collect()
+}
+
+/// Coefficients aligned with `terms` from the weak-form coefficients `coef` of its column terms
+/// (in order); a shape parameter takes its value from `shapes`, else 0 (a shape parameter of the
+/// current model: [`Candidate::weak_coef`] − [`Candidate::weak_coef_current`] leaves its refitted
+/// value unchanged).
+fn align(terms: &[Term], coef: &[f64], shapes: &[(Shape, f64)]) -> Vec<f64> {
+    let mut it = coef.iter();
+    terms
+        .iter()
+        .map(|t| match t {
+            Term::Shape(s) => shapes
+                .iter()
+                .find(|x| x.0 == *s)
+                .map(|x| x.1)
+                .unwrap_or(0.0),
+            _ => it.next().copied().unwrap_or(0.0),
+        })
+        .collect()
+}
+
+/// The weak-form columns of a refitted model's `terms` at its θ: the drag at its fitted exponent
+/// (rounded to a tenth), shape parameters as zero columns (so row · θ stays aligned).
+pub fn weak_columns(terms: &[Term], theta: &[f64]) -> Vec<Term> {
+    let shapes: Vec<(Shape, f64)> = terms
+        .iter()
+        .zip(theta)
+        .filter_map(|(t, &v)| match t {
+            Term::Shape(s) => Some((*s, v)),
+            _ => None,
+        })
+        .collect();
+    terms.iter().map(|&t| column_term(t, &shapes)).collect()
+}
+
 fn candidate(
     d: &Design,
     current: &[Term],
     cur: &LinFit,
     effect: Effect,
     latency: Option<(f64, f64)>,
+    shapes: &[(Shape, f64)],
 ) -> Option<Candidate> {
     let mut terms = current.to_vec();
     terms.extend(effect.terms.iter().copied());
-    let f = fit(d, &cols_of(d, &terms))?;
+    let cols: Vec<Term> = weak_terms(&terms)
+        .into_iter()
+        .map(|t| column_term(t, shapes))
+        .collect();
+    let f = fit(d, &cols_of(d, &cols))?;
+    if f.cols.len() != cols.len() {
+        return None;
+    }
     Some(Candidate {
         terms: effect.terms.clone(),
         weak_dbic: delta_bic(&f, cur),
-        weak_coef: f.coef,
-        weak_coef_current: cur.coef.clone(),
+        weak_coef: align(&terms, &f.coef, shapes),
+        weak_coef_current: align(current, &cur.coef, &[]),
         effect,
         latency,
+    })
+}
+
+/// Exponents (× 10) of the drag family's weak-form profile (p = 1 is left out: it is the
+/// viscous column of ζ).
+pub const DRAG_EXPONENT_GRID: [u8; 6] = [12, 15, 18, 20, 25, 30];
+
+/// Weight-to-force ratios ρ (× 10) of the load family's weak-form profile.
+pub const LOAD_WEIGHT_GRID: [u8; 8] = [0, 5, 10, 15, 20, 30, 50, 80];
+
+/// Widths w (× 100, rad/s) of the Stribeck family's weak-form profile.
+pub const STRIBECK_WIDTH_GRID: [u8; 6] = [10, 20, 35, 50, 75, 120];
+
+/// The weak-form grid columns of the families' profiles.
+fn grid_columns() -> Vec<Term> {
+    let mut v: Vec<Term> = DRAG_EXPONENT_GRID
+        .iter()
+        .map(|&p| Term::PowDrag(p))
+        .collect();
+    v.extend(STRIBECK_WIDTH_GRID.iter().map(|&w| Term::StribeckGrid(w)));
+    for radial in [false, true] {
+        v.extend(LOAD_WEIGHT_GRID.iter().map(|&r| Term::LoadGrid(r, radial)));
+    }
+    v
+}
+
+/// The shape values to profile for effect `e` (one empty entry for a family without shape).
+fn shape_grid(e: &Effect) -> Vec<Vec<(Shape, f64)>> {
+    if e.terms.contains(&Term::Shape(Shape::DragExponent)) {
+        DRAG_EXPONENT_GRID
+            .iter()
+            .map(|&p| vec![(Shape::DragExponent, f64::from(p) / 10.0)])
+            .collect()
+    } else if e.terms.contains(&Term::Shape(Shape::StribeckWidth)) {
+        STRIBECK_WIDTH_GRID
+            .iter()
+            .map(|&w| vec![(Shape::StribeckWidth, f64::from(w) / 100.0)])
+            .collect()
+    } else if e.terms.contains(&Term::Shape(Shape::LoadWeight)) {
+        LOAD_WEIGHT_GRID
+            .iter()
+            .map(|&r| vec![(Shape::LoadWeight, f64::from(r) / 10.0)])
+            .collect()
+    } else {
+        vec![vec![]]
+    }
+}
+
+/// The family's best member by the weak form: for a family with a shape parameter the
+/// parameter profiled on its coarse grid (the start value of the refit by simulation). The drag
+/// family is proposed by its best exponent but starts from the quadratic member (p = 2): the
+/// weak form's velocities carry noise, which biases the columns |β̇|^p the more the larger p
+/// (errors in variables), so its best exponent is not a reliable start; the simulation fits p.
+fn family_candidate(d: &Design, current: &[Term], cur: &LinFit, e: Effect) -> Option<Candidate> {
+    let all: Vec<Candidate> = shape_grid(&e)
+        .iter()
+        .filter_map(|shapes| candidate(d, current, cur, e.clone(), None, shapes))
+        .collect();
+    let best = all
+        .iter()
+        .min_by(|a, b| a.weak_dbic.total_cmp(&b.weak_dbic))?
+        .clone();
+    if !e.terms.contains(&Term::Shape(Shape::DragExponent)) {
+        return Some(best);
+    }
+    let quadratic = candidate(d, current, cur, e, None, &[(Shape::DragExponent, 2.0)])?;
+    Some(Candidate {
+        weak_dbic: best.weak_dbic,
+        ..quadratic
     })
 }
 
@@ -86,16 +206,17 @@ pub fn propose(
     accepted: &[Effect],
 ) -> Vec<Candidate> {
     let lat = latency.unwrap_or(0.0);
-    let mut all: Vec<Term> = current.to_vec();
+    let weak_current = weak_terms(current);
+    let mut all: Vec<Term> = weak_current.clone();
     for e in catalog() {
         all.extend(
-            e.terms
-                .iter()
+            weak_terms(&e.terms)
+                .into_iter()
                 .filter(|t| !all.contains(t))
-                .copied()
                 .collect::<Vec<_>>(),
         );
     }
+    all.extend(grid_columns());
     all.extend(
         dictionary()
             .into_iter()
@@ -103,12 +224,15 @@ pub fn propose(
             .collect::<Vec<_>>(),
     );
     let d = build(ctx.runs, ctx.geo, &all, ctx.weak, lat);
-    let Some(cur) = fit(&d, &cols_of(&d, current)) else {
+    let Some(cur) = fit(&d, &cols_of(&d, &weak_current)) else {
         return vec![];
     };
     let mut out: Vec<Candidate> = Vec::new();
     for e in catalog() {
-        if e.id == "static_friction" || accepted.iter().any(|a| same_slot(a, &e)) {
+        // the breakaway at rest only (no terms) is profiled over the stick phases (breakaway.rs)
+        if (e.id == "static_friction" && e.terms.is_empty())
+            || accepted.iter().any(|a| same_slot(a, &e))
+        {
             continue;
         }
         if e.id == "sensor_latency" {
@@ -122,9 +246,14 @@ pub fn propose(
         if e.terms.iter().any(|t| current.contains(t)) {
             continue;
         }
-        let Some(c) = candidate(&d, current, &cur, e, None) else {
+        let Some(c) = family_candidate(&d, current, &cur, e) else {
             continue;
         };
+        if judged_members(c.effect.id) {
+            // nested members: all proposed, the held-out judge picks (select.rs)
+            out.push(c);
+            continue;
+        }
         // one member per family (slot): the best by ΔBIC
         match out.iter_mut().find(|o| same_slot(&o.effect, &c.effect)) {
             Some(o) if o.weak_dbic <= c.weak_dbic => {}
@@ -136,7 +265,7 @@ pub fn propose(
     let mut dict: Vec<Candidate> = dictionary()
         .into_iter()
         .filter(|t| !current.contains(t))
-        .filter_map(|t| candidate(&d, current, &cur, unexplained(vec![t]), None))
+        .filter_map(|t| candidate(&d, current, &cur, unexplained(vec![t]), None, &[]))
         .filter(|c| c.weak_dbic < -10.0)
         .collect();
     dict.sort_by(|a, b| a.weak_dbic.total_cmp(&b.weak_dbic));
@@ -159,11 +288,12 @@ fn latency_candidate(
     let span = ctx.latency_span;
     let n = 24;
     let ne = cur.n_eff.max(2.0);
-    let cols: Vec<usize> = (0..current.len()).collect();
+    let weak_current = weak_terms(current);
+    let cols: Vec<usize> = (0..weak_current.len()).collect();
     let mut prof = Vec::new();
     for k in 0..=n {
         let tau = -span + 2.0 * span * k as f64 / n as f64;
-        let d = build(ctx.runs, ctx.geo, current, ctx.weak, tau);
+        let d = build(ctx.runs, ctx.geo, &weak_current, ctx.weak, tau);
         let f = fit(&d, &cols)?;
         prof.push((tau, ne * f.chi2.ln()));
     }
@@ -188,14 +318,14 @@ fn latency_candidate(
     } else {
         (t1, f64::NAN)
     };
-    let d = build(ctx.runs, ctx.geo, current, ctx.weak, tau);
+    let d = build(ctx.runs, ctx.geo, &weak_current, ctx.weak, tau);
     let f = fit(&d, &cols)?;
     let dbic = ne * (f.chi2 / cur.chi2).ln() + ne.ln();
     Some(Candidate {
         effect,
         terms: vec![],
-        weak_coef: f.coef,
-        weak_coef_current: cur.coef.clone(),
+        weak_coef: align(current, &f.coef, &[]),
+        weak_coef_current: align(current, &cur.coef, &[]),
         latency: Some((tau, tau_err)),
         weak_dbic: dbic,
     })

@@ -13,7 +13,7 @@
 //! correlated: the effective sample size n_eff = Σ_runs n_run / τ_run, with τ the integrated
 //! autocorrelation time of the standardised residuals, scales the covariance and the BIC.
 
-use super::model::{force_shape, Geometry};
+use super::model::{drag, force_shape, load_shape, Geometry, Shape};
 use super::preprocess::CleanRun;
 use crate::numerics::least_squares::{weighted, LeastSquaresError, DEFAULT_RCOND};
 use nalgebra::DMatrix;
@@ -37,8 +37,28 @@ pub enum Term {
     SinB,
     /// cos β (static torque).
     CosB,
-    /// −β̇|β̇| (quadratic drag).
+    /// −β̇|β̇| (quadratic drag; with a [`Term::Shape`] `DragExponent` in the model, the
+    /// simulation's −|β̇|^p sgn β̇).
     Quad,
+    /// −(|β̇|/V)^p sgn β̇ with p = the value / 10 (V the drag family's reference speed): a
+    /// weak-form column on the exponent grid of the drag family's profile (`power_law_drag`).
+    PowDrag(u8),
+    /// −sgn β̇ · |P(F − ρẑ)| (radial bearing load, `load_dependent_friction` family; ρ from a
+    /// [`Term::Shape`] `LoadWeight` in the model, else 0).
+    RadialLoadFric,
+    /// −sgn β̇ · bearing load at ρ = the value / 10, radial when the flag is set: a weak-form
+    /// column on the grid of the load family's profile.
+    LoadGrid(u8, bool),
+    /// −sgn β̇ · exp(−(β̇/w)²): the breakaway excess carried into sliding by a Stribeck decay
+    /// (`static_friction` family; w from a [`Term::Shape`] `StribeckWidth`, 0.5 rad/s for the
+    /// weak-form column without one).
+    StaticExcess,
+    /// −sgn β̇ · exp(−(β̇/w)²) at w = the value / 100 rad/s: a weak-form column on the grid of
+    /// the Stribeck family's profile.
+    StribeckGrid(u8),
+    /// A family's shape parameter: no weak-form column (zero), its θ entry in the refit by
+    /// simulation is the parameter's value.
+    Shape(Shape),
     /// −(β̇ − α̇) (corotating drag).
     Corot,
     /// −sgn β̇ · h(α, β) (load-dependent friction).
@@ -141,6 +161,18 @@ impl Term {
             Term::SinB => "sin(beta)".into(),
             Term::CosB => "cos(beta)".into(),
             Term::Quad => "-dbeta|dbeta|".into(),
+            Term::PowDrag(t) => format!("-(|dbeta|/V)^{}sgn(dbeta)", f64::from(*t) / 10.0),
+            Term::Shape(s) => s.name().into(),
+            Term::RadialLoadFric => "-sgn(dbeta)h_radial(alpha,beta)".into(),
+            Term::StaticExcess => "-sgn(dbeta)exp(-(dbeta/w)^2)".into(),
+            Term::StribeckGrid(w) => {
+                format!("-sgn(dbeta)exp(-(dbeta/{})^2)", f64::from(*w) / 100.0)
+            }
+            Term::LoadGrid(r, radial) => format!(
+                "-sgn(dbeta)|{}(F-{}z)|",
+                if *radial { "P" } else { "" },
+                f64::from(*r) / 10.0
+            ),
             Term::Corot => "-(dbeta-dalpha)".into(),
             Term::LoadFric => "-sgn(dbeta)h(alpha,beta)".into(),
             Term::Cos(k, l) => format!("cos({k}alpha{:+}beta)", l)
@@ -315,6 +347,12 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
         Term::SinB => (b.sin(), false),
         Term::CosB => (b.cos(), false),
         Term::Quad => (-v * v.abs(), false),
+        Term::PowDrag(t) => (-drag(Some(f64::from(t) / 10.0), v).0, false),
+        Term::Shape(_) => (0.0, false),
+        Term::RadialLoadFric => (load_shape(geo, al, b, 0.0, true), true),
+        Term::StaticExcess => ((-(v / 0.5).powi(2)).exp(), true),
+        Term::StribeckGrid(w) => ((-(v / (f64::from(w) / 100.0)).powi(2)).exp(), true),
+        Term::LoadGrid(r, radial) => (load_shape(geo, al, b, f64::from(r) / 10.0, radial), true),
         Term::LoadFric => (force_shape(geo, al, b), true),
         Term::Cos(k, l) => ((k as f64 * al + l as f64 * b).cos(), false),
         Term::Sin(k, l) => ((k as f64 * al + l as f64 * b).sin(), false),

@@ -3,13 +3,14 @@
 //! simulation on top of the accepted ones and judged by its held-out prediction, and the best
 //! significant one is accepted. Every candidate tried is kept with its numbers.
 
-use super::catalog::Effect;
+use super::catalog::{judged_members, Effect};
 use super::judge::{compare, heldout, z_threshold, Comparison, Folds, HeldOut};
 use super::model::Geometry;
 use super::preprocess::CleanRun;
 use super::propose::{propose, Candidate, ProposeCtx};
 use super::regression::Term;
 use super::shooting::{refit, ShootingOptions, SimFit, SimModel, Win};
+use super::spec::{fix_shapes, free_shapes};
 
 /// A model with its refit by simulation and its held-out errors.
 #[derive(Debug, Clone, PartialEq)]
@@ -66,6 +67,10 @@ pub struct Tried {
     pub accepted: bool,
     /// The refitted model with it (kept for the accepted one).
     pub state: Option<ModelState>,
+    /// For a significant member of a family whose members the judge picks (not the smallest):
+    /// the held-out z of this member against the smaller member chosen before it (the larger
+    /// member replaces it when z reaches the threshold).
+    pub member_z: Option<f64>,
 }
 
 /// What the selection needs.
@@ -87,6 +92,12 @@ pub struct SelectCtx<'a> {
     pub max_rounds: usize,
 }
 
+/// The terms `cand` adds as judged, with their weak-form values: a family's shape parameter held
+/// at the proposal's grid value ([`fix_shapes`]; it is fitted by simulation in [`polish`]).
+fn judged_terms(cur: &ModelState, cand: &Candidate) -> (Vec<Term>, Vec<f64>) {
+    fix_shapes(&cand.terms, &cand.weak_coef[cur.terms.len()..])
+}
+
 /// The starting θ of `cand` on top of `cur`: the current refit shifted by the weak form's change
 /// when the candidate's terms are added, the new terms at their weak-form values, the latency at
 /// the current fit or the profiled value.
@@ -95,7 +106,7 @@ fn start_theta(cur: &ModelState, cand: &Candidate) -> Vec<f64> {
     let mut th: Vec<f64> = (0..nc)
         .map(|k| cur.fit.theta[k] + cand.weak_coef[k] - cand.weak_coef_current[k])
         .collect();
-    th.extend_from_slice(&cand.weak_coef[nc..]);
+    th.extend(judged_terms(cur, cand).1);
     if cur.fit_latency {
         th.push(cur.latency());
     } else if let Some((tau, _)) = cand.latency {
@@ -112,7 +123,7 @@ fn evaluate_on(
     cand: &Candidate,
 ) -> Option<ModelState> {
     let mut terms = cur.terms.clone();
-    terms.extend(cand.terms.iter().copied());
+    terms.extend(judged_terms(cur, cand).0);
     let fit_latency = cur.fit_latency || cand.latency.is_some();
     let theta0 = start_theta(cur, cand);
     let model = SimModel {
@@ -146,21 +157,35 @@ pub fn evaluate(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<M
 }
 
 /// The final model refitted to convergence (the judge's refits stop after a few
-/// Levenberg–Marquardt steps from their warm starts: enough to judge, not to report), with its
-/// held-out errors recomputed.
+/// Levenberg–Marquardt steps from their warm starts: enough to judge, not to report), with the
+/// families' shape parameters freed ([`free_shapes`]): they are fitted here, by simulation, next
+/// to the linear coefficients, and their σ come from this refit's covariance. Its held-out errors
+/// are recomputed when no shape was freed; with shapes, the judged model's are kept (the one-step
+/// leave-fold-out refits are first order, too coarse for a shape parameter and the coefficient
+/// it trades off with).
 pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
     if st.effects.is_empty() {
         return st.clone();
     }
-    let model = st.model(ctx.runs, ctx.geo);
+    let (terms, theta0) = free_shapes(&st.terms, &st.fit.theta);
+    let freed = terms != st.terms;
+    let model = SimModel {
+        terms: terms.clone(),
+        ..st.model(ctx.runs, ctx.geo)
+    };
     let opts = ShootingOptions {
         patience: 4,
         ..*ctx.shooting
     };
-    match refit(&model, &st.fit.theta, ctx.wins, &opts) {
+    match refit(&model, &theta0, ctx.wins, &opts) {
         Some(fit) => {
-            let held = heldout(&model, &fit, ctx.wins, ctx.folds);
+            let held = if freed {
+                st.held.clone()
+            } else {
+                heldout(&model, &fit, ctx.wins, ctx.folds)
+            };
             ModelState {
+                terms,
                 fit,
                 held,
                 ..st.clone()
@@ -203,7 +228,6 @@ pub fn select(
             break;
         }
         let z_crit = z_threshold(cands.len());
-        let mut best: Option<(usize, f64)> = None;
         let first = tried.len();
         for c in cands {
             progress(&format!(
@@ -230,11 +254,6 @@ pub fn select(
                 cmp.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
                 cmp.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
             ));
-            if let Some(cm) = cmp {
-                if cm.z >= z_crit && best.map(|b| cm.gain > b.1).unwrap_or(true) {
-                    best = Some((tried.len(), cm.gain));
-                }
-            }
             tried.push(Tried {
                 round,
                 candidate: c,
@@ -243,8 +262,15 @@ pub fn select(
                 z_crit,
                 accepted: false,
                 state: st,
+                member_z: None,
             });
         }
+        let passed = choose_members(ctx, &mut tried[first..], z_crit);
+        let best = passed
+            .iter()
+            .map(|&k| (first + k, tried[first + k].cmp.map(|c| c.gain)))
+            .filter_map(|(k, g)| Some((k, g?)))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
         let Some((bi, _)) = best else {
             for t in &mut tried[first..] {
                 t.state = None;
@@ -260,4 +286,45 @@ pub fn select(
         }
     }
     (tried, cur)
+}
+
+/// The candidates of a round that may be accepted: every significant one (held-out z ≥ `z_crit`),
+/// except that of a family whose members the judge picks ([`judged_members`], nested members)
+/// only one passes: starting from the smallest significant member, a larger member replaces it
+/// when it predicts the held-out windows significantly better than it (the same rule, z ≥
+/// `z_crit`, on the paired windows of the two). Indices into `round`.
+fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<usize> {
+    let significant =
+        |t: &Tried| t.cmp.map(|c| c.z >= z_crit).unwrap_or(false) && t.state.is_some();
+    let mut out: Vec<usize> = (0..round.len())
+        .filter(|&k| significant(&round[k]) && !judged_members(round[k].candidate.effect.id))
+        .collect();
+    let mut ids: Vec<&'static str> = round
+        .iter()
+        .map(|t| t.candidate.effect.id)
+        .filter(|id| judged_members(id))
+        .collect();
+    ids.dedup();
+    for id in ids {
+        let mut members: Vec<usize> = (0..round.len())
+            .filter(|&k| round[k].candidate.effect.id == id && significant(&round[k]))
+            .collect();
+        members.sort_by_key(|&k| round[k].candidate.terms.len());
+        let Some(&first) = members.first() else {
+            continue;
+        };
+        let mut chosen = first;
+        for &k in &members[1..] {
+            let (Some(a), Some(b)) = (&round[chosen].state, &round[k].state) else {
+                continue;
+            };
+            let z = compare(&a.held, &b.held, ctx.wins, ctx.runs).z;
+            round[k].member_z = Some(z);
+            if z >= z_crit {
+                chosen = k;
+            }
+        }
+        out.push(chosen);
+    }
+    out
 }

@@ -93,7 +93,7 @@ impl SimModel<'_> {
     /// Coefficients of run `run` at θ.
     pub fn coefficients(&self, theta: &[f64], run: usize) -> Coefficients {
         let mut c = coefficients_for_run(&self.terms, &theta[..self.terms.len()], self.runs, run);
-        c.eta_static_excess = self.eta_static_excess;
+        c.eta_static_excess += self.eta_static_excess;
         c
     }
     /// The window's system at θ.

@@ -3,12 +3,99 @@
 //! run. Shared by the weak form, the refit by simulation and the judge, so none of them imports
 //! another to build a model.
 
-use super::model::{Coefficients, ExtraTerm};
+use super::model::{Coefficients, ExtraTerm, Shape};
 use super::preprocess::CleanRun;
 use super::regression::{session_positions, DriftParam, Term};
 
-/// The simulation form of a dictionary term (an [`ExtraTerm`] slot), `None` for catalog terms.
+/// The column standing for `t` at the shape values `shapes`: a family's term with its shape
+/// parameter baked in (the drag's −β̇|β̇| becomes −(|β̇|/V)^p sgn β̇ on the grid of tenths, the
+/// load friction the load at ρ, the Stribeck excess the decay at w); other terms unchanged.
+pub fn column_term(t: Term, shapes: &[(Shape, f64)]) -> Term {
+    let shape = |s: Shape| shapes.iter().find(|x| x.0 == s).map(|x| x.1);
+    // `as u8` saturates: values beyond the grid's range stay at its ends
+    match t {
+        Term::Quad => shape(Shape::DragExponent).map(|p| Term::PowDrag((10.0 * p).round() as u8)),
+        Term::LoadFric => {
+            shape(Shape::LoadWeight).map(|r| Term::LoadGrid((10.0 * r).round() as u8, false))
+        }
+        Term::RadialLoadFric => {
+            shape(Shape::LoadWeight).map(|r| Term::LoadGrid((10.0 * r).round() as u8, true))
+        }
+        Term::StaticExcess => {
+            shape(Shape::StribeckWidth).map(|w| Term::StribeckGrid((100.0 * w).round() as u8))
+        }
+        _ => None,
+    }
+    .unwrap_or(t)
+}
+
+/// `terms` with values `coef` (shape parameters as their own entries) with every shape held
+/// fixed: the shape entries dropped and baked into their family's term ([`column_term`]).
+pub fn fix_shapes(terms: &[Term], coef: &[f64]) -> (Vec<Term>, Vec<f64>) {
+    let shapes: Vec<(Shape, f64)> = terms
+        .iter()
+        .zip(coef)
+        .filter_map(|(t, &v)| match t {
+            Term::Shape(s) => Some((*s, v)),
+            _ => None,
+        })
+        .collect();
+    terms
+        .iter()
+        .zip(coef)
+        .filter(|(t, _)| !matches!(t, Term::Shape(_)))
+        .map(|(&t, &v)| (column_term(t, &shapes), v))
+        .unzip()
+}
+
+/// The inverse of [`fix_shapes`]: every family term with a baked-in shape becomes the family's
+/// term followed by its shape parameter, with the value of the grid. `theta` may carry entries
+/// after the terms' (the latency): they are kept at the end.
+pub fn free_shapes(terms: &[Term], theta: &[f64]) -> (Vec<Term>, Vec<f64>) {
+    let (mut t, mut v) = (Vec::new(), Vec::new());
+    for (&term, &x) in terms.iter().zip(theta) {
+        let (base, shape) = match term {
+            Term::PowDrag(p) => (Term::Quad, Some((Shape::DragExponent, f64::from(p) / 10.0))),
+            Term::LoadGrid(r, radial) => (
+                if radial {
+                    Term::RadialLoadFric
+                } else {
+                    Term::LoadFric
+                },
+                Some((Shape::LoadWeight, f64::from(r) / 10.0)),
+            ),
+            Term::StribeckGrid(w) => (
+                Term::StaticExcess,
+                Some((Shape::StribeckWidth, f64::from(w) / 100.0)),
+            ),
+            other => (other, None),
+        };
+        t.push(base);
+        v.push(x);
+        if let Some((s, value)) = shape {
+            t.push(Term::Shape(s));
+            v.push(value);
+        }
+    }
+    v.extend_from_slice(&theta[terms.len().min(theta.len())..]);
+    (t, v)
+}
+
+/// Which static-torque harmonic slot (k = 2, 3 → 0, 1) a lab-fixed torque term fills.
+pub fn torque_harmonic(t: Term) -> Option<(usize, bool)> {
+    match t {
+        Term::Sin(0, l) if (2..=3).contains(&l) => Some((l as usize - 2, true)),
+        Term::Cos(0, l) if (2..=3).contains(&l) => Some((l as usize - 2, false)),
+        _ => None,
+    }
+}
+
+/// The simulation form of a dictionary term (an [`ExtraTerm`] slot), `None` for catalog terms
+/// (the lab-fixed torque harmonics sin/cos kβ, k = 2, 3, have their own coefficients).
 pub fn extra_term(t: Term) -> Option<ExtraTerm> {
+    if torque_harmonic(t).is_some() {
+        return None;
+    }
     match t {
         Term::Cos(k, l) => Some(ExtraTerm::Trig { k, l, sin: false }),
         Term::Sin(k, l) => Some(ExtraTerm::Trig { k, l, sin: true }),
@@ -44,12 +131,42 @@ pub fn coefficients(terms: &[Term], coef: &[f64]) -> Coefficients {
             Term::SinB => c.st_a = v,
             Term::CosB => c.st_b = v,
             Term::Quad => c.quad = v,
+            Term::PowDrag(p) => {
+                c.quad = v;
+                c.drag_exponent.get_or_insert(f64::from(p) / 10.0);
+            }
+            Term::Shape(Shape::DragExponent) => c.drag_exponent = Some(v),
             Term::Corot => c.corot = v,
             Term::LoadFric => c.eta_load = v,
+            Term::RadialLoadFric => {
+                c.eta_load = v;
+                c.load_radial = true;
+            }
+            Term::LoadGrid(r, radial) => {
+                c.eta_load = v;
+                c.load_radial = radial;
+                c.load_weight = f64::from(r) / 10.0;
+            }
+            Term::Shape(Shape::LoadWeight) => c.load_weight = v,
+            Term::StaticExcess => c.eta_static_excess = v,
+            Term::StribeckGrid(w) => {
+                c.eta_static_excess = v;
+                c.stribeck_width = f64::from(w) / 100.0;
+            }
+            Term::Shape(Shape::StribeckWidth) => c.stribeck_width = v,
             Term::Compliance => compliance = v,
             Term::DrivenOffset => offset = v,
             Term::DrivenOffsetRate => offset_rate = v,
             Term::Drift(..) => {}
+            other if torque_harmonic(other).is_some() => {
+                if let Some((k, sin)) = torque_harmonic(other) {
+                    if sin {
+                        c.st_harmonics[k].0 = v;
+                    } else {
+                        c.st_harmonics[k].1 = v;
+                    }
+                }
+            }
             other => {
                 if let (Some(e), Some(slot)) = (
                     extra_term(other),
@@ -121,5 +238,56 @@ mod tests {
         t2.push(Term::Compliance);
         let c2 = coefficients(&t2, &[1.1, 23.0, -310.0, 62.0, 310.0 * 310.0 * 1e-4]);
         assert!((c2.compliance - 1e-4).abs() < 1e-15);
+    }
+
+    /// Family terms: the drag exponent and the torque harmonics get their own coefficients (not
+    /// the dictionary's extra slots); a weak-form grid column carries its exponent.
+    #[test]
+    fn family_terms_map_to_their_coefficients() {
+        use super::super::model::Shape;
+        let mut terms = super::super::regression::BASE_TERMS.to_vec();
+        terms.extend([
+            Term::Quad,
+            Term::Shape(Shape::DragExponent),
+            Term::Sin(0, 2),
+            Term::Cos(0, 3),
+            Term::Cos(1, 2),
+        ]);
+        let c = coefficients(
+            &terms,
+            &[1.0, 20.0, -300.0, 60.0, 0.04, 1.6, 2.0, -3.0, 0.5],
+        );
+        assert_eq!((c.quad, c.drag_exponent), (0.04, Some(1.6)));
+        assert_eq!(c.st_harmonics, [(2.0, 0.0), (0.0, -3.0)]);
+        assert_eq!(c.extra[0].1, 0.5);
+        assert_eq!(c.extra[1].0, ExtraTerm::Unused);
+        assert!(simulable(&terms));
+        let g = coefficients(&[Term::PowDrag(15)], &[0.2]);
+        assert_eq!((g.quad, g.drag_exponent), (0.2, Some(1.5)));
+    }
+
+    /// Fixing the shapes bakes them into grid terms with the same simulation; freeing them
+    /// restores the family's terms with the shape entries (and keeps a trailing latency).
+    #[test]
+    fn shapes_fix_and_free() {
+        use super::super::model::Shape;
+        let terms = [
+            Term::Eta,
+            Term::Quad,
+            Term::Shape(Shape::DragExponent),
+            Term::RadialLoadFric,
+            Term::Shape(Shape::LoadWeight),
+        ];
+        let coef = [20.0, 0.4, 1.5, 3.0, 2.2];
+        let (ft, fc) = fix_shapes(&terms, &coef);
+        assert_eq!(ft, [Term::Eta, Term::PowDrag(15), Term::LoadGrid(22, true)]);
+        assert_eq!(fc, [20.0, 0.4, 3.0]);
+        assert_eq!(coefficients(&ft, &fc), coefficients(&terms, &coef));
+        let mut th = fc.clone();
+        th.push(0.006);
+        let (bt, bc) = free_shapes(&ft, &th);
+        assert_eq!(bt, terms);
+        assert_eq!(bc[..5], coef);
+        assert_eq!(bc[5], 0.006);
     }
 }

@@ -539,7 +539,8 @@ impl<S: Parametrised> Figure for BoundaryPlot<S> {
             .map_err(plot_err)?;
         for (label, c) in &self.curves {
             let i = labels.iter().position(|l| l == label).unwrap_or(0);
-            let col = Palette99::pick(i).to_rgba();
+            // skip the palette's yellow (index 2), unreadable on white
+            let col = Palette99::pick(if i >= 2 { i + 1 } else { i }).to_rgba();
             let anno = chart
                 .draw_series(LineSeries::new(
                     c.points.iter().map(|p| (p.along, p.free)),
@@ -555,18 +556,28 @@ impl<S: Parametrised> Figure for BoundaryPlot<S> {
                 });
             }
         }
-        for ml in &mark_labels {
+        // one colour per kind of mark: black first, then distinct dark colours
+        let mark_colours = [
+            BLACK,
+            RGBColor(200, 30, 30),
+            RGBColor(30, 30, 200),
+            RGBColor(0, 140, 0),
+            RGBColor(160, 0, 160),
+            RGBColor(200, 120, 0),
+        ];
+        for (k, ml) in mark_labels.iter().enumerate() {
             let pts: Vec<(f64, f64)> = self
                 .marks
                 .iter()
                 .filter(|m| m.0 == *ml)
                 .map(|m| (m.1, m.2))
                 .collect();
+            let col = mark_colours[k % mark_colours.len()];
             chart
-                .draw_series(pts.into_iter().map(|p| Circle::new(p, 5, BLACK.filled())))
+                .draw_series(pts.into_iter().map(|p| Circle::new(p, 5, col.filled())))
                 .map_err(plot_err)?
                 .label(*ml)
-                .legend(|(x, y)| Circle::new((x + 9, y), 5, BLACK.filled()));
+                .legend(move |(x, y)| Circle::new((x + 9, y), 5, col.filled()));
         }
         if !self.curves.is_empty() || !self.marks.is_empty() {
             chart
