@@ -18,7 +18,7 @@ use crate::analysis::classify::{classify_point, ClassifyOptions, Dynamics, Point
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod};
 use crate::model::{Convention, Gear, GearParams};
-use crate::model::{DrivenOscillator, Parametrised};
+use crate::model::{DrivenOscillator, Parameter, Parametrised};
 pub use crate::progress::{Event, Observer, Silent};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -27,7 +27,11 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 mod shard;
 pub use shard::{merge_shards, spec_hash, Shard, ShardStatus};
 
-/// A swept parameter.
+/// A swept parameter of the physical gear ([`GearParams`] and the drive frequency): a
+/// [`Parameter`] of the lens vocabulary (names `theta`, `f`, `zeta`, `eta`, `inertia` on the
+/// command line). It acts on the physical parameters rather than on the reduced [`Gear`] because a
+/// sweep row may hold a signed shaft angle (Fig. 8: Θ from −90° to 90°) and the inertia I, which
+/// the reduced gear only sees through Δ(Θ) and g = c/I.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SweepParam {
@@ -43,24 +47,44 @@ pub enum SweepParam {
     Inertia,
 }
 
+impl Parameter for SweepParam {
+    const ALL: &'static [Self] = &[
+        Self::ThetaDeg,
+        Self::F,
+        Self::Zeta,
+        Self::Eta,
+        Self::Inertia,
+    ];
+    fn name(self) -> &'static str {
+        match self {
+            Self::ThetaDeg => "theta",
+            Self::F => "f",
+            Self::Zeta => "zeta",
+            Self::Eta => "eta",
+            Self::Inertia => "inertia",
+        }
+    }
+    fn unit(self) -> &'static str {
+        match self {
+            Self::ThetaDeg => "deg",
+            Self::F => "Hz",
+            Self::Zeta => "1/s",
+            Self::Eta => "1/s²",
+            Self::Inertia => "kg m²",
+        }
+    }
+}
+
 impl SweepParam {
-    /// Parses `theta`, `f`, `zeta`, `eta`, `inertia`.
+    /// Parses a [`Parameter::name`] (`theta`, `f`, `zeta`, `eta`, `inertia`) or `theta_deg`.
     pub fn parse(s: &str) -> Result<Self> {
-        Ok(match s {
-            "theta" | "theta_deg" => Self::ThetaDeg,
-            "f" => Self::F,
-            "zeta" => Self::Zeta,
-            "eta" => Self::Eta,
-            "inertia" => Self::Inertia,
-            _ => {
-                return Err(Error::InvalidInput(format!(
-                    "unknown sweep parameter `{s}` (theta, f, zeta, eta, inertia)"
-                )))
-            }
-        })
+        match s {
+            "theta_deg" => Ok(Self::ThetaDeg),
+            _ => Self::from_name(s),
+        }
     }
     /// Column name in outputs.
-    pub fn name(self) -> &'static str {
+    pub fn column_name(self) -> &'static str {
         match self {
             Self::ThetaDeg => "theta_deg",
             Self::F => "f_hz",
@@ -90,7 +114,7 @@ impl Axis {
         if step == 0.0 || (stop - start) / step < 0.0 {
             return Err(Error::InvalidInput(format!(
                 "axis {}: step {step} does not lead from {start} to {stop}",
-                param.name()
+                param.column_name()
             )));
         }
         let n = ((stop - start) / step + 1e-3).floor() as usize + 1;
@@ -614,8 +638,8 @@ impl SweepResult {
         let mut s = String::from_utf8(bytes).map_err(|e| Error::format("CSV", "sweep table", e))?;
         let header = format!(
             "# rows = {}, cols = {}, protocol = {:?}, method = {:?}\n",
-            self.spec.rows.param.name(),
-            self.spec.cols.param.name(),
+            self.spec.rows.param.column_name(),
+            self.spec.cols.param.column_name(),
             self.spec.protocol,
             self.spec.method
         );

@@ -11,7 +11,7 @@ use gearbif::integrator::EventDriven;
 use gearbif::io::recordings::{read_set, write_set};
 use gearbif::io::with_schema;
 use gearbif::model::gear::GearParam;
-use gearbif::model::params::{Parameter, Parametrised};
+use gearbif::model::params::Parametrised;
 use gearbif::model::GearParams;
 use gearbif::progress::Silent;
 use gearbif::sweep::{sweep_grid, Axis, Method, Protocol, SweepOutcome, SweepRunner, SweepSpec};
@@ -97,9 +97,8 @@ fn classify<'py>(
         tol,
         keep_samples,
     )?;
-    let r = py
-        .detach(|| classify_point(sys.dynsys(), x0, &EventDriven, &opts))
-        .py()?;
+    let r = py.detach(|| classify_point(sys.dynsys(), x0, &EventDriven, &opts));
+    let r = sys.finish(r)?;
     let mut doc = serde_json::json!({
         "schema": "gearbif.classify/1",
         "system": system.get_type().name()?.to_string(),
@@ -114,10 +113,10 @@ fn classify<'py>(
 }
 
 /// {name: value} of a system's parameters as JSON.
-fn params_json<S: Parametrised>(s: &S) -> serde_json::Value {
-    <S::Param as Parameter>::ALL
-        .iter()
-        .map(|&p| (p.name().to_string(), s.param(p).into()))
+fn params_json<S: PySystem>(s: &S) -> serde_json::Value {
+    s.param_values()
+        .into_iter()
+        .map(|(n, v)| (n.to_string(), v.into()))
         .collect::<serde_json::Map<_, _>>()
         .into()
 }
@@ -132,8 +131,8 @@ fn sweep_system<S: PySystem>(
     protocol: Protocol,
     opts: &ClassifyOptions,
 ) -> gearbif::Result<Vec<Vec<PointResult>>> {
-    let r = (S::Param::from_name(rows.0)?, rows.1);
-    let c = (S::Param::from_name(cols.0)?, cols.1);
+    let r = (base.param_by_name(rows.0)?, rows.1);
+    let c = (base.param_by_name(cols.0)?, cols.1);
     let grid = sweep_grid(&EventDriven, base, r, c, x0, protocol, opts, &Silent)?;
     Ok(grid
         .into_iter()
@@ -212,11 +211,10 @@ fn sweep_grid_py<'py>(
         tol,
         false,
     )?;
-    let grid = py
-        .detach(|| {
-            dispatch!(&sys, s => sweep_system(s, (&rname, &rvals), (&cname, &cvals), x0, protocol, &opts))
-        })
-        .py()?;
+    let r = py.detach(|| {
+        dispatch!(&sys, s => sweep_system(s, (&rname, &rvals), (&cname, &cvals), x0, protocol, &opts))
+    });
+    let grid = sys.finish(r)?;
     let (n, m) = (rvals.len(), cvals.len());
     let field = |f: &dyn Fn(&PointResult) -> Option<f64>| {
         crate::convert::rows(py, n, m, |i, j| f(&grid[i][j]).unwrap_or(f64::NAN))

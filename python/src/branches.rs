@@ -10,7 +10,6 @@ use gearbif::continuation::{
     switch_branch as switch, Branch, BranchPoint, Continuation, ContinuationOptions, SpecialPoint,
     StopReason,
 };
-use gearbif::model::params::Parameter;
 use gearbif::orbits::{OrbitSpec, PeriodicOrbit};
 use numpy::{Complex64, PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -122,6 +121,8 @@ pub trait AnyBranch: Send + Sync {
     fn map_evaluations(&self) -> usize;
     /// Name of the continuation parameter.
     fn param_name(&self) -> &'static str;
+    /// The first exception a Python callback of the system raised (user systems).
+    fn take_error(&self) -> Option<PyErr>;
     /// The system at the first point, as its Python object.
     fn system_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>>;
     /// The branch as JSON (one entry of `branches` in `gearbif continue --json`).
@@ -160,7 +161,10 @@ impl<S: PySystem> AnyBranch for Branch<S> {
         self.map_evaluations
     }
     fn param_name(&self) -> &'static str {
-        self.param.name()
+        self.system.param_label(self.param)
+    }
+    fn take_error(&self) -> Option<PyErr> {
+        self.system.take_error()
     }
     fn system_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         self.system.to_object(py)
@@ -342,7 +346,7 @@ fn continue_system<S: PySystem>(
     x0: [f64; 2],
     opts: ContinuationOptions,
 ) -> gearbif::Result<Box<dyn AnyBranch>> {
-    let p = S::Param::from_name(param)?;
+    let p = sys.param_by_name(param)?;
     Ok(Box::new(
         Continuation::new(sys, p, spec, x0, opts)?.run(None)?,
     ))
@@ -439,9 +443,8 @@ fn continuation(
         ..Default::default()
     };
     opts.validate().py()?;
-    let b = py
-        .detach(|| dispatch!(sys, s => continue_system(s, param, spec, x0, opts)))
-        .py()?;
+    let r = py.detach(|| dispatch!(sys.clone(), s => continue_system(s, param, spec, x0, opts)));
+    let b = sys.finish(r)?;
     Ok(PyBranch { inner: b, opts })
 }
 
@@ -505,7 +508,11 @@ fn switch_branch<'py>(
     }
     opts.validate().py()?;
     let b = &branch.inner;
-    let (nb, start) = py.detach(|| b.switch(&sp, dparam, opts)).py()?;
+    let r = py.detach(|| b.switch(&sp, dparam, opts));
+    if let Some(e) = b.take_error() {
+        return Err(e);
+    }
+    let (nb, start) = r.py()?;
     let d = orbit_dict(py, &start.orbit)?;
     d.set_item("separation", start.separation)?;
     d.set_item("param", start.param)?;

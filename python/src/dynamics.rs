@@ -1,7 +1,7 @@
 //! Simulation, Poincaré maps with Jacobians, and periodic orbits by shooting.
 
 use crate::convert::{complex2, count, floats, mat2, rows, state, to_python, vec2};
-use crate::errors::{invalid, IntoPyResult};
+use crate::errors::invalid;
 use crate::systems::{param_names, system as extract_system, System};
 use gearbif::integrator::{EventDriven, FlowMethod, FlowOptions, Mode, Sensitivity};
 use gearbif::maps::{poincare_map as map, Section};
@@ -108,9 +108,8 @@ fn simulate<'py>(
     let opts = FlowOptions::with_tol(tol)
         .record_events(true)
         .samples(times);
-    let flow = py
-        .detach(|| EventDriven.flow(sys.dynsys(), t0, x0, t_end, &opts))
-        .py()?;
+    let r = py.detach(|| EventDriven.flow(sys.dynsys(), t0, x0, t_end, &opts));
+    let flow = sys.finish(r)?;
     let d = PyDict::new(py);
     let t: Vec<f64> = flow.samples.iter().map(|s| s.t).collect();
     let beta: Vec<f64> = flow.samples.iter().map(|s| s.beta).collect();
@@ -168,9 +167,8 @@ fn poincare_map<'py>(
         } else {
             Sensitivity::None
         });
-    let img = py
-        .detach(|| map(&EventDriven, sys.dynsys(), section, x, iterations, &opts))
-        .py()?;
+    let r = py.detach(|| map(&EventDriven, sys.dynsys(), section, x, iterations, &opts));
+    let img = sys.finish(r)?;
     let d = PyDict::new(py);
     d.set_item("x", vec2(py, img.x))?;
     if let Some(j) = &img.jac_x {
@@ -302,9 +300,8 @@ fn shoot<'py>(
         winding.unwrap_or(sys.default_winding()),
     )?;
     let opts = shooting(tol, newton_tol, max_iter)?;
-    let o = py
-        .detach(|| gearbif::orbits::shoot(sys.dynsys(), &spec, x0, &opts))
-        .py()?;
+    let r = py.detach(|| gearbif::orbits::shoot(sys.dynsys(), &spec, x0, &opts));
+    let o = sys.finish(r)?;
     orbit_dict(py, &o)
 }
 

@@ -12,13 +12,14 @@ mod convert;
 mod dynamics;
 mod errors;
 mod systems;
+mod user;
 
 use pyo3::prelude::*;
 
 /// gearbif: exact (Filippov, event-driven) simulation, Poincaré maps with Jacobians, periodic
 /// orbits, continuation with special points, classification, sweeps and identification of
 /// periodically driven oscillators with dry friction — the dipole magnetic gear of
-/// Hartung & Rehberg (2020) built in.
+/// Hartung & Rehberg (2020) built in, and any system written in Python (UserSystem).
 ///
 /// Units: t [s], f [Hz], β [rad], ω [rad/s] (states on the lift); shaft angles Θ, Φ in degrees
 /// (arguments ending in `_deg`).

@@ -3,6 +3,7 @@
 
 use crate::convert::{complex2, to_python, vec2};
 use crate::errors::{invalid, IntoPyResult};
+use crate::user::{PyUserSystem, UserParam, UserSystem};
 use gearbif::model::gear::GearParam;
 use gearbif::model::params::{Parameter, Parametrised};
 use gearbif::model::{
@@ -436,12 +437,63 @@ oscillator_class!(
     )
 );
 
-/// A system of the module: converts back to its Python class and into [`System`].
+/// A system of the module: converts back to its Python class and into [`System`], and names its
+/// parameters (the built-in systems by their parameter type, a [`UserSystem`] by the user's names).
 pub trait PySystem: Parametrised + Serialize + 'static {
-    /// The Python object (Gear, CoulombOscillator, ForcedPendulum) of this system.
+    /// The Python object (Gear, CoulombOscillator, ForcedPendulum, UserSystem) of this system.
     fn to_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>>;
     /// The owned system as the module's enum.
     fn into_system(self) -> System;
+    /// The parameter called `name`.
+    fn param_by_name(&self, name: &str) -> gearbif::Result<Self::Param> {
+        Self::Param::from_name(name)
+    }
+    /// The name of parameter `p`.
+    fn param_label(&self, p: Self::Param) -> &'static str {
+        p.name()
+    }
+    /// Every parameter with its value, in order.
+    fn param_values(&self) -> Vec<(&'static str, f64)> {
+        <Self::Param as Parameter>::ALL
+            .iter()
+            .map(|&p| (p.name(), self.param(p)))
+            .collect()
+    }
+    /// The first exception a Python callback of the system raised (user systems only).
+    fn take_error(&self) -> Option<PyErr> {
+        None
+    }
+}
+
+impl PySystem for UserSystem {
+    fn to_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        Ok(Bound::new(
+            py,
+            PyUserSystem {
+                inner: self.clone(),
+            },
+        )?
+        .into_any())
+    }
+    fn into_system(self) -> System {
+        System::User(self)
+    }
+    fn param_by_name(&self, name: &str) -> gearbif::Result<UserParam> {
+        self.param_index(name)
+    }
+    fn param_label(&self, p: UserParam) -> &'static str {
+        UserSystem::param_label(self, p)
+    }
+    fn param_values(&self) -> Vec<(&'static str, f64)> {
+        self.names()
+            .iter()
+            .enumerate()
+            .map(|(k, n)| (*n, self.param(UserParam(k as u8))))
+            .collect()
+    }
+    fn take_error(&self) -> Option<PyErr> {
+        UserSystem::take_error(self)
+    }
 }
 
 impl PySystem for Gear {
@@ -453,18 +505,18 @@ impl PySystem for Gear {
     }
 }
 
-/// The parameters of a system as a dict {name: value}, in the order of its parameter type.
-pub fn params_dict<'py, S: Parametrised>(py: Python<'py>, s: &S) -> PyResult<Bound<'py, PyDict>> {
+/// The parameters of a system as a dict {name: value}, in order.
+pub fn params_dict<'py, S: PySystem>(py: Python<'py>, s: &S) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    for &p in <S::Param as Parameter>::ALL {
-        d.set_item(p.name(), s.param(p))?;
+    for (name, v) in s.param_values() {
+        d.set_item(name, v)?;
     }
     Ok(d)
 }
 
 /// `with_param` by name, validated.
-pub fn with_named_param<S: Parametrised>(s: &S, name: &str, value: f64) -> PyResult<S> {
-    let p = S::Param::from_name(name).py()?;
+pub fn with_named_param<S: PySystem>(s: &S, name: &str, value: f64) -> PyResult<S> {
+    let p = s.param_by_name(name).py()?;
     s.with_param(p, value).py()
 }
 
@@ -480,10 +532,11 @@ fn forces<S: DrivenOscillator>(s: &S, t: f64, x: f64, v: f64) -> PyResult<(f64, 
 }
 
 /// `Name(p1=v1, p2=v2, …)` over the system's parameters.
-fn repr<S: Parametrised>(name: &str, s: &S) -> String {
-    let args: Vec<String> = <S::Param as Parameter>::ALL
+fn repr<S: PySystem>(name: &str, s: &S) -> String {
+    let args: Vec<String> = s
+        .param_values()
         .iter()
-        .map(|&p| format!("{}={}", p.name(), s.param(p)))
+        .map(|(n, v)| format!("{n}={v}"))
         .collect();
     format!("{name}({})", args.join(", "))
 }
@@ -494,10 +547,12 @@ pub fn param_names<S: DrivenOscillator + ?Sized>(s: &S) -> Vec<&'static str> {
 }
 
 /// Any system of the module, owned (so computations can run without the interpreter lock).
+#[derive(Clone)]
 pub enum System {
     Gear(Gear),
     Coulomb(CoulombOscillator),
     Pendulum(ForcedPendulum),
+    User(UserSystem),
 }
 
 /// Runs `$body` with `$s` bound to the concrete system inside a [`System`] (one generic code path
@@ -508,6 +563,7 @@ macro_rules! dispatch {
             $crate::systems::System::Gear($s) => $body,
             $crate::systems::System::Coulomb($s) => $body,
             $crate::systems::System::Pendulum($s) => $body,
+            $crate::systems::System::User($s) => $body,
         }
     };
 }
@@ -517,6 +573,14 @@ impl System {
     /// The system as the library's trait object.
     pub fn dynsys(&self) -> &dyn DrivenOscillator {
         dispatch!(self, s => s)
+    }
+    /// The first exception a Python callback raised during a computation (user systems), else
+    /// the library's result.
+    pub fn finish<T>(&self, r: gearbif::Result<T>) -> PyResult<T> {
+        match dispatch!(self, s => s.take_error()) {
+            Some(e) => Err(e),
+            None => r.py(),
+        }
     }
     /// The default winding of an orbit: 1 for the gear (the lock), 0 for the oscillators.
     pub fn default_winding(&self) -> i32 {
@@ -538,8 +602,11 @@ pub fn system(obj: &Bound<'_, PyAny>) -> PyResult<System> {
     if let Ok(p) = obj.cast::<PyPendulum>() {
         return Ok(System::Pendulum(p.get().inner));
     }
+    if let Ok(u) = obj.cast::<PyUserSystem>() {
+        return Ok(System::User(u.get().inner.clone()));
+    }
     Err(invalid(format!(
-        "expected a gearbif system (Gear, CoulombOscillator, ForcedPendulum), got {}",
+        "expected a gearbif system (Gear, CoulombOscillator, ForcedPendulum, UserSystem), got {}",
         obj.get_type().name()?
     )))
 }
@@ -560,5 +627,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyGear>()?;
     m.add_class::<PyCoulomb>()?;
     m.add_class::<PyPendulum>()?;
+    m.add_class::<PyUserSystem>()?;
     Ok(())
 }
