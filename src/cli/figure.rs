@@ -246,6 +246,14 @@ pub fn make(
             };
             res.write(dir.join(format!("{stem}-data")))?;
             let mut fig = RmsMap::from_sweep(&res);
+            if full && matches!(name, Name::Fig8) {
+                // at the paper's resolution the cells are too small for class markers: the
+                // classes are in the data folder
+                fig.markers = Markers::None;
+                fig.title = format!("{stem}: RMS_δ (classes in {stem}-data/points.csv)");
+                save_both(&fig, dir, stem, &mut out)?;
+                return Ok(out);
+            }
             fig.title = format!("{stem}: RMS_δ, paper classes (○ chaos, × T/2, — T)");
             save_both(&fig, dir, stem, &mut out)?;
             fig.markers = Markers::Rigorous;

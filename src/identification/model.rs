@@ -502,6 +502,24 @@ mod tests {
         }
     }
 
+    /// The jet's ∂a/∂β and ∂a/∂ω against central differences of the forces (step 1e-6).
+    fn assert_jet_matches_differences(sys: &AugmentedGear, t: f64, b: f64, w: f64) {
+        let j = sys.forces_jet(t, b, w, false);
+        let h = 1e-6;
+        let fb = (sys.forces(t, b + h, w).a - sys.forces(t, b - h, w).a) / (2.0 * h);
+        let fw = (sys.forces(t, b, w + h).a - sys.forces(t, b, w - h).a) / (2.0 * h);
+        assert!(
+            (j.a_beta - fb).abs() < 1e-6 * (1.0 + fb.abs()),
+            "{} {fb}",
+            j.a_beta
+        );
+        assert!(
+            (j.a_omega - fw).abs() < 1e-6 * (1.0 + fw.abs()),
+            "{} {fw}",
+            j.a_omega
+        );
+    }
+
     /// A driven test system: Θ = Φ = 0.5 rad, α = 0.3 + 4t.
     fn driven_test_gear(c: Coefficients) -> AugmentedGear {
         AugmentedGear {
@@ -610,20 +628,7 @@ mod tests {
         let sys = driven_test_gear(c);
         for k in 0..10 {
             let (t, b, w) = (0.17 * k as f64, 0.9 * k as f64 - 3.0, 2.0 - 0.5 * k as f64);
-            let j = sys.forces_jet(t, b, w, false);
-            let h = 1e-6;
-            let fb = (sys.forces(t, b + h, w).a - sys.forces(t, b - h, w).a) / (2.0 * h);
-            let fw = (sys.forces(t, b, w + h).a - sys.forces(t, b, w - h).a) / (2.0 * h);
-            assert!(
-                (j.a_beta - fb).abs() < 1e-6 * (1.0 + fb.abs()),
-                "{} {fb}",
-                j.a_beta
-            );
-            assert!(
-                (j.a_omega - fw).abs() < 1e-6 * (1.0 + fw.abs()),
-                "{} {fw}",
-                j.a_omega
-            );
+            assert_jet_matches_differences(&sys, t, b, w);
         }
         // friction modulated by cos β: r = η + θ cos β, with its β-derivative
         let mut c2 = c;
@@ -664,22 +669,9 @@ mod tests {
         c.drag_exponent = Some(1.5);
         c.st_harmonics = [(2.5, -1.5), (0.0, 0.7)];
         let sys = driven_test_gear(c);
-        let h = 1e-6;
         for k in 0..12 {
             let (t, b, w) = (0.13 * k as f64, 0.7 * k as f64 - 3.0, 5.0 - 0.9 * k as f64);
-            let j = sys.forces_jet(t, b, w, false);
-            let fb = (sys.forces(t, b + h, w).a - sys.forces(t, b - h, w).a) / (2.0 * h);
-            let fw = (sys.forces(t, b, w + h).a - sys.forces(t, b, w - h).a) / (2.0 * h);
-            assert!(
-                (j.a_beta - fb).abs() < 1e-6 * (1.0 + fb.abs()),
-                "{} {fb}",
-                j.a_beta
-            );
-            assert!(
-                (j.a_omega - fw).abs() < 1e-6 * (1.0 + fw.abs()),
-                "{} {fw}",
-                j.a_omega
-            );
+            assert_jet_matches_differences(&sys, t, b, w);
         }
         // the value: −q |ω|^1.5 sgn ω + 2.5 sin 2β − 1.5 cos 2β + 0.7 cos 3β on top of the base
         let base = driven_test_gear(Coefficients::base(300.0, 0.2, 1.0, 20.0));
