@@ -449,16 +449,7 @@ impl<S: Parametrised> Figure for MultiplierPlot<S> {
             }
         }
         let (pos, _) = super::legend_corner(&frac, 3, 20, (600, 600));
-        chart
-            .configure_series_labels()
-            .position(pos)
-            .margin(8)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()
-            .map_err(plot_err)?;
-        Ok(())
+        super::draw_legend(&mut chart, pos)
     }
 }
 
@@ -580,15 +571,7 @@ impl<S: Parametrised> Figure for BoundaryPlot<S> {
                 .legend(move |(x, y)| Circle::new((x + 9, y), 5, col.filled()));
         }
         if !self.curves.is_empty() || !self.marks.is_empty() {
-            chart
-                .configure_series_labels()
-                .position(pos)
-                .margin(8)
-                .background_style(WHITE.mix(0.9))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .draw()
-                .map_err(plot_err)?;
+            super::draw_legend(&mut chart, pos)?;
         }
         Ok(())
     }
