@@ -13,12 +13,13 @@
 //! failed corrector, a correction longer than the step, or a tangent turning by more than 60°.
 
 use super::branch::{Branch, BranchPoint, StopReason};
+use super::minaug::linearise_map;
 use super::options::ContinuationOptions;
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, FlowMethod};
-use crate::model::{param_derivative, Parameter, Parametrised};
+use crate::model::{Parameter, Parametrised};
 use crate::numerics::{newton, Linearisation, NewtonOptions};
-use crate::orbits::{residual_with, shoot_with, EventCounts, Floquet, OrbitSpec, PeriodicOrbit};
+use crate::orbits::{shoot_with, EventCounts, Floquet, OrbitSpec, PeriodicOrbit};
 use crate::progress::{Event, Observer};
 use nalgebra::{Matrix2, Matrix3, Vector3};
 
@@ -196,31 +197,23 @@ impl<S: Parametrised, M: FlowMethod<S>> Continuation<S, M> {
     pub(super) fn eval(&mut self, u: Vector3<f64>) -> Result<(Solved, [f64; 2])> {
         self.evals += 1;
         let sys = self.sys.with_param(self.param, u[2])?;
-        let (r, img) = residual_with(
+        let lin = linearise_map(
             &self.method,
             &sys,
             &self.spec,
             [u[0], u[1]],
+            &[self.param],
             &self.opts.shooting,
-            true,
         )?;
-        let jac = img
-            .jac_x
-            .ok_or_else(|| Error::Continuation("map returned no state Jacobian".into()))?;
-        let jp = img
-            .jac_p
-            .as_ref()
-            .ok_or_else(|| Error::Continuation("map returned no parameter Jacobian".into()))?;
-        let fl = param_derivative(&sys, self.param, jp)?;
         Ok((
             Solved {
                 u,
-                jac,
-                f_lambda: fl,
-                events: EventCounts::from_image(&img),
+                jac: lin.jac,
+                f_lambda: lin.columns[0],
+                events: lin.events,
                 iterations: 0,
             },
-            r,
+            lin.residual,
         ))
     }
 
