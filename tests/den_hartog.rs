@@ -101,17 +101,16 @@ fn continuation_in_f_follows_den_hartog_and_locates_the_onset_of_stops() {
     assert!(worst < 1e-8, "{worst}");
 }
 
-/// The frequency ratio r in [lo, hi] where Den Hartog's boundary (μ/F)_stop(r) equals `ratio`
-/// (bisection on the closed form; the boundary rises with r on the intervals used here).
-fn published_stop_ratio_root(ratio: f64, mut lo: f64, mut hi: f64) -> f64 {
-    let g = |r: f64| den_hartog_coulomb_stop_ratio(r).unwrap() - ratio;
+/// The root of an increasing `g` in [lo, hi] by plain bisection to `tol` (kept independent of
+/// the crate's root finder, which the code under test uses).
+fn bisect(g: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64, tol: f64) -> f64 {
     assert!(
         g(lo) < 0.0 && g(hi) > 0.0,
         "not bracketed: {} {}",
         g(lo),
         g(hi)
     );
-    while hi - lo > 1e-14 {
+    while hi - lo > tol {
         let m = 0.5 * (lo + hi);
         if g(m) < 0.0 {
             lo = m
@@ -120,6 +119,17 @@ fn published_stop_ratio_root(ratio: f64, mut lo: f64, mut hi: f64) -> f64 {
         }
     }
     0.5 * (lo + hi)
+}
+
+/// The frequency ratio r in [lo, hi] where Den Hartog's boundary (μ/F)_stop(r) equals `ratio`
+/// (the boundary rises with r on the intervals used here).
+fn published_stop_ratio_root(ratio: f64, lo: f64, hi: f64) -> f64 {
+    bisect(
+        |r| den_hartog_coulomb_stop_ratio(r).unwrap() - ratio,
+        lo,
+        hi,
+        1e-14,
+    )
 }
 
 #[test]
@@ -189,17 +199,7 @@ fn below_the_published_boundary_stops_begin_inside_the_half_period() {
             let osc = CoulombOscillator::new(TAU, 0.0, ratio, 1.0, f).unwrap();
             non_stop_orbit(&osc).unwrap().interior_velocity_min().1
         };
-        let (mut lo, mut hi) = (lo, hi);
-        assert!(vmin(lo) < 0.0 && vmin(hi) > 0.0);
-        while hi - lo > 1e-13 {
-            let m = 0.5 * (lo + hi);
-            if vmin(m) < 0.0 {
-                lo = m
-            } else {
-                hi = m
-            }
-        }
-        let graze = 0.5 * (lo + hi);
+        let graze = bisect(vmin, lo, hi, 1e-13);
         let published = published_stop_ratio_root(ratio, 0.36, 0.84);
         eprintln!(
             "μ/F = {ratio}: continuation {f} ± {prec:e}, interior grazing {graze}, \
