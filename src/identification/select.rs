@@ -157,7 +157,8 @@ pub fn evaluate(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<M
 }
 
 /// The final model refitted to convergence (the judge's refits stop after a few
-/// Levenberg–Marquardt steps from their warm starts: enough to judge, not to report), with the
+/// Levenberg–Marquardt steps from their warm starts: enough to judge, not to report), the windows
+/// left out at its start tried again at the solution ([`ShootingOptions::reselect`]), with the
 /// families' shape parameters freed ([`free_shapes`]): they are fitted here, by simulation, next
 /// to the linear coefficients, and their σ come from this refit's covariance. Its held-out errors
 /// are recomputed when no shape was freed; with shapes, the judged model's are kept (the one-step
@@ -175,6 +176,7 @@ pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
     };
     let opts = ShootingOptions {
         patience: 4,
+        reselect: true,
         ..*ctx.shooting
     };
     match refit(&model, &theta0, ctx.wins, &opts) {
