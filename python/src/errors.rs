@@ -1,5 +1,7 @@
-//! The exception hierarchy: one Python class per variant of `gearbif::Error`, all subclasses of
-//! `GearbifError`.
+//! The exception hierarchy: one Python class per concern of `gearbif::Error`, all subclasses of
+//! `GearbifError`. The input errors (an option, a name, a combination of options, a state, times,
+//! a shape, a checkpoint folder) share `InvalidInputError`, whose attribute `kind` names the
+//! variant.
 
 use gearbif::Error;
 use pyo3::create_exception;
@@ -22,7 +24,9 @@ create_exception!(
     gearbif,
     InvalidInputError,
     GearbifError,
-    "An input (state, time, option, name) is malformed or inconsistent."
+    "An input (option, name, combination of options, state, times, shape, checkpoint folder) is \
+     malformed or inconsistent (attribute kind: the variant of gearbif::Error, e.g. \
+     \"InvalidOption\", \"NonFiniteState\")."
 );
 create_exception!(
     gearbif,
@@ -80,7 +84,15 @@ pub fn to_py(e: Error) -> PyErr {
             });
             err
         }
-        Error::InvalidInput(_) | Error::UnknownParameter { .. } => InvalidInputError::new_err(msg),
+        Error::UnknownParameter { .. } => input_error(msg, "UnknownParameter"),
+        Error::InvalidOption { .. } => input_error(msg, "InvalidOption"),
+        Error::UnknownName { .. } => input_error(msg, "UnknownName"),
+        Error::InconsistentOptions { .. } => input_error(msg, "InconsistentOptions"),
+        Error::NonFiniteState { .. } => input_error(msg, "NonFiniteState"),
+        Error::InvalidTimes { .. } => input_error(msg, "InvalidTimes"),
+        Error::Shape { .. } => input_error(msg, "Shape"),
+        Error::Checkpoint { .. } => input_error(msg, "Checkpoint"),
+        Error::Stopped { .. } => GearbifError::new_err(msg),
         Error::NoParameterColumn { .. } => UnsupportedError::new_err(msg),
         Error::NoPeriodDetected { .. } => NoPeriodError::new_err(msg),
         Error::Integration { .. } => IntegrationError::new_err(msg),
@@ -98,6 +110,15 @@ pub fn to_py(e: Error) -> PyErr {
             err
         }
     }
+}
+
+/// An `InvalidInputError` with its attribute `kind`, the variant of `gearbif::Error`.
+fn input_error(msg: String, kind: &str) -> PyErr {
+    let err = InvalidInputError::new_err(msg);
+    Python::attach(|py| {
+        err.value(py).setattr("kind", kind).ok();
+    });
+    err
 }
 
 /// `Result<T, gearbif::Error>` → `PyResult<T>`.

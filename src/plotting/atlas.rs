@@ -7,6 +7,7 @@ use super::{plot_err, Figure, LinePlot, Series};
 use crate::analysis::classify::WindowSample;
 use crate::analysis::HarmonicFit;
 use crate::error::Result;
+use crate::model::GearParam;
 use crate::sweep::{PointRecord, SweepParam, SweepResult};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -90,10 +91,12 @@ pub struct RmsMap {
 
 fn axis_label(p: SweepParam) -> &'static str {
     match p {
-        SweepParam::ThetaDeg => "Θ [deg]",
-        SweepParam::F => "f [Hz]",
-        SweepParam::Zeta => "ζ [1/s]",
-        SweepParam::Eta => "η [1/s²]",
+        SweepParam::Lens(GearParam::ThetaDeg) => "Θ [deg]",
+        SweepParam::Lens(GearParam::F) => "f [Hz]",
+        SweepParam::Lens(GearParam::G) => "g [1/s²]",
+        SweepParam::Lens(GearParam::Zeta) => "ζ [1/s]",
+        SweepParam::Lens(GearParam::Eta) => "η [1/s²]",
+        SweepParam::Lens(GearParam::Delta) => "Δ",
         SweepParam::Inertia => "I [kg m²]",
     }
 }
