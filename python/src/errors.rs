@@ -133,9 +133,10 @@ impl<T> IntoPyResult<T> for gearbif::Result<T> {
     }
 }
 
-/// An `InvalidInputError` with a message.
+/// An `InvalidInputError` with a message, for a keyword argument the bindings refuse before the
+/// library sees it (`kind` = "InvalidOption", as the library's own option errors).
 pub fn invalid(msg: impl Into<String>) -> PyErr {
-    InvalidInputError::new_err(msg.into())
+    input_error(msg.into(), "InvalidOption")
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
