@@ -472,7 +472,11 @@ pub(crate) struct LockLossStart {
 pub(crate) fn lock_loss_starts(base: &Gear) -> Result<[LockLossStart; 2]> {
     let fc = base
         .lock_loss_frequency()
-        .ok_or_else(|| Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into()))?;
+        .ok_or(Error::NoLockLossFrequency {
+            g: base.g,
+            zeta: base.zeta,
+            eta: base.eta,
+        })?;
     let th_rev = crate::model::gear::cogging_free_parallel_angles()
         .2
         .to_degrees();
