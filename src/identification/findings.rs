@@ -5,7 +5,7 @@ use super::catalog::{effect_params, Effect};
 use super::judge::{rms_rad, Comparison};
 use super::model::{Shape, DRAG_REFERENCE_SPEED};
 use super::preprocess::CleanRun;
-use super::regression::Term;
+use super::regression::{DriftParam, Term};
 use super::report::{EffectSize, Finding};
 use super::select::{ModelState, Tried};
 use super::shooting::Win;
@@ -82,15 +82,15 @@ pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<Effec
         ),
         "drive_steps" => mk("offset", "offset_deg", "offset_err_deg", "deg"),
         "static_friction" => mk("excess", "excess_relative", "excess_relative_err", "1"),
-        "parameter_drift" | "condition_dependence" => ["eta", "zeta", "g"].iter().find_map(|n| {
+        "parameter_drift" | "condition_dependence" => DriftParam::ALL.iter().find_map(|d| {
+            let n = d.name();
             mk(
                 &format!("{n}_change"),
                 &format!("{n}_change"),
                 &format!("{n}_change_err"),
-                match *n {
-                    "eta" => "s^-2",
-                    "zeta" => "s^-1",
-                    _ => "s^-2",
+                match d {
+                    DriftParam::Zeta => "s^-1",
+                    DriftParam::Eta | DriftParam::Coupling => "s^-2",
                 },
             )
         }),

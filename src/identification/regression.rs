@@ -111,6 +111,9 @@ pub enum DriftParam {
 }
 
 impl DriftParam {
+    /// Every drifting parameter, in the order of the catalogue: η, ζ, g.
+    pub const ALL: [DriftParam; 3] = [DriftParam::Eta, DriftParam::Zeta, DriftParam::Coupling];
+
     /// The parameter of the gear's lens that drifts.
     pub fn lens(self) -> GearParam {
         match self {

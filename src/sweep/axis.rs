@@ -65,6 +65,12 @@ impl Parameter for SweepParam {
             Self::Inertia => "kg m²",
         }
     }
+    fn symbol(self) -> &'static str {
+        match self {
+            Self::Lens(p) => p.symbol(),
+            Self::Inertia => "I",
+        }
+    }
     /// A lens name, `inertia`, or `theta_deg` (the column name of Θ).
     fn from_name(s: &str) -> Result<Self> {
         match s {
