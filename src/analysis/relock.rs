@@ -56,11 +56,12 @@ pub struct Saddle {
 pub fn saddle(gear: &Gear) -> Result<Saddle> {
     let om = co_rotating(gear)?;
     let s = (gear.zeta * om + gear.eta) / gear.g;
-    if !(s.abs() < 1.0) {
-        return Err(Error::InvalidInput(format!(
-            "no lock at f = {} Hz (above f_c): (ζΩ + η)/g = {s}",
-            gear.f
-        )));
+    if s.is_nan() || s.abs() >= 1.0 {
+        return Err(Error::InvalidParameter {
+            name: "f",
+            value: gear.f,
+            reason: "above the lock-loss frequency: no lock, no saddle",
+        });
     }
     let delta = s.asin();
     let c = gear.g * delta.cos();
@@ -93,9 +94,10 @@ pub fn slip_cycle(gear: &Gear, delta0: f64, guess: (f64, f64), tol: f64) -> Resu
     let om = co_rotating(gear)?;
     let (mut w0, mut tau) = guess;
     if !(w0.is_finite() && tau > 0.0 && delta0.is_finite()) {
-        return Err(Error::InvalidInput(format!(
-            "slip cycle: bad start (δ₀, ω₀, τ) = ({delta0}, {w0}, {tau})"
-        )));
+        return Err(Error::NonFiniteState {
+            what: "start of a slip cycle (δ₀, ω₀, τ > 0)",
+            state: vec![delta0, w0, tau],
+        });
     }
     let o = FlowOptions::with_tol(tol).sensitivity(Sensitivity::State);
     let b0 = delta0 + gear.alpha(0.0);
@@ -107,13 +109,11 @@ pub fn slip_cycle(gear: &Gear, delta0: f64, guess: (f64, f64), tol: f64) -> Resu
         Vector2::new(w0, tau),
         &nopts,
         |u| {
-            if !(u[1] > 0.0) {
+            if u[1].is_nan() || u[1] <= 0.0 {
                 return Err(Error::Continuation("slip cycle: duration ≤ 0".into()));
             }
             let fl = EventDriven.flow(gear, 0.0, [b0, u[0]], u[1], &o)?;
-            let j = fl
-                .jac_x
-                .ok_or_else(|| Error::Continuation("flow returned no Jacobian".into()))?;
+            let j = fl.jac_x.ok_or(Error::MissingJacobian { what: "state" })?;
             let vf = vector_field(gear, u[1], fl.x, fl.mode);
             Ok(Linearisation {
                 residual: Vector2::new(fl.x[0] - gear.alpha(u[1]) - (delta0 - TAU), fl.x[1] - u[0]),
@@ -196,15 +196,17 @@ pub fn homoclinic_frequency(
     ftol: f64,
 ) -> Result<Homoclinic> {
     if !(lo < hi && ftol > 0.0 && eps > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "homoclinic search needs lo < hi, ftol > 0, eps > 0 ({lo}, {hi}, {ftol}, {eps})"
-        )));
+        return Err(Error::inconsistent(
+            "lo, hi, eps, ftol",
+            format!("the search needs lo < hi, eps > 0, ftol > 0 ({lo}, {hi}, {eps}, {ftol})"),
+        ));
     }
     let passes = |f: f64| unstable_manifold_passes(&base.with_f(f)?, eps, tol);
     if passes(lo)? || !passes(hi)? {
-        return Err(Error::InvalidInput(format!(
-            "[{lo}, {hi}] Hz does not bracket the homoclinic frequency"
-        )));
+        return Err(Error::inconsistent(
+            "lo, hi",
+            format!("[{lo}, {hi}] Hz does not bracket the homoclinic frequency"),
+        ));
     }
     let mut bracket = crate::numerics::Bisection::new(lo, hi);
     while bracket.hi() - bracket.lo() > ftol {
@@ -245,9 +247,10 @@ pub fn ramp_relock(
 ) -> Result<RampRelock> {
     co_rotating(gear)?;
     if !(rate < 0.0 && f_end < gear.f && f_end > 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "a down-ramp needs rate < 0 and 0 < f_end < f ({rate}, {f_end})"
-        )));
+        return Err(Error::inconsistent(
+            "rate, f_end",
+            format!("a down-ramp needs rate < 0 and 0 < f_end < f ({rate}, {f_end})"),
+        ));
     }
     let ramp = Ramped::new(*gear, rate)?;
     let t_end = ramp.time_of(f_end);
@@ -272,9 +275,8 @@ pub fn ramp_relock(
         prev = cur;
         t = t1;
     }
-    let last = last.ok_or_else(|| {
-        Error::InvalidInput("the ramp started locked: no slip during the ramp".into())
-    })?;
+    let last = last
+        .ok_or_else(|| Error::option("x0", "the ramp started locked: no slip during the ramp"))?;
     let g_end = gear.with_f(f_end)?;
     let d_s = std::f64::consts::PI - saddle(&g_end)?.delta;
     let d = (x[0] - ramp.drive_phase(t) - d_s).rem_euclid(TAU);

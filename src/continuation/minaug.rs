@@ -58,13 +58,11 @@ pub fn linearise_map<S: Parametrised, M: FlowMethod<S>>(
     opts: &ShootingOptions,
 ) -> Result<MapLinearisation> {
     let (residual, img) = residual_with(method, sys, spec, x, opts, true)?;
-    let jac = img
-        .jac_x
-        .ok_or_else(|| Error::Continuation("map returned no state Jacobian".into()))?;
+    let jac = img.jac_x.ok_or(Error::MissingJacobian { what: "state" })?;
     let jp = img
         .jac_p
         .as_ref()
-        .ok_or_else(|| Error::Continuation("map returned no parameter Jacobian".into()))?;
+        .ok_or(Error::MissingJacobian { what: "parameter" })?;
     let columns = params
         .iter()
         .map(|&p| param_derivative(sys, p, jp))

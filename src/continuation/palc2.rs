@@ -23,7 +23,7 @@ use super::codim2::{test_functions, Codim2Kind, Codim2Point, CurveLocal};
 use super::minaug::{
     bordered_test, critical_multiplier, grazing_margin, linearise_map, unit, MapLinearisation,
 };
-use super::two_param::{Curve, CurvePoint, CurveStop};
+use super::two_param::{check_curve_args, lock_loss_starts, Curve, CurvePoint, CurveStop};
 use super::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::FlowMethod;
@@ -101,10 +101,13 @@ impl CurveOptions {
         if ok {
             Ok(())
         } else {
-            Err(Error::InvalidInput(format!(
-                "curve options: need 0 < ds_min <= |ds| <= ds_max, ordered ranges, positive \
-                 weights and tolerances ({self:?})"
-            )))
+            Err(Error::option(
+                "curve options",
+                format!(
+                    "need 0 < ds_min <= |ds| <= ds_max, ordered ranges, positive weights and \
+                     tolerances ({self:?})"
+                ),
+            ))
         }
     }
 }
@@ -351,7 +354,7 @@ pub fn continue_curve<S: Parametrised, M: FlowMethod<S>>(
     opts: &CurveOptions,
 ) -> Result<Curve<S>> {
     opts.validate()?;
-    check_start(free, along, x0, free0)?;
+    check_curve_args(free, along, x0, free0)?;
     let test = match kind {
         SpecialKind::NeimarkSacker => Test::UnitDeterminant,
         k => Test::Bordered(critical_multiplier(k)?),
@@ -385,19 +388,6 @@ pub fn continue_curve<S: Parametrised, M: FlowMethod<S>>(
     let first = s.first_node(x0, free0)?;
     s.rebord(&first);
     walk(&mut s, first)
-}
-
-/// Checks the two parameters and the start of a curve.
-fn check_start<P: Parameter>(free: P, along: P, x0: [f64; 2], free0: f64) -> Result<()> {
-    if free == along {
-        return Err(Error::InvalidInput(
-            "the two parameters of a curve must differ".into(),
-        ));
-    }
-    if !(x0.iter().all(|z| z.is_finite()) && free0.is_finite()) {
-        return Err(Error::InvalidInput("non-finite start of a curve".into()));
-    }
-    Ok(())
 }
 
 /// The augmented system of a grazing curve of `sys`: the one-sided flow of `side`.
@@ -449,7 +439,7 @@ pub fn continue_grazing_curve<S: Parametrised, M: FlowMethod<OneSided<S>>>(
     opts: &CurveOptions,
 ) -> Result<Curve<S>> {
     opts.validate()?;
-    check_start(free, along, x0, free0)?;
+    check_curve_args(free, along, x0, free0)?;
     let os = OneSided::new(sys.clone(), side)?;
     let mut s = grazing_system(method, &os, spec, [free, along], opts);
     let first = s.first_node(x0, free0)?;
@@ -480,7 +470,7 @@ pub fn locate_grazing<S: Parametrised, M: FlowMethod<OneSided<S>>>(
     free0: f64,
     opts: &CurveOptions,
 ) -> Result<CurvePoint> {
-    check_start(free, along, x0, free0)?;
+    check_curve_args(free, along, x0, free0)?;
     let os = OneSided::new(sys.clone(), side)?;
     let s = grazing_system(method, &os, spec, [free, along], opts);
     Ok(s.point(&s.first_node(x0, free0)?))
@@ -699,35 +689,25 @@ pub fn lock_loss_curves(
     opts: &CurveOptions,
 ) -> Result<Vec<(String, Curve<crate::model::Gear>)>> {
     use crate::model::GearParam;
-    use std::f64::consts::{FRAC_PI_2, TAU};
-    let fc = base
-        .lock_loss_frequency()
-        .ok_or_else(|| Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into()))?;
-    let th_rev = crate::model::gear::cogging_free_parallel_angles()
-        .2
-        .to_degrees();
     let mut out = Vec::new();
-    for (p, from) in [(1, 0.0), (-1, th_rev)] {
-        let g = base
-            .with_param(GearParam::ThetaDeg, from)?
-            .with_param(GearParam::F, fc)?;
+    for s in lock_loss_starts(base)? {
         let o = CurveOptions {
-            ds: opts.ds.abs() * if p > 0 { 1.0 } else { -1.0 },
-            along_range: (0.0, th_rev),
+            ds: opts.ds.abs() * if s.winding > 0 { 1.0 } else { -1.0 },
+            along_range: (0.0, s.theta_rev_deg),
             ..*opts
         };
         let c = continue_curve(
             &crate::integrator::EventDriven,
-            &g,
-            &OrbitSpec::symmetric(p),
+            &s.gear,
+            &s.spec,
             SpecialKind::Fold,
             GearParam::F,
             GearParam::ThetaDeg,
-            [FRAC_PI_2, p as f64 * TAU * fc],
-            fc,
+            s.x0,
+            s.fc,
             &o,
         )?;
-        out.push((format!("fold of the lock, winding {p:+}"), c));
+        out.push((s.label, c));
     }
     Ok(out)
 }

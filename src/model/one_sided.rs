@@ -30,9 +30,11 @@ impl<S: DrivenOscillator> OneSided<S> {
     /// The one-sided flow of `inner` on side `side` (+1: ω > 0, −1: ω < 0).
     pub fn new(inner: S, side: f64) -> Result<Self> {
         if side != 1.0 && side != -1.0 {
-            return Err(Error::InvalidInput(format!(
-                "the side of a one-sided flow is +1 or -1, got {side}"
-            )));
+            return Err(Error::InvalidParameter {
+                name: "side",
+                value: side,
+                reason: "the side of a one-sided flow is +1 or -1",
+            });
         }
         Ok(Self { inner, side })
     }

@@ -28,9 +28,11 @@ impl<S: DrivenOscillator> Ramped<S> {
     /// Ramps the drive of `inner` (whose forces depend on t only through 2πt/T) at `rate` Hz/s.
     pub fn new(inner: S, rate: f64) -> Result<Self> {
         if !rate.is_finite() {
-            return Err(Error::InvalidInput(format!(
-                "ramp rate must be finite, got {rate}"
-            )));
+            return Err(Error::InvalidParameter {
+                name: "rate",
+                value: rate,
+                reason: "a ramp rate must be finite",
+            });
         }
         let f0 = 1.0 / inner.period();
         Ok(Self { inner, rate, f0 })
