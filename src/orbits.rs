@@ -70,22 +70,26 @@ impl OrbitSpec {
     /// so G(x) = x + (πp − c) per application when σ = +1; when σ = −1 only p = 0 is meaningful and s = 0.
     pub fn shift<S: DrivenOscillator + ?Sized>(&self, sys: &S) -> Result<f64> {
         if self.iterations == 0 {
-            return Err(Error::InvalidInput("orbit iterations must be >= 1".into()));
+            return Err(Error::option("orbit iterations", "must be >= 1, got 0"));
         }
         match self.section {
             Section::Stroboscopic => Ok(TAU * self.winding as f64),
             Section::HalfPeriod => {
-                let r = sys.half_period_symmetry().ok_or_else(|| {
-                    Error::Unsupported("this system has no half-period symmetry".into())
-                })?;
+                let r = sys
+                    .half_period_symmetry()
+                    .ok_or(Error::NoHalfPeriodSymmetry)?;
                 if r.sign > 0.0 {
                     Ok(self.iterations as f64 * (PI * self.winding as f64 - r.shift))
                 } else if self.winding == 0 {
                     Ok(0.0)
                 } else {
-                    Err(Error::InvalidInput(
-                        "with a reflecting symmetry (σ = −1) a symmetric orbit has winding 0"
-                            .into(),
+                    Err(Error::inconsistent(
+                        "section, winding",
+                        format!(
+                            "with a reflecting symmetry (σ = −1) a symmetric orbit has winding 0, \
+                             not {}",
+                            self.winding
+                        ),
                     ))
                 }
             }
@@ -337,14 +341,7 @@ fn winding_of<S: DrivenOscillator + ?Sized>(sys: &S, d: f64) -> f64 {
 }
 
 fn check_state(x: [f64; 2]) -> Result<()> {
-    if x[0].is_finite() && x[1].is_finite() {
-        Ok(())
-    } else {
-        Err(Error::InvalidInput(format!(
-            "initial state must be finite, got ({}, {})",
-            x[0], x[1]
-        )))
-    }
+    crate::error::finite_state("initial state", &x)
 }
 
 /// Newton shooting for a periodic orbit from the guess `x0`, with the event-driven integrator.
@@ -384,11 +381,7 @@ where
     check_state(x0)?;
     let eval = |x: &Vector2<f64>| -> Result<Linearisation<2, MapImage>> {
         let (r, img) = residual_with(method, sys, spec, [x[0], x[1]], opts, true)?;
-        let jac = img.jac_x.ok_or_else(|| Error::NewtonFailed {
-            iterations: 0,
-            residual: f64::NAN,
-            reason: "map returned no Jacobian".into(),
-        })?;
+        let jac = img.jac_x.ok_or(Error::MissingJacobian { what: "state" })?;
         Ok(Linearisation {
             residual: Vector2::from(r),
             jacobian: jac - Matrix2::identity(),
