@@ -134,8 +134,13 @@ pub const DRAG_EXPONENT_GRID: [u8; 6] = [12, 15, 18, 20, 25, 30];
 /// Weight-to-force ratios ρ (× 10) of the load family's weak-form profile.
 pub const LOAD_WEIGHT_GRID: [u8; 8] = [0, 5, 10, 15, 20, 30, 50, 80];
 
-/// Widths w (× 100, rad/s) of the Stribeck family's weak-form profile.
-pub const STRIBECK_WIDTH_GRID: [u8; 6] = [10, 20, 35, 50, 75, 120];
+/// Widths w (× 100, rad/s) of the Stribeck family's weak-form profile: output speeds from a
+/// tenth of a rad/s to the few rad/s of the driven runs.
+pub const STRIBECK_WIDTH_GRID: [u8; 7] = [10, 20, 35, 50, 75, 120, 200];
+
+/// Shapes δ (× 10) of the Stribeck family's weak-form profile: the exponential and the Gaussian
+/// decay (δ is then fitted by simulation).
+pub const STRIBECK_POWER_GRID: [u8; 2] = [10, 20];
 
 /// The weak-form grid columns of the families' profiles.
 fn grid_columns() -> Vec<Term> {
@@ -143,7 +148,9 @@ fn grid_columns() -> Vec<Term> {
         .iter()
         .map(|&p| Term::PowDrag(p))
         .collect();
-    v.extend(STRIBECK_WIDTH_GRID.iter().map(|&w| Term::StribeckGrid(w)));
+    for d in STRIBECK_POWER_GRID {
+        v.extend(STRIBECK_WIDTH_GRID.iter().map(|&w| Term::StribeckGrid(w, d)));
+    }
     for radial in [false, true] {
         v.extend(LOAD_WEIGHT_GRID.iter().map(|&r| Term::LoadGrid(r, radial)));
     }
@@ -158,9 +165,16 @@ fn shape_grid(e: &Effect) -> Vec<Vec<(Shape, f64)>> {
             .map(|&p| vec![(Shape::DragExponent, f64::from(p) / 10.0)])
             .collect()
     } else if e.terms.contains(&Term::Shape(Shape::StribeckWidth)) {
-        STRIBECK_WIDTH_GRID
+        STRIBECK_POWER_GRID
             .iter()
-            .map(|&w| vec![(Shape::StribeckWidth, f64::from(w) / 100.0)])
+            .flat_map(|&d| {
+                STRIBECK_WIDTH_GRID.iter().map(move |&w| {
+                    vec![
+                        (Shape::StribeckWidth, f64::from(w) / 100.0),
+                        (Shape::StribeckPower, f64::from(d) / 10.0),
+                    ]
+                })
+            })
             .collect()
     } else if e.terms.contains(&Term::Shape(Shape::LoadWeight)) {
         LOAD_WEIGHT_GRID
@@ -198,7 +212,8 @@ fn family_candidate(d: &Design, current: &[Term], cur: &LinFit, e: Effect) -> Op
 
 /// Proposals for the model `current` (terms) at `latency`, given the effects already `accepted`.
 /// Catalog families (effects sharing an id and slot) give their best member by ΔBIC when it
-/// lowers the BIC at all; the dictionary gives its best `max_dictionary` terms with ΔBIC < −10.
+/// lowers the BIC at all (the Stribeck member of `static_friction` always: the weak form does not
+/// see the stick phases); the dictionary gives its best `max_dictionary` terms with ΔBIC < −10.
 pub fn propose(
     ctx: &ProposeCtx,
     current: &[Term],
@@ -261,7 +276,9 @@ pub fn propose(
             None => out.push(c),
         }
     }
-    out.retain(|c| c.weak_dbic < 0.0);
+    // the weak form skips the stick phases and their margins, where a Stribeck excess acts
+    // most: its ΔBIC cannot veto that family, which is always judged by simulation
+    out.retain(|c| c.weak_dbic < 0.0 || c.effect.id == "static_friction");
     let mut dict: Vec<Candidate> = dictionary()
         .into_iter()
         .filter(|t| !current.contains(t))
