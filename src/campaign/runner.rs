@@ -146,6 +146,11 @@ pub fn run_case(
         let _ = std::fs::remove_dir_all(&dir);
     }
     let expected: Vec<String> = case.effect.expected.iter().map(|s| s.to_string()).collect();
+    let remaining_above_noise = diag
+        .as_ref()
+        .ok()
+        .and_then(|d| d.report.remaining.as_ref())
+        .map(|r| !r.within_noise);
     let (verdict, findings, error) = match diag {
         Ok(d) => (
             d.report.verdict.clone(),
@@ -174,6 +179,7 @@ pub fn run_case(
         findings,
         truths: g.truths,
         seconds,
+        remaining_above_noise,
         error,
     })
 }

@@ -4,10 +4,10 @@
 //! effect.
 
 use super::preprocess::CleanRun;
-use super::shooting::Win;
 use super::regression::{delta_bic, fit, Design, LinFit, Term};
 use super::report::{Mismatch, Remainder, RemainderBin};
 use super::ringdown::KappaFit;
+use super::shooting::Win;
 use crate::numerics::least_squares::{weighted, DEFAULT_RCOND};
 use serde_json::json;
 use std::collections::BTreeMap;
@@ -344,9 +344,7 @@ pub const REMAINDER_Z: f64 = 3.0;
 /// E and σ_E of windows given as pairs (χ², dof), see [`Remainder`].
 fn ratio_excess(pairs: &[(f64, f64)]) -> (f64, f64) {
     let n = pairs.len();
-    let (sc, sd): (f64, f64) = pairs
-        .iter()
-        .fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    let (sc, sd): (f64, f64) = pairs.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
     if n < 2 || sd <= 0.0 {
         return (f64::NAN, f64::NAN);
     }
@@ -356,6 +354,9 @@ fn ratio_excess(pairs: &[(f64, f64)]) -> (f64, f64) {
         / (sd * sd);
     (r - 1.0, v.sqrt())
 }
+
+/// Bins of one grouping: (label, window indices).
+type Bins = Vec<(String, Vec<usize>)>;
 
 /// Per-window description used for binning: (run, middle β, mean |β̇|, contains a stick phase).
 #[derive(Debug, Clone, Copy)]
@@ -407,7 +408,11 @@ pub fn remainder(
             .collect()
     };
     let (e, se) = ratio_excess(&pairs(&used));
-    let both: Vec<usize> = used.iter().copied().filter(|&k| base[k].is_some()).collect();
+    let both: Vec<usize> = used
+        .iter()
+        .copied()
+        .filter(|&k| base[k].is_some())
+        .collect();
     let base_pairs: Vec<(f64, f64)> = both
         .iter()
         .filter_map(|&k| Some((base[k]?, dof(&wins[k]))))
@@ -438,8 +443,8 @@ pub fn remainder(
         .iter()
         .filter_map(|&k| Some(fin[k]? - dof(&wins[k])))
         .sum();
-    let mut groups: Vec<(&str, Vec<(String, Vec<usize>)>)> = Vec::new();
-    let by = |label: &dyn Fn(usize) -> Option<String>| -> Vec<(String, Vec<usize>)> {
+    let mut groups: Vec<(&str, Bins)> = Vec::new();
+    let by = |label: &dyn Fn(usize) -> Option<String>| -> Bins {
         let mut m: BTreeMap<String, Vec<usize>> = BTreeMap::new();
         for &k in &used {
             if let Some(l) = label(k) {
@@ -462,14 +467,15 @@ pub fn remainder(
         "drive_hz",
         by(&|k| {
             let r = &runs[info[k].run];
-            (!r.ringdown)
-                .then(|| format!("{:.2}", r.alpha_rate.abs() / std::f64::consts::TAU))
+            (!r.ringdown).then(|| format!("{:.2}", r.alpha_rate.abs() / std::f64::consts::TAU))
         }),
     ));
     groups.push((
         "beta_phase_deg",
         by(&|k| {
-            let b = (info[k].beta_mid.to_degrees() / 60.0).floor().clamp(0.0, 5.0) as i32;
+            let b = (info[k].beta_mid.to_degrees() / 60.0)
+                .floor()
+                .clamp(0.0, 5.0) as i32;
             Some(format!("[{}, {})", 60 * b, 60 * (b + 1)))
         }),
     ));
@@ -523,7 +529,9 @@ pub fn remainder(
         vec![]
     } else {
         bins.iter()
-            .filter(|b| b.excess_sigma > 0.0 && b.excess_chi2_per_dof >= REMAINDER_Z * b.excess_sigma)
+            .filter(|b| {
+                b.excess_sigma > 0.0 && b.excess_chi2_per_dof >= REMAINDER_Z * b.excess_sigma
+            })
             .cloned()
             .collect()
     };

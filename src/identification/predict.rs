@@ -95,7 +95,10 @@ pub fn simulations() -> u64 {
 /// The integration steps of the finished window simulations so far (accepted and rejected), and
 /// the simulations stopped by the step budget [`WINDOW_MAX_STEPS`] (all threads).
 pub fn simulation_steps() -> (u64, u64) {
-    (STEPS.load(Ordering::Relaxed), OVER_BUDGET.load(Ordering::Relaxed))
+    (
+        STEPS.load(Ordering::Relaxed),
+        OVER_BUDGET.load(Ordering::Relaxed),
+    )
 }
 
 /// Most integration steps (accepted and rejected) of one window simulation. A window lasts at

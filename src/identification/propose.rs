@@ -149,7 +149,11 @@ fn grid_columns() -> Vec<Term> {
         .map(|&p| Term::PowDrag(p))
         .collect();
     for d in STRIBECK_POWER_GRID {
-        v.extend(STRIBECK_WIDTH_GRID.iter().map(|&w| Term::StribeckGrid(w, d)));
+        v.extend(
+            STRIBECK_WIDTH_GRID
+                .iter()
+                .map(|&w| Term::StribeckGrid(w, d)),
+        );
     }
     for radial in [false, true] {
         v.extend(LOAD_WEIGHT_GRID.iter().map(|&r| Term::LoadGrid(r, radial)));
@@ -212,8 +216,7 @@ fn family_candidate(d: &Design, current: &[Term], cur: &LinFit, e: Effect) -> Op
 
 /// Proposals for the model `current` (terms) at `latency`, given the effects already `accepted`.
 /// Catalog families (effects sharing an id and slot) give their best member by ΔBIC when it
-/// lowers the BIC at all (the Stribeck member of `static_friction` always: the weak form does not
-/// see the stick phases); the dictionary gives its best `max_dictionary` terms with ΔBIC < −10.
+/// lowers the BIC at all; the dictionary gives its best `max_dictionary` terms with ΔBIC < −10.
 pub fn propose(
     ctx: &ProposeCtx,
     current: &[Term],
@@ -276,9 +279,7 @@ pub fn propose(
             None => out.push(c),
         }
     }
-    // the weak form skips the stick phases and their margins, where a Stribeck excess acts
-    // most: its ΔBIC cannot veto that family, which is always judged by simulation
-    out.retain(|c| c.weak_dbic < 0.0 || c.effect.id == "static_friction");
+    out.retain(|c| c.weak_dbic < 0.0);
     let mut dict: Vec<Candidate> = dictionary()
         .into_iter()
         .filter(|t| !current.contains(t))

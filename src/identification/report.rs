@@ -83,7 +83,6 @@ pub struct RemainderBin {
     pub share: f64,
 }
 
-
 /// The refitted base model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Baseline {
@@ -268,9 +267,7 @@ fn remainder_markdown(rem: &Remainder) -> String {
         rem.base_excess_sigma
     );
     if rem.within_noise {
-        s.push_str(&format!(
-            "Nothing left above noise: {numbers}.\n\n"
-        ));
+        s.push_str(&format!("Nothing left above noise: {numbers}.\n\n"));
         return s;
     }
     s.push_str(&format!(
