@@ -170,7 +170,7 @@ pub enum Error {
     /// A continuation could not proceed.
     #[error("continuation stopped: {0}")]
     Continuation(String),
-    /// Reading or parsing input files failed (without an underlying error to carry).
+    /// A plotting backend failed; its message is kept as text.
     #[error("{0}")]
     Io(String),
     /// A file or folder could not be read, written, created or moved into place.
@@ -195,7 +195,29 @@ pub enum Error {
         #[source]
         source: Source,
     },
-    /// The requested operation is not available for this system (e.g. no half-period symmetry).
+    /// The half-period section G was asked of a system that declares no half-period symmetry
+    /// ([`crate::model::DrivenOscillator::half_period_symmetry`]).
+    #[error("unsupported: this system has no half-period symmetry (use the stroboscopic section)")]
+    NoHalfPeriodSymmetry,
+    /// A flow method returned no Jacobian where one was asked for (`what`: "state" for ∂x/∂x₀,
+    /// "parameter" for ∂x/∂p): the method does not propagate sensitivities.
+    #[error("unsupported: the flow method returned no {what} Jacobian")]
+    MissingJacobian {
+        /// "state" or "parameter".
+        what: &'static str,
+    },
+    /// The gear never locks or has no viscous limit: f_c = (g − η)/(2πζ) needs ζ > 0 and g > η.
+    #[error("unsupported: no lock-loss frequency f_c = (g − η)/(2πζ) for g = {}, ζ = {}, η = {} (needs ζ > 0 and g > η)", show(*g), show(*zeta), show(*eta))]
+    NoLockLossFrequency {
+        /// Coupling g, s⁻².
+        g: f64,
+        /// Viscous damping ζ, s⁻¹.
+        zeta: f64,
+        /// Dry friction η, s⁻².
+        eta: f64,
+    },
+    /// The requested operation is not available for this system (e.g. the gear's lock branch of
+    /// an oscillator, a closed form outside its range).
     #[error("unsupported: {0}")]
     Unsupported(String),
     /// An input file is malformed: a recording set's experiment.toml or CSV file, a `--config`
@@ -403,6 +425,15 @@ mod tests {
         assert!(matches!(
             merge_shards(&[]),
             Err(Error::Shape { got: 0, .. })
+        ));
+        let no_viscosity = Gear::new(400.0, 1.0, 0.0, 23.1, 1.0).unwrap();
+        assert!(matches!(
+            crate::continuation::two_param::lock_loss_boundary(
+                &no_viscosity,
+                5.0,
+                &Default::default()
+            ),
+            Err(Error::NoLockLossFrequency { zeta, .. }) if zeta == 0.0
         ));
     }
 
