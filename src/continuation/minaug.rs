@@ -143,7 +143,8 @@ pub fn bordered_test(
 /// (over the orbit's map if longer), from `x` on the section. It is positive while the orbit stays
 /// on one side of Σ = {ω = 0}, and zero where it touches Σ with ω̇ = 0 there (grazing; for dry
 /// friction with |a| ≤ r at the touch point, the onset of sticking). The minimum is found on 400
-/// dense-output samples and refined on 40 samples around the smallest; ω is then evaluated by the
+/// dense-output samples (two more past the end, so a minimum at the section is found inside the
+/// window) and refined on 40 samples around the smallest; ω is then evaluated by the
 /// flow at the vertex time of the parabola through the three smallest samples (error ½ω̈δt² from
 /// the vertex time's error δt ~ ω‴h²/ω̈, h = T/16000, plus the integrator's).
 pub fn grazing_margin<S: Parametrised, M: FlowMethod<S>>(
@@ -154,7 +155,7 @@ pub fn grazing_margin<S: Parametrised, M: FlowMethod<S>>(
     side: f64,
     tol: f64,
 ) -> Result<f64> {
-    let t1 = spec.periods().ceil().max(1.0) * sys.period();
+    let t1 = spec.periods() * sys.period();
     let sample = |a: f64, b: f64, n: usize| -> Result<Vec<(f64, f64)>> {
         let times: Vec<f64> = (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect();
         let opts = FlowOptions::with_tol(tol).samples(times);
@@ -166,12 +167,11 @@ pub fn grazing_margin<S: Parametrised, M: FlowMethod<S>>(
             .min_by(|&i, &j| v[i].1.total_cmp(&v[j].1))
             .unwrap_or(0)
     };
-    let coarse = sample(0.0, t1, 400)?;
-    let i = argmin(&coarse);
-    let (a, b) = (
-        coarse[i.saturating_sub(1)].0,
-        coarse[(i + 1).min(coarse.len() - 1)].0,
-    );
+    // two samples past the end, so that a minimum at t ≈ 0 ≡ t1 (mod the period) is interior
+    let n = 400;
+    let coarse = sample(0.0, t1 * (1.0 + 2.0 / n as f64), n + 2)?;
+    let i = 1 + argmin(&coarse[1..=n]);
+    let (a, b) = (coarse[i - 1].0, coarse[i + 1].0);
     let fine = sample(a, b, 40)?;
     let j = argmin(&fine);
     if j == 0 || j + 1 >= fine.len() {

@@ -20,13 +20,15 @@
 //! dropped.
 
 use super::codim2::{test_functions, Codim2Kind, Codim2Point, CurveLocal};
-use super::minaug::{bordered_test, critical_multiplier, linearise_map, unit, MapLinearisation};
+use super::minaug::{
+    bordered_test, critical_multiplier, grazing_margin, linearise_map, unit, MapLinearisation,
+};
 use super::options::{check_accuracy, check_range, check_steps};
 use super::two_param::{check_curve_args, lock_loss_starts, Curve, CurvePoint, CurveStop};
 use super::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::FlowMethod;
-use crate::model::{Parameter, Parametrised};
+use crate::model::{OneSided, Parameter, Parametrised};
 use crate::numerics::{newton, Illinois, Linearisation, NewtonOptions};
 use crate::orbits::{OrbitSpec, ShootingOptions};
 use nalgebra::{Matrix4, Vector4};
@@ -55,6 +57,14 @@ pub struct CurveOptions {
     pub detect: bool,
     /// Width of the final bracket (scaled arclength) of a located codimension-two point.
     pub locate_tol: f64,
+    /// Stop when the spectral radius of the orbit's map exceeds this (single shooting loses about
+    /// log₁₀|μ| digits); unlimited by default.
+    #[serde(default = "unlimited")]
+    pub max_multiplier: f64,
+}
+
+fn unlimited() -> f64 {
+    f64::INFINITY
 }
 
 impl Default for CurveOptions {
@@ -70,6 +80,7 @@ impl Default for CurveOptions {
             shooting: ShootingOptions::default(),
             detect: true,
             locate_tol: 1e-9,
+            max_multiplier: f64::INFINITY,
         }
     }
 }
@@ -80,7 +91,15 @@ impl CurveOptions {
         check_steps(self.ds, self.ds_min, self.ds_max, self.max_steps)?;
         check_range("free_range", self.free_range)?;
         check_range("along_range", self.along_range)?;
-        check_accuracy(&self.shooting, self.locate_tol, self.omega_weight)
+        check_accuracy(&self.shooting, self.locate_tol, self.omega_weight)?;
+        if self.max_multiplier.is_nan() || self.max_multiplier <= 1.0 {
+            return Err(Error::InvalidParameter {
+                name: "max_multiplier",
+                value: self.max_multiplier,
+                reason: "must be > 1",
+            });
+        }
+        Ok(())
     }
 }
 
@@ -107,6 +126,8 @@ enum Test {
     Bordered(f64),
     /// det M − 1 (Neimark–Sacker).
     UnitDeterminant,
+    /// The smallest side·ω over the (one-sided) orbit: zero where it grazes Σ.
+    Grazing(f64),
 }
 
 /// The augmented system of one curve.
@@ -147,6 +168,12 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
                 (t.g, t.v, t.w)
             }
             Test::UnitDeterminant => (lin.floquet().ns_test(), [0.0; 2], [0.0; 2]),
+            Test::Grazing(side) => {
+                let x = [u[0], u[1]];
+                let tol = self.opts.shooting.tol;
+                let g = grazing_margin(self.method, &sys, &self.spec, x, side, tol)?;
+                (g, [0.0; 2], [0.0; 2])
+            }
         };
         Ok((lin, g, v, w))
     }
@@ -257,6 +284,16 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
         Ok(if t.dot(prev) < 0.0 { -t } else { t })
     }
 
+    /// The first node: corrected from (`x0`, `free0`) with the along parameter held at its value
+    /// in the system.
+    fn first_node(&self, x0: [f64; 2], free0: f64) -> Result<Node> {
+        let along0 = self.sys.param(self.params[1]);
+        let e4 = Vector4::new(0.0, 0.0, 0.0, 1.0);
+        let u0 = Vector4::new(x0[0], x0[1], free0, along0);
+        let orient = e4 * self.opts.ds.signum();
+        self.correct(u0, e4, e4 * along0, 0.0, orient)
+    }
+
     /// Resets the bordering vectors to the null vectors at `node` (a no-op for NS curves).
     fn rebord(&mut self, node: &Node) {
         if matches!(self.test, Test::Bordered(_)) {
@@ -339,12 +376,95 @@ pub fn continue_curve<S: Parametrised, M: FlowMethod<S>>(
         s.b = [uu[(0, k)], uu[(1, k)]];
         s.c = [vt[(k, 0)], vt[(k, 1)]];
     }
-    let e4 = Vector4::new(0.0, 0.0, 0.0, 1.0);
-    let u0 = Vector4::new(x0[0], x0[1], free0, along0);
-    let orient = e4 * opts.ds.signum();
-    let first = s.correct(u0, e4, e4 * along0, 0.0, orient)?;
+    let first = s.first_node(x0, free0)?;
     s.rebord(&first);
     walk(&mut s, first)
+}
+
+/// The augmented system of a grazing curve of `sys`: the one-sided flow of `side`.
+fn grazing_system<'a, S: Parametrised, M>(
+    method: &'a M,
+    one_sided: &'a OneSided<S>,
+    spec: &OrbitSpec,
+    params: [S::Param; 2],
+    opts: &CurveOptions,
+) -> System<'a, OneSided<S>, M> {
+    System {
+        method,
+        sys: one_sided,
+        spec: *spec,
+        kind: SpecialKind::Nonsmooth,
+        params,
+        test: Test::Grazing(one_sided.side()),
+        b: [1.0, 0.0],
+        c: [1.0, 0.0],
+        opts: *opts,
+    }
+}
+
+/// Continues the curve of **grazing points** of the problem `spec` of `sys` in (`free`, `along`):
+/// orbits on side `side` of Σ = {ω = 0} that touch it, ω = ω̇ = 0 at one instant (for dry
+/// friction: the onset of sticking, |a| = r there). The defining system is a regular root problem
+/// on the one-sided flow ([`OneSided`], the smooth field of `side` continued across Σ):
+///
+/// ```text
+///   P̃ᵏ(x; λ₁, λ₂) − x − (s, 0) = 0,   g(x; λ₁, λ₂) = min_t side·ω̃(t) = 0,
+/// ```
+///
+/// with P̃ the one-sided map (equal to the true map on the side where the orbit does not touch
+/// Σ, and at the grazing point itself) and g the grazing margin ([`grazing_margin`]: a smooth
+/// function there, positive before the touch and negative past it, where the true orbit sticks).
+/// Continued by the same pseudo-arclength as the other curves, so it passes turning points; the
+/// codimension-two points located on it are fold–grazing and flip–grazing points (on G:
+/// symmetry-breaking–grazing) and turning points. `method` integrates the one-sided flow.
+#[allow(clippy::too_many_arguments)]
+pub fn continue_grazing_curve<S: Parametrised, M: FlowMethod<OneSided<S>>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    side: f64,
+    free: S::Param,
+    along: S::Param,
+    x0: [f64; 2],
+    free0: f64,
+    opts: &CurveOptions,
+) -> Result<Curve<S>> {
+    opts.validate()?;
+    check_curve_args(free, along, x0, free0)?;
+    let os = OneSided::new(sys.clone(), side)?;
+    let mut s = grazing_system(method, &os, spec, [free, along], opts);
+    let first = s.first_node(x0, free0)?;
+    let c = walk(&mut s, first)?;
+    Ok(Curve {
+        kind: c.kind,
+        along: c.along,
+        free: c.free,
+        spec: c.spec,
+        points: c.points,
+        stopped: c.stopped,
+        codim2: c.codim2,
+    })
+}
+
+/// The grazing point of the problem `spec` of `sys` at the present value of `along` (held fixed):
+/// the defining system of [`continue_grazing_curve`] solved for (x, `free`) by Newton from
+/// (`x0`, `free0`). Its `precision` is the last Newton step.
+#[allow(clippy::too_many_arguments)]
+pub fn locate_grazing<S: Parametrised, M: FlowMethod<OneSided<S>>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    side: f64,
+    free: S::Param,
+    along: S::Param,
+    x0: [f64; 2],
+    free0: f64,
+    opts: &CurveOptions,
+) -> Result<CurvePoint> {
+    check_curve_args(free, along, x0, free0)?;
+    let os = OneSided::new(sys.clone(), side)?;
+    let s = grazing_system(method, &os, spec, [free, along], opts);
+    Ok(s.point(&s.first_node(x0, free0)?))
 }
 
 /// Where a parameter left its range: (which parameter, the bound).
@@ -410,6 +530,15 @@ fn walk<S: Parametrised, M: FlowMethod<S>>(s: &mut System<S, M>, first: Node) ->
             _ => (ds * 0.6).max(s.opts.ds_min),
         };
         prev = next;
+        let radius = prev.lin.floquet().spectral_radius();
+        if radius > s.opts.max_multiplier {
+            stopped = Some(CurveStop::MultiplierLimit {
+                modulus: radius,
+                free: prev.u[2],
+                along: prev.u[3],
+            });
+            break;
+        }
         if let Some((k, b)) = bound {
             stopped = Some(CurveStop::ParameterBound {
                 param: s.params[k].name().to_string(),
