@@ -64,11 +64,10 @@ impl CampaignSpec {
         }
         for &l in &self.levels {
             if !(l.is_finite() && l > 0.0) {
-                return Err(Error::InvalidParameter {
-                    name: "level",
-                    value: l,
-                    reason: "must be finite and > 0",
-                });
+                return Err(Error::option(
+                    format!("level {l}"),
+                    "must be finite and > 0",
+                ));
             }
         }
         if !(self.rk4_step_s.is_finite() && self.rk4_step_s > 0.0 && self.rk4_step_s <= 0.01) {
