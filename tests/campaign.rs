@@ -241,7 +241,7 @@ fn cli_campaign_rejects_bad_input() {
             vec!["--effects", "warp_drive"],
             "unknown effect `warp_drive`",
         ),
-        (vec!["--sizes", "-1"], "`level` = -1"),
+        (vec!["--sizes", "-1"], "level -1"),
         (vec!["--set", "huge"], "unknown set size `huge`"),
         (vec!["--seeds", "0"], "--seeds"),
         (vec!["--step", "0.5"], "RK4 step"),
