@@ -24,6 +24,7 @@ use super::minaug::{
     arrival_edge, bordered_test, critical_multiplier, grazing_margin, linearise_map,
     nearest_edge_arrival, unit, MapLinearisation,
 };
+use super::options::{check_accuracy, check_range, check_steps};
 use super::two_param::{check_curve_args, lock_loss_starts, Curve, CurvePoint, CurveStop};
 use super::SpecialKind;
 use crate::error::{Error, Result};
@@ -86,30 +87,20 @@ impl Default for CurveOptions {
 }
 
 impl CurveOptions {
-    /// Checks steps and ranges.
+    /// Checks steps, ranges and tolerances (the checks of [`super::ContinuationOptions`]).
     pub fn validate(&self) -> Result<()> {
-        let ok = self.ds.is_finite()
-            && self.ds != 0.0
-            && self.ds_min > 0.0
-            && self.ds_max >= self.ds_min
-            && self.ds.abs() >= self.ds_min
-            && self.max_steps > 0
-            && self.omega_weight > 0.0
-            && self.locate_tol > 0.0
-            && self.max_multiplier > 1.0
-            && self.free_range.0 <= self.free_range.1
-            && self.along_range.0 <= self.along_range.1;
-        if ok {
-            Ok(())
-        } else {
-            Err(Error::option(
-                "curve options",
-                format!(
-                    "need 0 < ds_min <= |ds| <= ds_max, ordered ranges, positive weights and \
-                     tolerances ({self:?})"
-                ),
-            ))
+        check_steps(self.ds, self.ds_min, self.ds_max, self.max_steps)?;
+        check_range("free_range", self.free_range)?;
+        check_range("along_range", self.along_range)?;
+        check_accuracy(&self.shooting, self.locate_tol, self.omega_weight)?;
+        if self.max_multiplier.is_nan() || self.max_multiplier <= 1.0 {
+            return Err(Error::InvalidParameter {
+                name: "max_multiplier",
+                value: self.max_multiplier,
+                reason: "must be > 1",
+            });
         }
+        Ok(())
     }
 }
 
