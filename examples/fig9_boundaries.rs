@@ -13,7 +13,8 @@
 
 use gearbif::continuation::minaug::grazing_margin;
 use gearbif::continuation::palc2::{
-    continue_curve, continue_grazing_curve, locate_grazing, lock_loss_curves, CurveOptions,
+    continue_curve, continue_event_edge_curve, continue_grazing_curve, locate_grazing,
+    lock_loss_curves, CurveOptions,
 };
 use gearbif::continuation::two_param::Curve;
 use gearbif::continuation::{Branch, Continuation, ContinuationOptions, SpecialKind, SpecialPoint};
@@ -104,7 +105,35 @@ fn onset_by_continuation(
     f0: f64,
     w: f64,
 ) -> gearbif::Result<SpecialPoint> {
-    let b = Continuation::new(
+    let b = branch_across(theta, spec, x, f0, w)?;
+    stick_onset(&b).ok_or_else(|| {
+        gearbif::Error::Continuation(format!("no stick onset near {f0} Hz at Θ = {theta}°"))
+    })
+}
+
+/// The end of sticking, event signature (1, 1) ↔ (2, 0), located on a branch.
+fn stick_end(b: &Branch) -> Option<SpecialPoint> {
+    let want = [(1, 1), (2, 0)];
+    b.specials
+        .iter()
+        .find(|s| {
+            s.jump.as_ref().is_some_and(|j| {
+                want.contains(&j.events_before.signature())
+                    && want.contains(&j.events_after.signature())
+            })
+        })
+        .cloned()
+}
+
+/// One-parameter continuation in f at Θ = `theta` across [f0 − w, f0 + w] from near `x`.
+fn branch_across(
+    theta: f64,
+    spec: OrbitSpec,
+    x: [f64; 2],
+    f0: f64,
+    w: f64,
+) -> gearbif::Result<Branch> {
+    Continuation::new(
         Gear::paper(theta, f0 + w)?,
         GearParam::F,
         spec,
@@ -117,10 +146,52 @@ fn onset_by_continuation(
             ..Default::default()
         },
     )?
-    .run(None)?;
-    stick_onset(&b).ok_or_else(|| {
-        gearbif::Error::Continuation(format!("no stick onset near {f0} Hz at Θ = {theta}°"))
-    })
+    .run(None)
+}
+
+/// The curve where the asymmetric T orbit's stick phase shrinks to nothing ((1, 1) ↔ (2, 0): the
+/// arrival on Σ at the edge a = +η), from the point a continuation in f locates at 25°, both ways;
+/// confirmed at three of its points by a continuation in f at that Θ.
+fn stick_end_curves(opts: &CurveOptions) -> gearbif::Result<Labelled> {
+    let spec = OrbitSpec::stroboscopic(1, 1);
+    let b = branch_across(25.0, spec, [2.9748, 24.3248], 2.36, 0.025)?;
+    let sp = stick_end(&b)
+        .ok_or_else(|| gearbif::Error::Continuation("no end of sticking at 25°".into()))?;
+    println!(
+        "end of sticking, T orbit, Θ = 25° (continuation in f): {:.10} Hz",
+        sp.param
+    );
+    let g = Gear::paper(25.0, sp.param)?;
+    let mut out = Vec::new();
+    for ds in [0.2, -0.2] {
+        let o = CurveOptions {
+            ds,
+            ds_max: 0.5,
+            max_steps: 40,
+            max_multiplier: 1e3,
+            ..*opts
+        };
+        let args = (GearParam::F, GearParam::ThetaDeg);
+        let c =
+            continue_event_edge_curve(&EventDriven, &g, &spec, args.0, args.1, sp.x, sp.param, &o)?;
+        out.push(("end of sticking: T orbit (asymmetric)".to_string(), c));
+    }
+    for p in out[0].1.points.iter().skip(8).step_by(8).take(3) {
+        let b = branch_across(p.along, spec, p.x, p.free, 0.004)?;
+        let q = stick_end(&b).ok_or_else(|| {
+            gearbif::Error::Continuation(format!("no end of sticking at Θ = {}°", p.along))
+        })?;
+        println!(
+            "Θ = {:.6}°: end-of-sticking curve {:.10} Hz, continuation in f {:.10} ± {:.1e} Hz, \
+             difference {:.1e} Hz",
+            p.along,
+            p.free,
+            q.param,
+            q.precision,
+            p.free - q.param
+        );
+    }
+    Ok(out)
 }
 
 /// A grazing curve from the stick onset `sp` located at Θ = 25° (both directions).
@@ -301,6 +372,7 @@ fn main() -> gearbif::Result<()> {
     confirm(&grazing[0].1, &[30.0, 35.0, 40.0, 45.0], &opts)?;
     confirm(&grazing[2].1, &[30.0, 40.0], &opts)?;
     curves.extend(grazing);
+    curves.extend(stick_end_curves(&opts)?);
     report(&curves);
     // where the fold curves end: the orbit touches ω = 0 (grazing, onset of sticking)
     for (label, c) in curves.iter().take(2) {

@@ -29,41 +29,39 @@ fn main() -> gearbif::Result<()> {
     println!("f_h = {f_h:.10} Hz, change with tolerance/offset {spread:.1e} Hz");
     // 2. the slip cycle followed down towards f_h: τ against −ln(f − f_h)/λ_u
     let d0 = -std::f64::consts::FRAC_PI_2;
-    // start near the cycle at 3.78 Hz, then natural continuation with a secant predictor
-    let first = slip_cycle(&base.with_f(3.78)?, d0, (-2.738, 0.390), 1e-11)?;
-    let mut cycles: Vec<(f64, SlipCycle)> = vec![(3.78, first)];
-    // targets f_h + 0.1·10^(−k/4); the predictor is a secant in ln(f − f_h), in which τ is
-    // asymptotically linear
-    for k in 0..=20 {
-        let f = f_h + 0.1 * 10f64.powf(-0.25 * k as f64);
-        let n = cycles.len();
-        let (fa, a) = cycles[n - 1];
-        let guess = if n >= 2 {
-            let (fb, b) = cycles[n - 2];
-            let ln = |x: f64| (x - f_h).ln();
-            let s = (ln(f) - ln(fa)) / (ln(fa) - ln(fb));
-            (
-                a.omega0 + s * (a.omega0 - b.omega0),
-                a.duration + s * (a.duration - b.duration),
-            )
-        } else {
-            (a.omega0, a.duration)
-        };
+    // natural continuation from the cycle at 3.78 Hz towards f_h: steps of at most a quarter of
+    // the distance f − f_h, the previous cycle as the guess, halved when Newton fails; recorded at
+    // f − f_h = 0.1·10^(−k/2)
+    let mut cur = (
+        3.78,
+        slip_cycle(&base.with_f(3.78)?, d0, (-2.738, 0.390), 1e-11)?,
+    );
+    let mut cycles: Vec<(f64, SlipCycle)> = Vec::new();
+    let mut k = 0;
+    let mut df: f64 = 0.01;
+    while k <= 6 && df > 1e-12 {
+        let target = f_h + 0.1 * 10f64.powf(-0.5 * k as f64);
+        let f = (cur.0 - df.min(0.25 * (cur.0 - f_h))).max(target);
+        let guess = (cur.1.omega0, cur.1.duration);
         match slip_cycle(&base.with_f(f)?, d0, guess, 1e-11) {
-            Ok(c) => cycles.push((f, c)),
-            Err(e) => {
-                println!("cycle continuation stops: {e}");
-                break;
+            Ok(c) => {
+                cur = (f, c);
+                df *= 1.5;
+                if f == target {
+                    cycles.push(cur);
+                    k += 1;
+                }
             }
+            Err(_) => df *= 0.5,
         }
     }
-    cycles.remove(0);
+    println!("cycle followed to f − f_h = {:.1e} Hz", cur.0 - f_h);
     let lam = saddle(&base.with_f(f_h)?)?.unstable;
     println!(
         "saddle at f_h: λ_u = {lam:.6} 1/s (ln 10/(2λ_u) = {:.6} s)",
         10f64.ln() / (2.0 * lam)
     );
-    let halves: Vec<_> = cycles.iter().step_by(2).collect();
+    let halves: Vec<_> = cycles.iter().collect();
     for w in halves.windows(2) {
         let ((f1, c1), (f2, c2)) = (w[0], w[1]);
         println!(

@@ -385,57 +385,6 @@ pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::{fit_harmonics, ClassifyOptions};
-    use crate::integrator::{EventDriven, FlowMethod, FlowOptions};
-    use crate::model::Gear;
-    use crate::sweep::{merge_shards, Axis, SweepSpec};
-
-    #[test]
-    fn bad_inputs_give_their_specific_variant() {
-        let gear = Gear::paper(0.0, 1.0).unwrap();
-        let o = FlowOptions::with_tol(1e-8);
-        let m = &EventDriven;
-        assert!(matches!(
-            m.flow(&gear, 1.0, [0.0, 0.0], 0.5, &o),
-            Err(Error::InvalidTimes { t0, t1, .. }) if t0 == 1.0 && t1 == 0.5
-        ));
-        assert!(matches!(
-            m.flow(&gear, 0.0, [f64::NAN, 0.0], 1.0, &o),
-            Err(Error::NonFiniteState { what: "initial state", ref state })
-                if state[0].is_nan() && state[1] == 0.0
-        ));
-        let opts = ClassifyOptions {
-            record_turns: 0,
-            ..ClassifyOptions::default()
-        };
-        assert!(matches!(
-            opts.validate(),
-            Err(Error::InvalidOption { ref option, .. }) if option == "record_turns"
-        ));
-        assert!(matches!(
-            fit_harmonics(&[0.0; 20], &[0.0; 19], 7),
-            Err(Error::Shape { expected, got: 19, .. }) if expected.starts_with("20")
-        ));
-        let axis = Axis::parse("f:1:2:0.5").unwrap();
-        let spec = SweepSpec::paper_fig7(axis.clone(), axis);
-        assert!(matches!(
-            spec.validate(),
-            Err(Error::InconsistentOptions { ref options, .. }) if options == "rows, cols"
-        ));
-        assert!(matches!(
-            merge_shards(&[]),
-            Err(Error::Shape { got: 0, .. })
-        ));
-        let no_viscosity = Gear::new(400.0, 1.0, 0.0, 23.1, 1.0).unwrap();
-        assert!(matches!(
-            crate::continuation::two_param::lock_loss_boundary(
-                &no_viscosity,
-                5.0,
-                &Default::default()
-            ),
-            Err(Error::NoLockLossFrequency { zeta, .. }) if zeta == 0.0
-        ));
-    }
 
     #[test]
     fn unknown_names_list_the_accepted_ones() {

@@ -2,7 +2,9 @@
 //! against a second, independent route.
 
 use gearbif::analysis::relock::{homoclinic_frequency, ramp_relock, saddle, slip_cycle};
-use gearbif::continuation::palc2::{continue_grazing_curve, locate_grazing, CurveOptions};
+use gearbif::continuation::palc2::{
+    continue_event_edge_curve, continue_grazing_curve, locate_grazing, CurveOptions,
+};
 use gearbif::continuation::{Continuation, ContinuationOptions, SpecialPoint};
 use gearbif::integrator::EventDriven;
 use gearbif::model::{Gear, GearParam};
@@ -16,6 +18,20 @@ fn onset_by_continuation(
     x: [f64; 2],
     f0: f64,
     w: f64,
+) -> SpecialPoint {
+    nonsmooth_by_continuation(theta, spec, x, f0, w, &[(0, 0)], false)
+}
+
+/// The nonsmooth point of a one-parameter continuation in f over [f0 − w, f0 + w] at Θ = `theta`
+/// whose event signatures are in `sigs` (on one side if `!both`, on both sides if `both`).
+fn nonsmooth_by_continuation(
+    theta: f64,
+    spec: OrbitSpec,
+    x: [f64; 2],
+    f0: f64,
+    w: f64,
+    sigs: &[(usize, usize)],
+    both: bool,
 ) -> SpecialPoint {
     let b = Continuation::new(
         Gear::paper(theta, f0 + w).unwrap(),
@@ -37,11 +53,16 @@ fn onset_by_continuation(
         .iter()
         .find(|s| {
             s.jump.as_ref().is_some_and(|j| {
-                j.events_before.signature() == (0, 0) || j.events_after.signature() == (0, 0)
+                let (a, b) = (j.events_before.signature(), j.events_after.signature());
+                if both {
+                    sigs.contains(&a) && sigs.contains(&b)
+                } else {
+                    sigs.contains(&a) || sigs.contains(&b)
+                }
             })
         })
         .cloned()
-        .expect("a stick onset")
+        .expect("a nonsmooth point of that kind")
 }
 
 #[test]
@@ -131,4 +152,35 @@ fn theta0_relock_is_the_homoclinic_of_the_slip_cycle() {
     );
     assert!((r.last_slip - f_h).abs() < 0.4 * rate.abs(), "{r:?}");
     assert!(r.lock_offset < 1e-4 && r.slips > 10);
+}
+
+#[test]
+fn end_of_sticking_curve_point_agrees_with_a_continuation_in_f() {
+    // the asymmetric T orbit at Θ = 25°: its stick phase shrinks to nothing near 2.343 Hz
+    let spec = OrbitSpec::stroboscopic(1, 1);
+    let sigs = [(1, 1), (2, 0)];
+    let sp = nonsmooth_by_continuation(25.0, spec, [2.9748, 24.3248], 2.36, 0.025, &sigs, true);
+    let g = Gear::paper(25.0, sp.param).unwrap();
+    let opts = CurveOptions {
+        ds: 0.3,
+        max_steps: 4,
+        ..Default::default()
+    };
+    let (f, th) = (GearParam::F, GearParam::ThetaDeg);
+    let c =
+        continue_event_edge_curve(&EventDriven, &g, &spec, f, th, sp.x, sp.param, &opts).unwrap();
+    assert!(
+        (c.points[0].free - sp.param).abs() < 1e-7,
+        "{} {}",
+        c.points[0].free,
+        sp.param
+    );
+    let p = c.points.last().unwrap();
+    assert!(p.along > 25.5 && p.test_value.abs() < 1e-8, "{p:?}");
+    let q = nonsmooth_by_continuation(p.along, spec, p.x, p.free, 0.004, &sigs, true);
+    println!(
+        "Θ = {:.6}°: edge curve {:.10}, continuation {:.10} ± {:.1e} Hz",
+        p.along, p.free, q.param, q.precision
+    );
+    assert!((q.param - p.free).abs() < 1e-7);
 }

@@ -190,6 +190,79 @@ pub fn grazing_margin<S: Parametrised, M: FlowMethod<S>>(
     Ok(side * fl.x[1])
 }
 
+/// The edge margin of one arrival on Σ: a(t, β, 0) − σ r_s(t, β) at the arrival's time `t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArrivalEdge {
+    /// The margin (zero where the arrival lies on the edge σ of the stick region).
+    pub margin: f64,
+    /// Time of the arrival.
+    pub t: f64,
+}
+
+/// The arrivals on Σ (stick entries and crossings) of the orbit from `x` over the map's duration.
+fn arrivals<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    x: [f64; 2],
+    tol: f64,
+) -> Result<Vec<crate::integrator::Event>> {
+    use crate::integrator::EventKind;
+    let t1 = spec.periods() * sys.period();
+    let fl = method.flow(
+        sys,
+        0.0,
+        x,
+        t1,
+        &FlowOptions::with_tol(tol).record_events(true),
+    )?;
+    Ok(fl
+        .events
+        .into_iter()
+        .filter(|e| matches!(e.kind, EventKind::StickStart | EventKind::Crossing { .. }))
+        .collect())
+}
+
+/// The edge margin a − σ r_s of the orbit's arrival on Σ nearest in time to `t_ref`.
+pub fn arrival_edge<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    x: [f64; 2],
+    sigma: f64,
+    t_ref: f64,
+    tol: f64,
+) -> Result<ArrivalEdge> {
+    let ev = arrivals(method, sys, spec, x, tol)?;
+    let e = ev
+        .iter()
+        .min_by(|a, b| (a.t - t_ref).abs().total_cmp(&(b.t - t_ref).abs()))
+        .ok_or_else(|| Error::Continuation("the orbit has no arrival on Σ to track".into()))?;
+    Ok(ArrivalEdge {
+        margin: sys.forces(e.t, e.beta, 0.0).a - sigma * sys.static_friction(e.t, e.beta),
+        t: e.t,
+    })
+}
+
+/// The arrival on Σ whose |a| is nearest to the static bound r_s: (σ = sgn a, its time).
+pub fn nearest_edge_arrival<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    x: [f64; 2],
+    tol: f64,
+) -> Result<(f64, f64)> {
+    let ev = arrivals(method, sys, spec, x, tol)?;
+    let gap = |e: &crate::integrator::Event| {
+        (sys.forces(e.t, e.beta, 0.0).a.abs() - sys.static_friction(e.t, e.beta)).abs()
+    };
+    let e = ev
+        .iter()
+        .min_by(|a, b| gap(a).total_cmp(&gap(b)))
+        .ok_or_else(|| Error::Continuation("the orbit has no arrival on Σ".into()))?;
+    Ok((sys.forces(e.t, e.beta, 0.0).a.signum(), e.t))
+}
+
 /// Unit vector along `v` (unchanged if it is zero or not finite).
 pub fn unit(v: [f64; 2]) -> [f64; 2] {
     let n = Vector2::from(v).norm();

@@ -18,11 +18,18 @@
 //! each trial point corrected on the hyperplane t_a·(W u − W u_a) = σ; a bracket whose test function
 //! does not fall below 1e-3 of its end values is a jump (a nonsmooth point), not a zero, and is
 //! dropped.
+//!
+//! Curves of nonsmooth points use the same solver with another scalar equation g: the grazing
+//! margin of the one-sided flow ([`continue_grazing_curve`], the onset of sticking) and the edge
+//! margin a − σ r_s of a tracked arrival on Σ on the real map ([`continue_event_edge_curve`], the
+//! end of sticking).
 
 use super::codim2::{test_functions, Codim2Kind, Codim2Point, CurveLocal};
 use super::minaug::{
-    bordered_test, critical_multiplier, grazing_margin, linearise_map, unit, MapLinearisation,
+    arrival_edge, bordered_test, critical_multiplier, grazing_margin, linearise_map,
+    nearest_edge_arrival, unit, MapLinearisation,
 };
+use super::options::{check_accuracy, check_range, check_steps};
 use super::two_param::{check_curve_args, lock_loss_starts, Curve, CurvePoint, CurveStop};
 use super::SpecialKind;
 use crate::error::{Error, Result};
@@ -85,30 +92,20 @@ impl Default for CurveOptions {
 }
 
 impl CurveOptions {
-    /// Checks steps and ranges.
+    /// Checks steps, ranges and tolerances (the checks of [`super::ContinuationOptions`]).
     pub fn validate(&self) -> Result<()> {
-        let ok = self.ds.is_finite()
-            && self.ds != 0.0
-            && self.ds_min > 0.0
-            && self.ds_max >= self.ds_min
-            && self.ds.abs() >= self.ds_min
-            && self.max_steps > 0
-            && self.omega_weight > 0.0
-            && self.locate_tol > 0.0
-            && self.max_multiplier > 1.0
-            && self.free_range.0 <= self.free_range.1
-            && self.along_range.0 <= self.along_range.1;
-        if ok {
-            Ok(())
-        } else {
-            Err(Error::option(
-                "curve options",
-                format!(
-                    "need 0 < ds_min <= |ds| <= ds_max, ordered ranges, positive weights and \
-                     tolerances ({self:?})"
-                ),
-            ))
+        check_steps(self.ds, self.ds_min, self.ds_max, self.max_steps)?;
+        check_range("free_range", self.free_range)?;
+        check_range("along_range", self.along_range)?;
+        check_accuracy(&self.shooting, self.locate_tol, self.omega_weight)?;
+        if self.max_multiplier.is_nan() || self.max_multiplier <= 1.0 {
+            return Err(Error::InvalidParameter {
+                name: "max_multiplier",
+                value: self.max_multiplier,
+                reason: "must be > 1",
+            });
         }
+        Ok(())
     }
 }
 
@@ -126,6 +123,8 @@ struct Node {
     tangent: Vector4<f64>,
     iterations: usize,
     step: f64,
+    /// Time of the tracked arrival on Σ (event-edge curves only).
+    event_time: f64,
 }
 
 /// The scalar equation that makes the orbit special.
@@ -137,6 +136,9 @@ enum Test {
     UnitDeterminant,
     /// The smallest side·ω over the (one-sided) orbit: zero where it grazes Σ.
     Grazing(f64),
+    /// a − σ r_s at the tracked arrival on Σ: zero where the arrival lies on the edge σ of the stick
+    /// region (a stick phase starts or ends, a crossing appears).
+    ArrivalEdge(f64),
 }
 
 /// The augmented system of one curve.
@@ -150,6 +152,8 @@ struct System<'a, S: Parametrised, M> {
     b: [f64; 2],
     c: [f64; 2],
     opts: CurveOptions,
+    /// Time of the tracked arrival on Σ (event-edge curves), updated at every accepted point.
+    t_ref: f64,
 }
 
 impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
@@ -158,7 +162,8 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
     }
 
     /// The map's linearisation and the test function (g, v, w) at u.
-    fn eval(&self, u: &Vector4<f64>) -> Result<(MapLinearisation, f64, [f64; 2], [f64; 2])> {
+    #[allow(clippy::type_complexity)]
+    fn eval(&self, u: &Vector4<f64>) -> Result<(MapLinearisation, f64, [f64; 2], [f64; 2], f64)> {
         let sys = self
             .sys
             .with_param(self.params[0], u[2])?
@@ -183,13 +188,19 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
                 let g = grazing_margin(self.method, &sys, &self.spec, x, side, tol)?;
                 (g, [0.0; 2], [0.0; 2])
             }
+            Test::ArrivalEdge(sigma) => {
+                let x = [u[0], u[1]];
+                let tol = self.opts.shooting.tol;
+                let e = arrival_edge(self.method, &sys, &self.spec, x, sigma, self.t_ref, tol)?;
+                return Ok((lin, e.margin, [0.0; 2], [0.0; 2], e.t));
+            }
         };
-        Ok((lin, g, v, w))
+        Ok((lin, g, v, w, f64::NAN))
     }
 
     /// The Newton matrix rows of F and g at u (∇g by forward differences) and the point data.
     fn rows(&self, u: &Vector4<f64>) -> Result<(Vector4<f64>, Matrix4<f64>, Node)> {
-        let (lin, g, v, w) = self.eval(u)?;
+        let (lin, g, v, w, event_time) = self.eval(u)?;
         let hs = [
             1e-6,
             1e-6 * u[1].abs().max(1.0),
@@ -221,6 +232,7 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
             tangent: Vector4::zeros(),
             iterations: 0,
             step: 0.0,
+            event_time,
         };
         Ok((r, jm, node))
     }
@@ -305,6 +317,9 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
 
     /// Resets the bordering vectors to the null vectors at `node` (a no-op for NS curves).
     fn rebord(&mut self, node: &Node) {
+        if matches!(self.test, Test::ArrivalEdge(_)) {
+            self.t_ref = node.event_time;
+        }
         if matches!(self.test, Test::Bordered(_)) {
             self.b = unit(node.w);
             self.c = unit(node.v);
@@ -370,6 +385,7 @@ pub fn continue_curve<S: Parametrised, M: FlowMethod<S>>(
         b: [1.0, 0.0],
         c: [1.0, 0.0],
         opts: *opts,
+        t_ref: f64::NAN,
     };
     // bordering vectors from the multiplier nearest σ at the start
     if let Test::Bordered(sg) = test {
@@ -408,6 +424,7 @@ fn grazing_system<'a, S: Parametrised, M>(
         b: [1.0, 0.0],
         c: [1.0, 0.0],
         opts: *opts,
+        t_ref: f64::NAN,
     }
 }
 
@@ -474,6 +491,53 @@ pub fn locate_grazing<S: Parametrised, M: FlowMethod<OneSided<S>>>(
     let os = OneSided::new(sys.clone(), side)?;
     let s = grazing_system(method, &os, spec, [free, along], opts);
     Ok(s.point(&s.first_node(x0, free0)?))
+}
+
+/// Continues the curve of points where an **arrival on Σ lies on an edge of the stick region**:
+/// the orbit of `spec` reaches ω = 0 at t_e with a(t_e, β_e, 0) = σ r_s(t_e, β_e). Across it the
+/// event sequence changes without a touch of Σ: a stick phase starts (arrival from the side −σ:
+/// (0, 1) → (1, 1), a crossing appears) or a stick phase shrinks to nothing ((1, 1) → (2, 0)).
+/// Defining system on the real map (which is C¹ there: the crossing saltation
+/// diag(1, (a − s'r)/(a − s r)) tends to the stick saltation diag(1, 0) at the edge):
+///
+/// ```text
+///   Pᵏ(x; λ₁, λ₂) − x − (s, 0) = 0,   a(t_e, β_e, 0) − σ r_s(t_e, β_e) = 0,
+/// ```
+///
+/// with t_e the arrival tracked from point to point (the one nearest to the previous point's).
+/// The arrival and σ are chosen at the start as the arrival whose |a| is nearest to r_s (the
+/// nonsmooth point a one-parameter continuation located). Turning points and fold/flip points of
+/// the orbit on the curve are located as on the grazing curves.
+#[allow(clippy::too_many_arguments)]
+pub fn continue_event_edge_curve<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    free: S::Param,
+    along: S::Param,
+    x0: [f64; 2],
+    free0: f64,
+    opts: &CurveOptions,
+) -> Result<Curve<S>> {
+    opts.validate()?;
+    check_curve_args(free, along, x0, free0)?;
+    let start = sys.with_param(free, free0)?;
+    let (sigma, t_ref) = nearest_edge_arrival(method, &start, spec, x0, opts.shooting.tol)?;
+    let mut s = System {
+        method,
+        sys,
+        spec: *spec,
+        kind: SpecialKind::Nonsmooth,
+        params: [free, along],
+        test: Test::ArrivalEdge(sigma),
+        b: [1.0, 0.0],
+        c: [1.0, 0.0],
+        opts: *opts,
+        t_ref,
+    };
+    let first = s.first_node(x0, free0)?;
+    s.rebord(&first);
+    walk(&mut s, first)
 }
 
 /// Where a parameter left its range: (which parameter, the bound).
