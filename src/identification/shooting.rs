@@ -221,9 +221,9 @@ pub fn choose_windows(runs: &[CleanRun], max: usize) -> Vec<(usize, usize, usize
 /// a spike test: s_k = min over the pairs (a, b) of |r_k − r̂_k|/√(1 + w_a² + w_b²), r̂_k =
 /// w_a r_a + w_b r_b the straight line in time through two adjacent kept frames among the three
 /// nearest on each side — the nearest on both sides, or two on one side (extrapolated) — so each
-/// ratio is N(0, 1) for white noise and
-/// ≈ 0 for a misfit that is smooth over a few frames: a model that misses an effect leaves a
-/// smooth residual (growing over the window from the fitted initial state) and keeps its frames,
+/// ratio is N(0, 1) for white noise and ≈ 0 for a misfit that is smooth over a few frames: a
+/// model that misses an effect leaves a smooth residual (growing over the window from the fitted
+/// initial state) and keeps its frames,
 /// while a camera outlier frame (10–40°, 20σ and more) is a spike; taking the smallest s over the
 /// pairs keeps a good frame next to an outlier (one of its pairs avoids the outlier). The largest
 /// spike is removed first and the test repeated. Returns the keep flags.
@@ -369,8 +369,9 @@ impl SimFit {
 /// solution, and the fit is repeated from it with those that the fitted model follows, until no
 /// more join (at most [`MAX_RESELECT`] times): the windows left out at a start that lacks part of
 /// an effect are those where the effect is strongest, and a fit without them sees it attenuated
-/// (a latency 2 % low from a start at 5 ms for 8 ms). `None` when the model has no simulation
-/// form, no window can be fitted, or the optimiser cannot evaluate the start.
+/// (a latency of 8 ms came out 7.89 ± 0.05 ms from a start at 5 ms, 7.98 ± 0.03 re-selected).
+/// `None` when the model has no simulation form, no window can be fitted, or the optimiser
+/// cannot evaluate the start.
 pub fn refit(
     model: &SimModel,
     theta0: &[f64],
