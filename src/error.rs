@@ -73,9 +73,80 @@ pub enum Error {
         /// The smallest closing error |P_T^k(x) − x − (2πp, 0)| seen.
         best_closing_error: f64,
     },
-    /// A state or time given to the integrator is non-finite or inconsistent.
-    #[error("invalid input: {0}")]
-    InvalidInput(String),
+    /// An option (a command-line flag, a field of an options struct, a keyword argument) does not
+    /// parse or lies outside its domain. One number with a fixed name outside its range is an
+    /// [`Error::InvalidParameter`] instead.
+    #[error("invalid {option}: {reason}")]
+    InvalidOption {
+        /// The option as the user wrote it (`--winding`, `axis \`f:1:x:2\``, `iterations`).
+        option: String,
+        /// What is wrong, with the value.
+        reason: String,
+    },
+    /// A name (a kind, section, effect, method, set size) that is not one of the accepted ones.
+    /// Parameter names have [`Error::UnknownParameter`].
+    #[error("unknown {what} `{name}` (expected {expected})")]
+    UnknownName {
+        /// What the name names: "effect", "kind", "section", …
+        what: &'static str,
+        /// The name given.
+        name: String,
+        /// The accepted names, as a list ending in "or".
+        expected: String,
+    },
+    /// Options that are each valid but do not go together: two sweep axes on one parameter, a
+    /// flag that needs another, a minimum above a maximum, nothing to do.
+    #[error("inconsistent options {options}: {reason}")]
+    InconsistentOptions {
+        /// The options involved (`--ds, --ds-max`).
+        options: String,
+        /// Why they do not go together.
+        reason: String,
+    },
+    /// A state given to the integrator, a shooting, a curve or a classification is not finite.
+    #[error("{what} must be finite, got ({})", state.iter().map(|&v| show(v)).collect::<Vec<_>>().join(", "))]
+    NonFiniteState {
+        /// Which state: "initial state", "start of a curve", …
+        what: &'static str,
+        /// Its components.
+        state: Vec<f64>,
+    },
+    /// Integration or sample times that are not finite or not in increasing order.
+    #[error("{reason} (t0 = {}, t1 = {})", show(*t0), show(*t1))]
+    InvalidTimes {
+        /// The first time of the offending pair.
+        t0: f64,
+        /// The second time of the offending pair.
+        t1: f64,
+        /// What is wrong.
+        reason: &'static str,
+    },
+    /// Data of the wrong size: lengths that do not match, too few samples, no segments, no runs,
+    /// an index beyond the end.
+    #[error("{what}: expected {expected}, got {got}")]
+    Shape {
+        /// What was counted.
+        what: String,
+        /// What the operation needs (`>= 1`, `15 (one per angle)`).
+        expected: String,
+        /// What it got.
+        got: usize,
+    },
+    /// A checkpoint or output folder that holds another computation, or is incomplete or damaged
+    /// beyond what can be recomputed (a file that does not parse is an [`Error::Recording`]).
+    #[error("{path}: {reason}")]
+    Checkpoint {
+        /// The folder or file at fault.
+        path: String,
+        /// What is wrong and what to do.
+        reason: String,
+    },
+    /// A long computation was stopped by its observer before it finished.
+    #[error("{what} was stopped before it finished")]
+    Stopped {
+        /// What was stopped: "sweep", "report sweep".
+        what: &'static str,
+    },
     /// The integrator could not finish (step size underflow, too many steps, non-finite state).
     #[error("integration failed at t = {t}: {reason}")]
     Integration {
@@ -151,6 +222,60 @@ pub(crate) fn show(v: f64) -> String {
 }
 
 impl Error {
+    /// [`Error::InvalidOption`] for `option`.
+    pub fn option(option: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::InvalidOption {
+            option: option.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// [`Error::InconsistentOptions`] for `options`.
+    pub fn inconsistent(options: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::InconsistentOptions {
+            options: options.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// [`Error::UnknownName`]: `name` is not one of `expected` (listed as "a, b or c").
+    pub fn unknown_name<T: AsRef<str>>(
+        what: &'static str,
+        name: impl Into<String>,
+        expected: impl IntoIterator<Item = T>,
+    ) -> Self {
+        let names: Vec<String> = expected
+            .into_iter()
+            .map(|e| e.as_ref().to_string())
+            .collect();
+        let expected = match names.split_last() {
+            Some((last, init)) if !init.is_empty() => format!("{} or {last}", init.join(", ")),
+            _ => names.join(""),
+        };
+        Error::UnknownName {
+            what,
+            name: name.into(),
+            expected,
+        }
+    }
+
+    /// [`Error::Shape`]: `what` needs `expected` but has `got`.
+    pub fn shape(what: impl Into<String>, expected: impl Into<String>, got: usize) -> Self {
+        Error::Shape {
+            what: what.into(),
+            expected: expected.into(),
+            got,
+        }
+    }
+
+    /// [`Error::Checkpoint`] for `path`.
+    pub fn checkpoint(path: &std::path::Path, reason: impl Into<String>) -> Self {
+        Error::Checkpoint {
+            path: path.display().to_string(),
+            reason: reason.into(),
+        }
+    }
+
     /// [`Error::File`] for `action` on `path`.
     pub fn file(
         action: &'static str,
@@ -180,6 +305,19 @@ impl Error {
 
 /// Result alias used throughout the crate.
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// Checks that every component of `state` is finite, returning [`Error::NonFiniteState`] for
+/// `what` otherwise.
+pub(crate) fn finite_state(what: &'static str, state: &[f64]) -> Result<()> {
+    if state.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::NonFiniteState {
+            what,
+            state: state.to_vec(),
+        })
+    }
+}
 
 /// Checks that `value` is finite, returning [`Error::InvalidParameter`] otherwise.
 pub(crate) fn finite(name: &'static str, value: f64) -> Result<f64> {
@@ -219,5 +357,76 @@ pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<f64> {
             value,
             reason: "must be >= 0",
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::{fit_harmonics, ClassifyOptions};
+    use crate::integrator::{EventDriven, FlowMethod, FlowOptions};
+    use crate::model::Gear;
+    use crate::sweep::{merge_shards, Axis, SweepSpec};
+
+    #[test]
+    fn bad_inputs_give_their_specific_variant() {
+        let gear = Gear::paper(0.0, 1.0).unwrap();
+        let o = FlowOptions::with_tol(1e-8);
+        let m = &EventDriven;
+        assert!(matches!(
+            m.flow(&gear, 1.0, [0.0, 0.0], 0.5, &o),
+            Err(Error::InvalidTimes { t0, t1, .. }) if t0 == 1.0 && t1 == 0.5
+        ));
+        assert!(matches!(
+            m.flow(&gear, 0.0, [f64::NAN, 0.0], 1.0, &o),
+            Err(Error::NonFiniteState { what: "initial state", ref state })
+                if state[0].is_nan() && state[1] == 0.0
+        ));
+        let opts = ClassifyOptions {
+            record_turns: 0,
+            ..ClassifyOptions::default()
+        };
+        assert!(matches!(
+            opts.validate(),
+            Err(Error::InvalidOption { ref option, .. }) if option == "record_turns"
+        ));
+        assert!(matches!(
+            fit_harmonics(&[0.0; 20], &[0.0; 19], 7),
+            Err(Error::Shape { expected, got: 19, .. }) if expected.starts_with("20")
+        ));
+        let axis = Axis::parse("f:1:2:0.5").unwrap();
+        let spec = SweepSpec::paper_fig7(axis.clone(), axis);
+        assert!(matches!(
+            spec.validate(),
+            Err(Error::InconsistentOptions { ref options, .. }) if options == "rows, cols"
+        ));
+        assert!(matches!(
+            merge_shards(&[]),
+            Err(Error::Shape { got: 0, .. })
+        ));
+    }
+
+    #[test]
+    fn unknown_names_list_the_accepted_ones() {
+        let e = Error::unknown_name("--lock", "sideways", ["stable", "unstable"]);
+        assert_eq!(
+            e.to_string(),
+            "unknown --lock `sideways` (expected stable or unstable)"
+        );
+        let e = Error::unknown_name("kind", "cusp", ["fold", "flip", "sb", "ns"]);
+        assert!(e.to_string().ends_with("(expected fold, flip, sb or ns)"));
+    }
+
+    #[test]
+    fn file_errors_keep_their_source() {
+        use std::error::Error as _;
+        let path = std::path::Path::new("/nonexistent/gearbif/x.toml");
+        let io = std::fs::read(path).unwrap_err();
+        let e = Error::file("read", path, io);
+        let src = e.source().expect("the io error is the source");
+        assert!(src.to_string().contains("No such file"), "{src}");
+        let toml_err = toml::from_str::<toml::Value>("a = = 1").unwrap_err();
+        let e = Error::format("TOML", "x.toml", toml_err);
+        assert!(e.source().is_some());
     }
 }

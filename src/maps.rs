@@ -79,7 +79,7 @@ where
     M: FlowMethod<S> + ?Sized,
 {
     if iterations == 0 {
-        return Err(Error::InvalidInput("iterations must be >= 1".into()));
+        return Err(Error::option("iterations", "must be >= 1, got 0"));
     }
     let sym =
         match section {

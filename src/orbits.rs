@@ -70,7 +70,7 @@ impl OrbitSpec {
     /// so G(x) = x + (πp − c) per application when σ = +1; when σ = −1 only p = 0 is meaningful and s = 0.
     pub fn shift<S: DrivenOscillator + ?Sized>(&self, sys: &S) -> Result<f64> {
         if self.iterations == 0 {
-            return Err(Error::InvalidInput("orbit iterations must be >= 1".into()));
+            return Err(Error::option("orbit iterations", "must be >= 1, got 0"));
         }
         match self.section {
             Section::Stroboscopic => Ok(TAU * self.winding as f64),
@@ -83,9 +83,13 @@ impl OrbitSpec {
                 } else if self.winding == 0 {
                     Ok(0.0)
                 } else {
-                    Err(Error::InvalidInput(
-                        "with a reflecting symmetry (σ = −1) a symmetric orbit has winding 0"
-                            .into(),
+                    Err(Error::inconsistent(
+                        "section, winding",
+                        format!(
+                            "with a reflecting symmetry (σ = −1) a symmetric orbit has winding 0, \
+                             not {}",
+                            self.winding
+                        ),
                     ))
                 }
             }
@@ -337,14 +341,7 @@ fn winding_of<S: DrivenOscillator + ?Sized>(sys: &S, d: f64) -> f64 {
 }
 
 fn check_state(x: [f64; 2]) -> Result<()> {
-    if x[0].is_finite() && x[1].is_finite() {
-        Ok(())
-    } else {
-        Err(Error::InvalidInput(format!(
-            "initial state must be finite, got ({}, {})",
-            x[0], x[1]
-        )))
-    }
+    crate::error::finite_state("initial state", &x)
 }
 
 /// Newton shooting for a periodic orbit from the guess `x0`, with the event-driven integrator.

@@ -6,8 +6,9 @@
 //!
 //! Progress and checkpoint reporting are observers ([`crate::progress::Observer`]), outside the
 //! numerics. The row computation is generic ([`sweep_row`], [`sweep_grid`]: any system with a
-//! parameter lens, any integrator); [`SweepSpec`] and [`SweepRunner`] are the gear's instance,
-//! with the paper's protocols and checkpoints.
+//! parameter lens, any integrator, axes named by the lens's names, [`parse_axis`]); [`SweepSpec`]
+//! and [`SweepRunner`] are the gear's instance, with the paper's protocols and checkpoints, whose
+//! axes ([`SweepParam`]) are the gear's lens names plus the built gear's inertia.
 //!
 //! Protocols:
 //! - [`Protocol::Fresh`] (Fig. 7b): every point starts from the same initial state.
@@ -17,152 +18,17 @@
 use crate::analysis::classify::{classify_point, ClassifyOptions, Dynamics, PointResult};
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod};
-use crate::model::{Convention, Gear, GearParams};
-use crate::model::{DrivenOscillator, Parameter, Parametrised};
+use crate::model::{Convention, Gear, GearParam, GearParams};
+use crate::model::{DrivenOscillator, Parametrised};
 pub use crate::progress::{Event, Observer, Silent};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+mod axis;
 mod shard;
+pub use axis::{log_values, parse_axis, range_values, Axis, SweepParam};
 pub use shard::{merge_shards, spec_hash, Shard, ShardStatus};
-
-/// A swept parameter of the physical gear ([`GearParams`] and the drive frequency): a
-/// [`Parameter`] of the lens vocabulary (names `theta`, `f`, `zeta`, `eta`, `inertia` on the
-/// command line). It acts on the physical parameters rather than on the reduced [`Gear`] because a
-/// sweep row may hold a signed shaft angle (Fig. 8: Θ from −90° to 90°) and the inertia I, which
-/// the reduced gear only sees through Δ(Θ) and g = c/I.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SweepParam {
-    /// Parallel shaft angle Θ = Φ, degrees.
-    ThetaDeg,
-    /// Drive frequency f, Hz.
-    F,
-    /// Viscous damping ζ, 1/s.
-    Zeta,
-    /// Dry friction η, 1/s².
-    Eta,
-    /// Output inertia I, kg m².
-    Inertia,
-}
-
-impl Parameter for SweepParam {
-    const ALL: &'static [Self] = &[
-        Self::ThetaDeg,
-        Self::F,
-        Self::Zeta,
-        Self::Eta,
-        Self::Inertia,
-    ];
-    fn name(self) -> &'static str {
-        match self {
-            Self::ThetaDeg => "theta",
-            Self::F => "f",
-            Self::Zeta => "zeta",
-            Self::Eta => "eta",
-            Self::Inertia => "inertia",
-        }
-    }
-    fn unit(self) -> &'static str {
-        match self {
-            Self::ThetaDeg => "deg",
-            Self::F => "Hz",
-            Self::Zeta => "1/s",
-            Self::Eta => "1/s²",
-            Self::Inertia => "kg m²",
-        }
-    }
-}
-
-impl SweepParam {
-    /// Parses a [`Parameter::name`] (`theta`, `f`, `zeta`, `eta`, `inertia`) or `theta_deg`.
-    pub fn parse(s: &str) -> Result<Self> {
-        match s {
-            "theta_deg" => Ok(Self::ThetaDeg),
-            _ => Self::from_name(s),
-        }
-    }
-    /// Column name in outputs.
-    pub fn column_name(self) -> &'static str {
-        match self {
-            Self::ThetaDeg => "theta_deg",
-            Self::F => "f_hz",
-            Self::Zeta => "zeta",
-            Self::Eta => "eta",
-            Self::Inertia => "inertia",
-        }
-    }
-}
-
-/// One axis of a sweep: a parameter and its values.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Axis {
-    /// The parameter.
-    pub param: SweepParam,
-    /// Its values, in sweep order.
-    pub values: Vec<f64>,
-}
-
-impl Axis {
-    /// Values start, start + step, … up to stop (inclusive within step/1000), computed as
-    /// start + i·step (no accumulated rounding).
-    pub fn range(param: SweepParam, start: f64, stop: f64, step: f64) -> Result<Self> {
-        crate::error::finite("start", start)?;
-        crate::error::finite("stop", stop)?;
-        crate::error::finite("step", step)?;
-        if step == 0.0 || (stop - start) / step < 0.0 {
-            return Err(Error::InvalidInput(format!(
-                "axis {}: step {step} does not lead from {start} to {stop}",
-                param.column_name()
-            )));
-        }
-        let n = ((stop - start) / step + 1e-3).floor() as usize + 1;
-        if n > 10_000_000 {
-            return Err(Error::InvalidInput("axis has more than 1e7 points".into()));
-        }
-        let values = (0..n).map(|i| start + i as f64 * step).collect();
-        Ok(Self { param, values })
-    }
-
-    /// `n` log-spaced values from `start` to `stop` (both > 0).
-    pub fn log(param: SweepParam, start: f64, stop: f64, n: usize) -> Result<Self> {
-        crate::error::positive("start", start)?;
-        crate::error::positive("stop", stop)?;
-        if n < 2 {
-            return Err(Error::InvalidInput("a log axis needs >= 2 points".into()));
-        }
-        let (a, b) = (start.ln(), stop.ln());
-        let values = (0..n)
-            .map(|i| (a + (b - a) * i as f64 / (n - 1) as f64).exp())
-            .collect();
-        Ok(Self { param, values })
-    }
-
-    /// Parses `param:start:stop:step` or `param:start:stop:nlog` with a trailing `log`
-    /// (e.g. `theta:-90:90:5`, `f:0.1:100:0.02`, `f:0.5:50:40:log`).
-    pub fn parse(s: &str) -> Result<Self> {
-        let parts: Vec<&str> = s.split(':').collect();
-        let num = |x: &str| -> Result<f64> {
-            x.trim()
-                .parse::<f64>()
-                .map_err(|_| Error::InvalidInput(format!("axis `{s}`: `{x}` is not a number")))
-        };
-        match parts.as_slice() {
-            [p, a, b, st] => Self::range(SweepParam::parse(p)?, num(a)?, num(b)?, num(st)?),
-            [p, a, b, n, "log"] => {
-                let n = num(n)?;
-                if n.fract() != 0.0 || n < 2.0 {
-                    return Err(Error::InvalidInput(format!("axis `{s}`: bad count")));
-                }
-                Self::log(SweepParam::parse(p)?, num(a)?, num(b)?, n as usize)
-            }
-            _ => Err(Error::InvalidInput(format!(
-                "axis `{s}`: expected param:start:stop:step or param:start:stop:n:log"
-            ))),
-        }
-    }
-}
 
 /// How successive points of a row start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -221,8 +87,8 @@ impl SweepSpec {
         Ok(Self {
             gear: GearParams::paper(),
             f: 1.0,
-            rows: Axis::range(SweepParam::ThetaDeg, -90.0, 90.0, 5.0)?,
-            cols: Axis::range(SweepParam::F, 0.1, 100.0, 0.02)?,
+            rows: Axis::range(GearParam::ThetaDeg, -90.0, 90.0, 5.0)?,
+            cols: Axis::range(GearParam::F, 0.1, 100.0, 0.02)?,
             protocol: Protocol::SemiStatic,
             alpha0_deg: 0.0,
             beta0_deg: 180.0,
@@ -270,12 +136,13 @@ impl SweepSpec {
         crate::error::finite("beta0_deg", self.beta0_deg)?;
         self.classify.validate()?;
         if self.rows.param == self.cols.param {
-            return Err(Error::InvalidInput(
-                "the two sweep axes must be different parameters".into(),
+            return Err(Error::inconsistent(
+                "rows, cols",
+                "the two sweep axes must be different parameters",
             ));
         }
         if self.is_empty() {
-            return Err(Error::InvalidInput("empty sweep".into()));
+            return Err(Error::shape("points of the sweep", ">= 1", 0));
         }
         for ax in [&self.rows, &self.cols] {
             for &v in &ax.values {
@@ -307,21 +174,14 @@ impl SweepSpec {
                 })
     }
 
-    /// The gear at a grid point.
+    /// The gear at a grid point: the spec's gear with the two axes set through the gear's lens
+    /// ([`SweepParam::apply`]).
     pub fn gear_at(&self, row_value: f64, col_value: f64) -> Result<Gear> {
-        let mut p = self.gear;
-        let mut f = self.f;
+        let mut g = self.gear.driven(self.f)?;
         for (param, v) in [(self.rows.param, row_value), (self.cols.param, col_value)] {
-            match param {
-                SweepParam::ThetaDeg => p = p.with_parallel_shafts_deg(v),
-                SweepParam::F => f = v,
-                SweepParam::Zeta => p.zeta = v,
-                SweepParam::Eta => p.eta = v,
-                SweepParam::Inertia => p.inertia = v,
-            }
+            g = param.apply(&g, &self.gear, v)?;
         }
-        p.driven(f)?
-            .with_convention(self.convention)
+        g.with_convention(self.convention)
             .with_alpha0(self.alpha0_deg.to_radians())
     }
 
@@ -382,11 +242,9 @@ impl SweepSpec {
 
     /// Computes one row (sequential along the columns).
     pub fn compute_row(&self, row: usize, observer: &dyn Observer) -> Result<RowResult> {
-        let rv = *self
-            .rows
-            .values
-            .get(row)
-            .ok_or_else(|| Error::InvalidInput(format!("row {row} out of range")))?;
+        let rv = *self.rows.values.get(row).ok_or_else(|| {
+            Error::shape("row index", format!("< {}", self.rows.values.len()), row)
+        })?;
         let results = match self.method {
             Method::EventDriven => {
                 self.row_with(&EventDriven, rv, &self.classify, row, observer)?
@@ -478,8 +336,9 @@ where
 {
     opts.validate()?;
     if rows.0 == cols.0 {
-        return Err(Error::InvalidInput(
-            "the two sweep axes must be different parameters".into(),
+        return Err(Error::inconsistent(
+            "rows, cols",
+            "the two sweep axes must be different parameters",
         ));
     }
     observer.observe(&Event::Started {
@@ -737,10 +596,10 @@ impl<'a> SweepRunner<'a> {
                 what: format!("corrupt sweep checkpoint ({e}); delete its folder to start afresh"),
             })?;
             if old != self.spec {
-                return Err(Error::InvalidInput(format!(
-                    "checkpoint {} belongs to a different sweep; use another directory",
-                    dir.display()
-                )));
+                return Err(Error::checkpoint(
+                    dir,
+                    "the checkpoint belongs to a different sweep; use another directory",
+                ));
             }
             crate::io::remove_stale_temporaries(&dir.join("rows"));
             for (i, slot) in rows.iter_mut().enumerate() {
@@ -767,8 +626,9 @@ impl<'a> SweepRunner<'a> {
     /// Runs (or resumes) the sweep.
     pub fn run(&self) -> Result<SweepOutcome> {
         if self.shard.is_some() {
-            return Err(Error::InvalidInput(
-                "a sharded runner is run with `run_shard`".into(),
+            return Err(Error::inconsistent(
+                "shard",
+                "a sharded runner is run with `run_shard`",
             ));
         }
         let rows = self.run_rows()?;
@@ -789,8 +649,9 @@ impl<'a> SweepRunner<'a> {
     /// shards are combined by [`merge_shards`].
     pub fn run_shard(mut self, shard: Shard) -> Result<ShardStatus> {
         if self.checkpoint.is_none() {
-            return Err(Error::InvalidInput(
-                "a shard needs a checkpoint directory".into(),
+            return Err(Error::inconsistent(
+                "shard, checkpoint",
+                "a shard needs a checkpoint directory",
             ));
         }
         shard.check_rows(self.spec.rows.values.len())?;
@@ -904,8 +765,9 @@ pub fn hysteresis(
     observer: &dyn Observer,
 ) -> Result<Hysteresis> {
     if f_values.is_empty() || f_values.windows(2).any(|w| w[1] <= w[0] || w[1].is_nan()) {
-        return Err(Error::InvalidInput(
-            "hysteresis needs ascending frequencies".into(),
+        return Err(Error::option(
+            "hysteresis frequencies",
+            "need at least one, strictly ascending",
         ));
     }
     let mut x = [beta0_deg.to_radians(), 0.0];

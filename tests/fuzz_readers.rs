@@ -481,7 +481,9 @@ proptest! {
                 prop_assert!(file.ends_with("spec.json"), "{}", file);
                 prop_assert!(line.is_some());
             }
-            Err(Error::InvalidInput(m)) => prop_assert!(m.contains("different sweep"), "{}", m),
+            Err(Error::Checkpoint { reason, .. }) => {
+                prop_assert!(reason.contains("different sweep"), "{}", reason)
+            }
             Err(e) => prop_assert!(false, "untyped error {:?}", e),
         }
     }
@@ -548,7 +550,8 @@ proptest! {
                 prop_assert!(s.contains("line") || s.contains("UTF-8") || s.contains("utf-8"), "{}", s);
             }
             Err(Error::File { path, .. }) => prop_assert!(path.ends_with(".json"), "{}", path),
-            Err(Error::InvalidInput(m)) => prop_assert!(!m.is_empty()),
+            // a file that parses but does not fit the others: the folder or file is named
+            Err(Error::Checkpoint { path, .. }) => prop_assert!(!path.is_empty()),
             Err(e) => prop_assert!(false, "untyped error {:?}", e),
         }
     }
@@ -593,7 +596,9 @@ fn impossible_shard_manifests_are_refused() {
         let r = merge_shards(&[dir.join("s0"), dir.join("s1")]);
         std::fs::remove_dir_all(&dir).ok();
         match r {
-            Err(Error::InvalidInput(msg)) => assert!(msg.contains("shard.json"), "{what}: {msg}"),
+            Err(Error::Checkpoint { path, reason }) => {
+                assert!(path.ends_with("shard.json"), "{what}: {path}: {reason}")
+            }
             other => panic!("{what}: expected a refusal naming shard.json, got {other:?}"),
         }
     }

@@ -109,11 +109,11 @@ fn bad_input_and_failures_are_typed_errors() {
     let gear = Gear::paper(0.0, 10.0).unwrap();
     assert!(matches!(
         shoot(&gear, &OrbitSpec::symmetric(1), [f64::NAN, 0.0], &opts()),
-        Err(Error::InvalidInput(_))
+        Err(Error::NonFiniteState { .. })
     ));
     assert!(matches!(
         shoot(&gear, &OrbitSpec::stroboscopic(0, 1), [0.0, 0.0], &opts()),
-        Err(gearbif::Error::InvalidInput(_))
+        Err(gearbif::Error::InvalidOption { .. })
     ));
     // no locked orbit above f_c: Newton must fail with a reason, not return garbage
     let fast = Gear::paper(0.0, 45.0).unwrap();

@@ -20,9 +20,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyAny, PyDict};
 use std::path::PathBuf;
 
-/// Classification options from the Python arguments, validated.
-#[allow(clippy::too_many_arguments)]
-fn classify_options(
+/// The classification keyword arguments shared by `classify`, `sweep_grid` and `sweep` (one
+/// place for their meaning and checks; the defaults of their signatures are [`Default`]).
+struct ClassifyArgs {
     settle_turns: i64,
     record_turns: i64,
     samples_per_turn: i64,
@@ -30,20 +30,39 @@ fn classify_options(
     analysis_turns: i64,
     tol: f64,
     keep_samples: bool,
-) -> PyResult<ClassifyOptions> {
-    check_tol(tol)?;
-    let opts = ClassifyOptions {
-        settle_turns: count(settle_turns, "settle_turns", 0)?,
-        record_turns: count(record_turns, "record_turns", 1)?,
-        samples_per_turn: count(samples_per_turn, "samples_per_turn", 15)?,
-        rigorous: rigorous && analysis_turns > 0,
-        analysis_turns: count(analysis_turns, "analysis_turns", 0)?.max(2),
-        tol,
-        keep_samples,
-        ..ClassifyOptions::default()
-    };
-    opts.validate().py()?;
-    Ok(opts)
+}
+
+impl Default for ClassifyArgs {
+    fn default() -> Self {
+        Self {
+            settle_turns: 90,
+            record_turns: 10,
+            samples_per_turn: 50,
+            rigorous: true,
+            analysis_turns: 60,
+            tol: 1e-9,
+            keep_samples: false,
+        }
+    }
+}
+
+impl ClassifyArgs {
+    /// The validated options (analysis_turns = 0 skips the rigorous class).
+    fn options(self) -> PyResult<ClassifyOptions> {
+        check_tol(self.tol)?;
+        let opts = ClassifyOptions {
+            settle_turns: count(self.settle_turns, "settle_turns", 0)?,
+            record_turns: count(self.record_turns, "record_turns", 1)?,
+            samples_per_turn: count(self.samples_per_turn, "samples_per_turn", 15)?,
+            rigorous: self.rigorous && self.analysis_turns > 0,
+            analysis_turns: count(self.analysis_turns, "analysis_turns", 0)?.max(2),
+            tol: self.tol,
+            keep_samples: self.keep_samples,
+            ..ClassifyOptions::default()
+        };
+        opts.validate().py()?;
+        Ok(opts)
+    }
 }
 
 /// The default start: (π/2, 0) for the gear (the paper's Fig. 6 start β = 90°), the rest state
@@ -88,7 +107,7 @@ fn classify<'py>(
         Some(x) => state(x, "x0")?,
         None => default_start(&sys),
     };
-    let opts = classify_options(
+    let opts = ClassifyArgs {
         settle_turns,
         record_turns,
         samples_per_turn,
@@ -96,7 +115,8 @@ fn classify<'py>(
         analysis_turns,
         tol,
         keep_samples,
-    )?;
+    }
+    .options()?;
     let r = py.detach(|| classify_point(sys.dynsys(), x0, &EventDriven, &opts));
     let r = sys.finish(r)?;
     let mut doc = serde_json::json!({
@@ -202,15 +222,15 @@ fn sweep_grid_py<'py>(
         None => default_start(&sys),
     };
     let protocol = self::protocol(protocol)?;
-    let opts = classify_options(
+    let opts = ClassifyArgs {
         settle_turns,
         record_turns,
         samples_per_turn,
-        true,
         analysis_turns,
         tol,
-        false,
-    )?;
+        ..ClassifyArgs::default()
+    }
+    .options()?;
     let r = py.detach(|| {
         dispatch!(&sys, s => sweep_system(s, (&rname, &rvals), (&cname, &cvals), x0, protocol, &opts))
     });
@@ -278,8 +298,9 @@ fn axis(obj: Option<&Bound<'_, PyAny>>, default: &str) -> PyResult<Axis> {
 ///       alpha0_deg=90.0, beta0_deg=90.0, convention="physical", settle_turns=None,
 ///       record_turns=10, analysis_turns=60, tol=1e-9, out_dir=None)
 ///
-/// Axes as on the command line ("param:start:stop:step", "param:start:stop:n:log", param in theta
-/// [deg], f [Hz], zeta [1/s], eta [1/s²], inertia [kg m²]) or (param, values). params: a
+/// Axes as on the command line ("param:start:stop:step", "param:start:stop:n:log", param a name of
+/// the gear's lens — theta [deg], f [Hz], zeta [1/s], eta [1/s²], g [1/s²], delta — or inertia
+/// [kg m²]) or (param, values). params: a
 /// GearParams (default: the paper's gear); f [Hz] when f is not an axis; protocol "fresh" (every
 /// point from (alpha0_deg, beta0_deg), Fig. 7b) or "semi_static" (state carried along a row,
 /// Fig. 8); settle_turns default 90 (fresh) or 1000 (semi_static); analysis_turns = 0 skips the
@@ -309,16 +330,14 @@ fn sweep<'py>(
         Protocol::Fresh => 90,
         Protocol::SemiStatic => 1000,
     });
-    let defaults = ClassifyOptions::default();
-    let classify = classify_options(
-        settle,
+    let classify = ClassifyArgs {
+        settle_turns: settle,
         record_turns,
-        defaults.samples_per_turn as i64,
-        true,
         analysis_turns,
         tol,
-        false,
-    )?;
+        ..ClassifyArgs::default()
+    }
+    .options()?;
     let spec = SweepSpec {
         gear: params.map(|p| p.inner).unwrap_or_else(GearParams::paper),
         f,
@@ -340,9 +359,7 @@ fn sweep<'py>(
                 }
                 Ok(*r)
             }
-            SweepOutcome::Stopped { .. } => Err(gearbif::Error::InvalidInput(
-                "the sweep stopped early".into(),
-            )),
+            SweepOutcome::Stopped { .. } => Err(gearbif::Error::Stopped { what: "the sweep" }),
         })
         .py()?;
     to_python(py, &with_schema("gearbif.sweep/1", &res))

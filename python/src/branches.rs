@@ -170,7 +170,7 @@ impl<S: PySystem> AnyBranch for Branch<S> {
         self.system.to_object(py)
     }
     fn to_json(&self) -> gearbif::Result<serde_json::Value> {
-        serde_json::to_value(self).map_err(|e| gearbif::Error::InvalidInput(e.to_string()))
+        serde_json::to_value(self).map_err(|e| gearbif::Error::format("JSON", "branch", e))
     }
     fn switch(
         &self,

@@ -1,5 +1,7 @@
-//! The exception hierarchy: one Python class per variant of `gearbif::Error`, all subclasses of
-//! `GearbifError`.
+//! The exception hierarchy: one Python class per concern of `gearbif::Error`, all subclasses of
+//! `GearbifError`. The input errors (an option, a name, a combination of options, a state, times,
+//! a shape, a checkpoint folder) share `InvalidInputError`, whose attribute `kind` names the
+//! variant.
 
 use gearbif::Error;
 use pyo3::create_exception;
@@ -22,7 +24,9 @@ create_exception!(
     gearbif,
     InvalidInputError,
     GearbifError,
-    "An input (state, time, option, name) is malformed or inconsistent."
+    "An input (option, name, combination of options, state, times, shape, checkpoint folder) is \
+     malformed or inconsistent (attribute kind: the variant of gearbif::Error, e.g. \
+     \"InvalidOption\", \"NonFiniteState\")."
 );
 create_exception!(
     gearbif,
@@ -80,7 +84,15 @@ pub fn to_py(e: Error) -> PyErr {
             });
             err
         }
-        Error::InvalidInput(_) | Error::UnknownParameter { .. } => InvalidInputError::new_err(msg),
+        Error::UnknownParameter { .. } => input_error(msg, "UnknownParameter"),
+        Error::InvalidOption { .. } => input_error(msg, "InvalidOption"),
+        Error::UnknownName { .. } => input_error(msg, "UnknownName"),
+        Error::InconsistentOptions { .. } => input_error(msg, "InconsistentOptions"),
+        Error::NonFiniteState { .. } => input_error(msg, "NonFiniteState"),
+        Error::InvalidTimes { .. } => input_error(msg, "InvalidTimes"),
+        Error::Shape { .. } => input_error(msg, "Shape"),
+        Error::Checkpoint { .. } => input_error(msg, "Checkpoint"),
+        Error::Stopped { .. } => GearbifError::new_err(msg),
         Error::NoParameterColumn { .. } => UnsupportedError::new_err(msg),
         Error::NoPeriodDetected { .. } => NoPeriodError::new_err(msg),
         Error::Integration { .. } => IntegrationError::new_err(msg),
@@ -100,6 +112,15 @@ pub fn to_py(e: Error) -> PyErr {
     }
 }
 
+/// An `InvalidInputError` with its attribute `kind`, the variant of `gearbif::Error`.
+fn input_error(msg: String, kind: &str) -> PyErr {
+    let err = InvalidInputError::new_err(msg);
+    Python::attach(|py| {
+        err.value(py).setattr("kind", kind).ok();
+    });
+    err
+}
+
 /// `Result<T, gearbif::Error>` → `PyResult<T>`.
 pub trait IntoPyResult<T> {
     /// Maps the error to its Python exception.
@@ -112,9 +133,10 @@ impl<T> IntoPyResult<T> for gearbif::Result<T> {
     }
 }
 
-/// An `InvalidInputError` with a message.
+/// An `InvalidInputError` with a message, for a keyword argument the bindings refuse before the
+/// library sees it (`kind` = "InvalidOption", as the library's own option errors).
 pub fn invalid(msg: impl Into<String>) -> PyErr {
-    InvalidInputError::new_err(msg.into())
+    input_error(msg.into(), "InvalidOption")
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -160,11 +160,24 @@ def test_recordings(tmp_path):
         gearbif.fit(bad)
     assert "experiment.toml" in e.value.file
     raises(gearbif.InvalidInputError, gearbif.synth, tmp_path / "s", "no_such_effect")
-    raises(gearbif.InvalidInputError, gearbif.synth, tmp_path / "s", "none", NAN)
+    raises(gearbif.InvalidParameterError, gearbif.synth, tmp_path / "s", "none", NAN)
     raises(gearbif.InvalidInputError, gearbif.synth, tmp_path / "s", ringdowns=-1)
     raises(gearbif.InvalidInputError, gearbif.synth, tmp_path / "s", f_range=(2.0, 1.0))
     raises(gearbif.InvalidInputError, gearbif.synth, tmp_path / "s", seed=-1)
     assert not (tmp_path / "s").exists()  # nothing half-written
+
+
+def test_input_errors_name_their_kind():
+    cases = [
+        ("InvalidOption", gearbif.sweep, dict(rows="theta:0:10", cols="f:1:2:0.5")),
+        ("InconsistentOptions", gearbif.sweep_grid, dict(system=GEAR, rows=("f", [1.0]), cols=("f", [2.0]))),
+        ("UnknownParameter", gearbif.sweep, dict(rows="speed:0:10:1", cols="f:1:2:0.5")),
+        ("InvalidOption", gearbif.classify, dict(system=GEAR, record_turns=0)),
+    ]
+    for kind, fn, kw in cases:
+        with pytest.raises(gearbif.InvalidInputError) as e:
+            fn(**kw)
+        assert e.value.kind == kind, (kind, str(e.value))
 
 
 def test_the_exception_hierarchy():

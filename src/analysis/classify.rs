@@ -89,16 +89,24 @@ impl ClassifyOptions {
 
     /// Validates the options.
     pub fn validate(&self) -> Result<()> {
-        if self.record_turns == 0 || self.samples_per_turn < 15 {
-            return Err(Error::InvalidInput(
-                "need record_turns >= 1 and samples_per_turn >= 15 (7-harmonic fit)".into(),
-            ));
-        }
-        if self.rigorous && (self.analysis_turns < 2 || self.max_half_periods == 0) {
-            return Err(Error::InvalidInput(
-                "rigorous classification needs analysis_turns >= 2 and max_half_periods >= 1"
-                    .into(),
-            ));
+        let at_least = |name: &str, v: usize, min: usize, why: &str| {
+            if v < min {
+                Err(Error::option(name, format!("{v} < {min} ({why})")))
+            } else {
+                Ok(())
+            }
+        };
+        at_least("record_turns", self.record_turns, 1, "nothing to record")?;
+        at_least(
+            "samples_per_turn",
+            self.samples_per_turn,
+            15,
+            "7-harmonic fit",
+        )?;
+        if self.rigorous {
+            let why = "rigorous classification";
+            at_least("analysis_turns", self.analysis_turns, 2, why)?;
+            at_least("max_half_periods", self.max_half_periods, 1, why)?;
         }
         crate::error::positive("tol", self.tol)?;
         crate::error::positive("period_tol", self.period_tol)?;
@@ -107,8 +115,9 @@ impl ClassifyOptions {
             crate::error::positive("settle_tol", e)?;
         }
         if self.settle_after_nonperiodic == Some(0) {
-            return Err(Error::InvalidInput(
-                "settle_after_nonperiodic must be >= 1 turn".into(),
+            return Err(Error::option(
+                "settle_after_nonperiodic",
+                "must be >= 1 turn, got 0",
             ));
         }
         Ok(())
@@ -278,12 +287,7 @@ where
     M: FlowMethod<S> + ?Sized,
 {
     opts.validate()?;
-    if !x0[0].is_finite() || !x0[1].is_finite() {
-        return Err(Error::InvalidInput(format!(
-            "initial state must be finite, got ({}, {})",
-            x0[0], x0[1]
-        )));
-    }
+    crate::error::finite_state("initial state", &x0)?;
     let period = sys.period();
     let fopts = FlowOptions::with_tol(opts.tol);
     let t_settle = opts.settle_turns as f64 * period;

@@ -113,8 +113,9 @@ where
     J: Fn(&S, [f64; 2]) -> Result<Verdict>,
 {
     if !(tol > 0.0 && old_side.is_finite() && new_side.is_finite()) {
-        return Err(Error::InvalidInput(
-            "bisection needs a finite bracket and tol > 0".into(),
+        return Err(Error::option(
+            "bisection bracket",
+            format!("needs finite ends and tol > 0, got [{old_side}, {new_side}], tol = {tol}"),
         ));
     }
     let trial = |v: f64, x: [f64; 2]| -> Result<Verdict> {
@@ -123,9 +124,10 @@ where
         judge(&sys, y)
     };
     if !trial(new_side, x_old)?.is_new {
-        return Err(Error::InvalidInput(format!(
-            "the bracket end {new_side} does not show the new behaviour"
-        )));
+        return Err(Error::option(
+            "bisection bracket",
+            format!("the bracket end {new_side} does not show the new behaviour"),
+        ));
     }
     let mut trials = 1;
     while (old_side - new_side).abs() > tol {

@@ -115,23 +115,32 @@ fn ratio(num: f64, den: f64) -> f64 {
 /// ```
 pub fn fit_harmonics(alpha: &[f64], delta: &[f64], n: usize) -> Result<HarmonicFit> {
     if alpha.len() != delta.len() {
-        return Err(Error::InvalidInput(format!(
-            "harmonic fit: {} angles but {} values",
-            alpha.len(),
-            delta.len()
-        )));
+        return Err(Error::shape(
+            "harmonic fit: values",
+            format!("{} (one per angle)", alpha.len()),
+            delta.len(),
+        ));
     }
     let m = alpha.len();
     let p = 2 * n + 1;
     if n == 0 || m < p {
-        return Err(Error::InvalidInput(format!(
-            "harmonic fit of {n} harmonics needs at least {p} samples, got {m}"
-        )));
+        return Err(Error::shape(
+            format!("harmonic fit of {n} harmonics: samples"),
+            format!(">= {p} and n >= 1"),
+            m,
+        ));
     }
     if alpha.iter().chain(delta).any(|v| !v.is_finite()) {
-        return Err(Error::InvalidInput(
-            "harmonic fit: non-finite sample".into(),
-        ));
+        let (a, d) = alpha
+            .iter()
+            .zip(delta)
+            .find(|(a, d)| !(a.is_finite() && d.is_finite()))
+            .map(|(&a, &d)| (a, d))
+            .unwrap_or((f64::NAN, f64::NAN));
+        return Err(Error::NonFiniteState {
+            what: "harmonic fit sample (angle, value)",
+            state: vec![a, d],
+        });
     }
     let mut x = DMatrix::<f64>::zeros(m, p);
     for (k, &al) in alpha.iter().enumerate() {
@@ -147,13 +156,14 @@ pub fn fit_harmonics(alpha: &[f64], delta: &[f64], n: usize) -> Result<HarmonicF
     let smax = svd.singular_values.max();
     let smin = svd.singular_values.min();
     if smin.is_nan() || smin <= 1e-10 * smax {
-        return Err(Error::InvalidInput(
-            "harmonic fit: the sample angles do not determine all harmonics".into(),
+        return Err(Error::option(
+            "harmonic fit angles",
+            format!("do not determine all {n} harmonics (too few distinct angles)"),
         ));
     }
     let coef = svd
         .solve(&y, 1e-12 * smax)
-        .map_err(|e| Error::InvalidInput(format!("harmonic fit: {e}")))?;
+        .map_err(|e| Error::option("harmonic fit", e.to_string()))?;
     let resid = &y - &x * &coef;
     let rms = (resid.norm_squared() / m as f64).sqrt();
     Ok(HarmonicFit {

@@ -174,12 +174,10 @@ pub const EFFECTS: &[EffectSpec] = &[
 
 /// Looks an effect up by id.
 pub fn effect(id: &str) -> Result<&'static EffectSpec> {
-    EFFECTS.iter().find(|e| e.id == id).ok_or_else(|| {
-        Error::InvalidInput(format!(
-            "unknown effect `{id}` (known: {})",
-            EFFECTS.iter().map(|e| e.id).collect::<Vec<_>>().join(", ")
-        ))
-    })
+    EFFECTS
+        .iter()
+        .find(|e| e.id == id)
+        .ok_or_else(|| Error::unknown_name("effect", id, EFFECTS.iter().map(|e| e.id)))
 }
 
 /// A headline size the diagnosis should report, with the truth.
@@ -238,10 +236,13 @@ fn phi_for_delta(theta: f64, delta: f64) -> Result<f64> {
     let (st, ct) = theta.sin_cos();
     let rr = (ct * ct + 4.0 * st * st).sqrt();
     if delta.abs() > rr {
-        return Err(Error::InvalidInput(format!(
-            "no output angle gives Δ = {delta} at Θ = {:.2}°",
-            theta.to_degrees()
-        )));
+        return Err(Error::option(
+            "delta",
+            format!(
+                "no output angle gives Δ = {delta} at Θ = {:.2}°",
+                theta.to_degrees()
+            ),
+        ));
     }
     Ok((delta / rr).acos() - (2.0 * st).atan2(ct))
 }
@@ -255,9 +256,11 @@ pub fn build_case(
     rk4: &Rk4Filippov,
 ) -> Result<GeneratedCase> {
     if !(level.is_finite() && level >= 0.0) {
-        return Err(Error::InvalidInput(format!(
-            "effect level {level} must be finite and ≥ 0"
-        )));
+        return Err(Error::InvalidParameter {
+            name: "level",
+            value: level,
+            reason: "an effect level must be finite and >= 0",
+        });
     }
     let stream = EFFECTS.iter().position(|e| e.id == spec.id).unwrap_or(0) as u64;
     let mut rng = Rng::new(seed, stream * 1000 + (level * 100.0).round() as u64);
@@ -375,7 +378,7 @@ pub fn build_case(
         }
         "angle_modulated_friction" => truth.angle_modulation = s,
         other => {
-            return Err(Error::InvalidInput(format!(
+            return Err(Error::Unsupported(format!(
                 "effect `{other}` has no generator"
             )))
         }

@@ -76,21 +76,26 @@ impl SetSize {
             "ci" => Ok(Self::ci()),
             "medium" => Ok(Self::medium()),
             "full" => Ok(Self::full()),
-            other => Err(Error::InvalidInput(format!(
-                "unknown set size `{other}` (expected ci, medium or full)"
-            ))),
+            other => Err(Error::unknown_name(
+                "set size",
+                other,
+                ["ci", "medium", "full"],
+            )),
         }
     }
     /// Checks the numbers.
     pub fn validate(&self) -> Result<()> {
         if self.ringdowns + self.driven == 0 {
-            return Err(Error::InvalidInput("a set needs at least one run".into()));
+            return Err(Error::inconsistent(
+                "ringdowns, driven",
+                "a set needs at least one run",
+            ));
         }
         if self.samples_per_turn < 8 {
-            return Err(Error::InvalidInput(format!(
-                "samples per turn = {} (need ≥ 8)",
-                self.samples_per_turn
-            )));
+            return Err(Error::option(
+                "samples_per_turn",
+                format!("{} (need >= 8)", self.samples_per_turn),
+            ));
         }
         for (n, v) in [
             ("turns", self.turns),
@@ -100,11 +105,18 @@ impl SetSize {
             ("f_max", self.f_max),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(Error::InvalidInput(format!("{n} = {v} must be > 0")));
+                return Err(Error::InvalidParameter {
+                    name: n,
+                    value: v,
+                    reason: "must be finite and > 0",
+                });
             }
         }
         if self.f_max < self.f_min {
-            return Err(Error::InvalidInput("f_max < f_min".into()));
+            return Err(Error::inconsistent(
+                "f_min, f_max",
+                format!("f_max = {} < f_min = {}", self.f_max, self.f_min),
+            ));
         }
         Ok(())
     }

@@ -111,15 +111,25 @@ impl Rk4Filippov {
         times: &[f64],
     ) -> Result<(Vec<f64>, Rk4Stats)> {
         if !(self.step > 0.0 && self.step.is_finite()) {
-            return Err(Error::InvalidInput(format!(
-                "RK4 step must be > 0, got {}",
-                self.step
-            )));
+            return Err(Error::InvalidParameter {
+                name: "step",
+                value: self.step,
+                reason: "the RK4 step must be finite and > 0",
+            });
         }
-        if times.windows(2).any(|w| w[1] < w[0]) || times.first().is_some_and(|&t| t < t0) {
-            return Err(Error::InvalidInput(
-                "sample times must be sorted and not before the start".into(),
-            ));
+        if let Some(&t) = times.first().filter(|&&t| t < t0) {
+            return Err(Error::InvalidTimes {
+                t0,
+                t1: t,
+                reason: "sample times must not be before the start",
+            });
+        }
+        if let Some(w) = times.windows(2).find(|w| w[1] < w[0]) {
+            return Err(Error::InvalidTimes {
+                t0: w[0],
+                t1: w[1],
+                reason: "sample times must be sorted",
+            });
         }
         let sys = Sys { m: model, d: drive };
         let phase = if x0[1] != 0.0 {

@@ -43,8 +43,9 @@ impl CampaignSpec {
     /// Checks ids, levels, seeds and the set size.
     pub fn validate(&self) -> Result<()> {
         if self.effects.is_empty() || self.levels.is_empty() {
-            return Err(Error::InvalidInput(
-                "a campaign needs at least one effect and one level".into(),
+            return Err(Error::inconsistent(
+                "effects, levels",
+                "a campaign needs at least one effect and one level",
             ));
         }
         for e in &self.effects {
@@ -55,21 +56,27 @@ impl CampaignSpec {
                 &self.seeds
             };
             if seeds.is_empty() {
-                return Err(Error::InvalidInput(format!("effect `{e}` has no seeds")));
+                return Err(Error::option(
+                    format!("seeds of effect `{e}`"),
+                    "none given",
+                ));
             }
         }
         for &l in &self.levels {
             if !(l.is_finite() && l > 0.0) {
-                return Err(Error::InvalidInput(format!(
-                    "level {l} must be finite and > 0"
-                )));
+                return Err(Error::InvalidParameter {
+                    name: "level",
+                    value: l,
+                    reason: "must be finite and > 0",
+                });
             }
         }
         if !(self.rk4_step_s.is_finite() && self.rk4_step_s > 0.0 && self.rk4_step_s <= 0.01) {
-            return Err(Error::InvalidInput(format!(
-                "RK4 step {} s must be in (0, 0.01]",
-                self.rk4_step_s
-            )));
+            return Err(Error::InvalidParameter {
+                name: "rk4_step_s",
+                value: self.rk4_step_s,
+                reason: "the RK4 step must be in (0, 0.01] s",
+            });
         }
         self.set.validate()
     }
@@ -198,17 +205,16 @@ pub fn run_campaign(
     let cases = plan(spec)?;
     let spec_path = out.join("spec.json");
     if let Ok(text) = std::fs::read_to_string(&spec_path) {
-        let old: CampaignSpec = serde_json::from_str(&text).map_err(|e| {
-            Error::InvalidInput(format!(
-                "{}: not a campaign spec ({e})",
-                spec_path.display()
-            ))
+        let old: CampaignSpec = serde_json::from_str(&text).map_err(|e| Error::Recording {
+            file: spec_path.display().to_string(),
+            line: (e.line() > 0).then_some(e.line()),
+            what: format!("not a campaign spec ({e})"),
         })?;
         if old.set != spec.set || old.rk4_step_s != spec.rk4_step_s {
-            return Err(Error::InvalidInput(format!(
-                "{} holds a campaign with another set size or step; choose another --out",
-                out.display()
-            )));
+            return Err(Error::checkpoint(
+                out,
+                "the folder holds a campaign with another set size or step; choose another --out",
+            ));
         }
     }
     write_json_atomic(&spec_path, spec)?;
@@ -252,7 +258,11 @@ pub fn run_campaign(
     }
     let results: Vec<CaseResult> = cases
         .iter()
-        .map(|c| load(c).ok_or_else(|| Error::Io(format!("result of case {} is missing", c.key()))))
+        .map(|c| {
+            load(c).ok_or_else(|| {
+                Error::checkpoint(out, format!("the result of case {} is missing", c.key()))
+            })
+        })
         .collect::<Result<_>>()?;
     Ok(CampaignDoc {
         schema: SCHEMA.to_string(),

@@ -111,10 +111,17 @@ pub fn run(a: Args) -> Result<()> {
         }
     } else {
         let x = parse_state(a.start_state.as_deref().ok_or_else(|| {
-            Error::InvalidInput("--start-state-rad is needed for this curve".into())
+            Error::inconsistent(
+                "--kind, --free, --along, --start-state-rad",
+                "--start-state-rad is needed for this curve (only the lock-loss fold has a \
+                 built-in start)",
+            )
         })?)?;
         let f0 = a.start_free.ok_or_else(|| {
-            Error::InvalidInput("--start-free is needed with --start-state-rad".into())
+            Error::inconsistent(
+                "--start-state-rad, --start-free",
+                "--start-free is needed with --start-state-rad",
+            )
         })?;
         let spec = match parse_section(&a.section)? {
             Section::HalfPeriod => OrbitSpec::symmetric(a.winding),
@@ -208,20 +215,24 @@ pub fn run(a: Args) -> Result<()> {
 fn check_args(a: &Args) -> Result<()> {
     tolerance("tol", a.tol)?;
     if a.method != "palc" && a.method != "natural" {
-        return Err(Error::InvalidInput(format!(
-            "--method {}: expected palc or natural",
-            a.method
-        )));
+        return Err(Error::unknown_name(
+            "--method",
+            a.method.as_str(),
+            ["palc", "natural"],
+        ));
     }
     check_winding(a.winding)?;
     parse_section(&a.section)?;
     let (lo, hi) = parse_range(a.range.as_deref().unwrap_or("0:54.7356103"))?;
     if !(a.step.is_finite() && a.step > 0.0) || (hi - lo) / a.step > limits::GRID_MAX as f64 {
-        return Err(Error::InvalidInput(format!(
-            "--step = {} must be finite and > 0 with at most {} steps over {lo}:{hi}",
-            a.step,
-            limits::GRID_MAX
-        )));
+        return Err(Error::option(
+            "--step",
+            format!(
+                "{} must be finite and > 0 with at most {} steps over {lo}:{hi}",
+                a.step,
+                limits::GRID_MAX
+            ),
+        ));
     }
     if let Some(s) = &a.start_state {
         parse_state(s)?;

@@ -81,11 +81,6 @@ fn spec_of(a: &Args) -> Result<CampaignSpec> {
     set.ringdowns = a.ringdowns.unwrap_or(set.ringdowns);
     set.driven = a.driven.unwrap_or(set.driven);
     set.turns = a.turns.unwrap_or(set.turns);
-    if a.seeds == 0 || a.null_seeds == 0 {
-        return Err(Error::InvalidInput(
-            "--seeds and --null-seeds must be ≥ 1".into(),
-        ));
-    }
     for (flag, n) in [("seeds", a.seeds), ("null-seeds", a.null_seeds)] {
         super::common::count(flag, n as usize, 1, 100_000)?;
     }
@@ -126,7 +121,7 @@ pub fn run(a: Args) -> Result<()> {
     let out = a
         .out
         .clone()
-        .ok_or_else(|| Error::InvalidInput("--out is required".into()))?;
+        .ok_or_else(|| Error::option("--out", "is required"))?;
     super::common::output_dir("--out", &out)?;
     let t0 = Instant::now();
     let doc = run_campaign(&spec, &out, &|s| {

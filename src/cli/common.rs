@@ -332,9 +332,10 @@ pub fn count(flag: &str, value: usize, lo: usize, hi: usize) -> Result<usize> {
     if (lo..=hi).contains(&value) {
         Ok(value)
     } else {
-        Err(Error::InvalidInput(format!(
-            "--{flag} = {value} must be in {lo}..={hi}"
-        )))
+        Err(Error::option(
+            format!("--{flag}"),
+            format!("{value} must be in {lo}..={hi}"),
+        ))
     }
 }
 
@@ -348,17 +349,23 @@ pub fn start_state(flag: &str, beta: f64, omega: f64, beta_in_deg: bool) -> Resu
     };
     let unit = if beta_in_deg { "deg" } else { "rad" };
     if !beta.is_finite() || beta.abs() > lim {
-        return Err(Error::InvalidInput(format!(
-            "{flag}: beta = {} must be finite with |beta| <= {} {unit}",
-            crate::error::show(beta),
-            crate::error::show(lim)
-        )));
+        return Err(Error::option(
+            flag,
+            format!(
+                "beta = {} must be finite with |beta| <= {} {unit}",
+                crate::error::show(beta),
+                crate::error::show(lim)
+            ),
+        ));
     }
     if !omega.is_finite() || omega.abs() > limits::OMEGA_MAX {
-        return Err(Error::InvalidInput(format!(
-            "{flag}: omega = {} must be finite with |omega| <= 1e6 rad/s",
-            crate::error::show(omega)
-        )));
+        return Err(Error::option(
+            flag,
+            format!(
+                "omega = {} must be finite with |omega| <= 1e6 rad/s",
+                crate::error::show(omega)
+            ),
+        ));
     }
     Ok(())
 }
@@ -367,10 +374,10 @@ pub fn start_state(flag: &str, beta: f64, omega: f64, beta_in_deg: bool) -> Resu
 /// file, and its nearest existing ancestor is a folder.
 pub fn output_dir(flag: &str, path: &Path) -> Result<()> {
     if path.exists() && !path.is_dir() {
-        return Err(Error::InvalidInput(format!(
-            "{flag} {}: exists and is not a folder",
-            path.display()
-        )));
+        return Err(Error::option(
+            format!("{flag} {}", path.display()),
+            "exists and is not a folder",
+        ));
     }
     writable_parent(flag, path)
 }
@@ -379,10 +386,10 @@ pub fn output_dir(flag: &str, path: &Path) -> Result<()> {
 /// its nearest existing ancestor a folder, and (with `figure`) an `.svg` or `.png` extension.
 pub fn output_file(flag: &str, path: &Path, figure: bool) -> Result<()> {
     if path.is_dir() {
-        return Err(Error::InvalidInput(format!(
-            "{flag} {}: is a folder, expected a file",
-            path.display()
-        )));
+        return Err(Error::option(
+            format!("{flag} {}", path.display()),
+            "is a folder, expected a file",
+        ));
     }
     if figure {
         let ext = path
@@ -390,10 +397,10 @@ pub fn output_file(flag: &str, path: &Path, figure: bool) -> Result<()> {
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
         if !matches!(ext.as_deref(), Some("svg" | "png")) {
-            return Err(Error::InvalidInput(format!(
-                "{flag} {}: a figure must end in .svg or .png",
-                path.display()
-            )));
+            return Err(Error::option(
+                format!("{flag} {}", path.display()),
+                "a figure must end in .svg or .png",
+            ));
         }
     }
     match path.parent().filter(|p| !p.as_os_str().is_empty()) {
@@ -411,19 +418,17 @@ fn writable_parent(flag: &str, path: &Path) -> Result<()> {
         if q.exists() {
             if q.is_dir() {
                 if std::fs::metadata(q).is_ok_and(|m| m.permissions().readonly()) {
-                    return Err(Error::InvalidInput(format!(
-                        "{flag} {}: folder {} is read-only",
-                        path.display(),
-                        q.display()
-                    )));
+                    return Err(Error::option(
+                        format!("{flag} {}", path.display()),
+                        format!("folder {} is read-only", q.display()),
+                    ));
                 }
                 return Ok(());
             }
-            return Err(Error::InvalidInput(format!(
-                "{flag} {}: {} is not a folder",
-                path.display(),
-                q.display()
-            )));
+            return Err(Error::option(
+                format!("{flag} {}", path.display()),
+                format!("{} is not a folder", q.display()),
+            ));
         }
         p = q.parent();
     }

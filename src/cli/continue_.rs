@@ -58,9 +58,10 @@ impl BranchArgs {
     pub fn check_steps(ds: f64, ds_max: f64, max_steps: usize) -> Result<()> {
         within("ds-max", ds_max, f64::MIN_POSITIVE, f64::MAX, "must be > 0")?;
         if ds == 0.0 || !ds.is_finite() || ds.abs() > ds_max {
-            return Err(Error::InvalidInput(format!(
-                "--ds = {ds} must be finite, nonzero and at most --ds-max = {ds_max}"
-            )));
+            return Err(Error::inconsistent(
+                "--ds, --ds-max",
+                format!("--ds = {ds} must be finite, nonzero and at most --ds-max = {ds_max}"),
+            ));
         }
         count("max-steps", max_steps, 1, limits::TURNS_MAX)?;
         Ok(())
@@ -144,17 +145,18 @@ pub const BRANCHES_SCHEMA: &str = "gearbif.branches/1";
 pub(crate) fn parse_range(s: &str) -> Result<(f64, f64)> {
     let (a, b) = s
         .split_once(':')
-        .ok_or_else(|| Error::InvalidInput(format!("range `{s}` must be lo:hi")))?;
+        .ok_or_else(|| Error::option(format!("range `{s}`"), "expected lo:hi"))?;
     let p = |x: &str| {
         x.trim()
             .parse::<f64>()
-            .map_err(|_| Error::InvalidInput(format!("range `{s}`: `{x}` is not a number")))
+            .map_err(|_| Error::option(format!("range `{s}`"), format!("`{x}` is not a number")))
     };
     let (lo, hi) = (p(a)?, p(b)?);
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        return Err(Error::InvalidInput(format!(
-            "range `{s}` must be finite numbers with lo < hi"
-        )));
+        return Err(Error::option(
+            format!("range `{s}`"),
+            "must be finite numbers with lo < hi",
+        ));
     }
     Ok((lo, hi))
 }
@@ -165,12 +167,14 @@ pub(crate) fn parse_state(s: &str) -> Result<[f64; 2]> {
         .split(',')
         .map(|x| x.trim().parse::<f64>())
         .collect::<std::result::Result<_, _>>()
-        .map_err(|_| Error::InvalidInput(format!("state `{s}` must be BETA_RAD,OMEGA")))?;
-    if v.len() != 2 || !v.iter().all(|x| x.is_finite()) {
-        return Err(Error::InvalidInput(format!(
-            "state `{s}` must be two finite numbers (β [rad], ω [rad/s])"
-        )));
+        .map_err(|_| Error::option(format!("state `{s}`"), "expected BETA_RAD,OMEGA"))?;
+    if v.len() != 2 {
+        return Err(Error::option(
+            format!("state `{s}`"),
+            "expected two numbers BETA_RAD,OMEGA",
+        ));
     }
+    crate::error::finite_state("state (β [rad], ω [rad/s])", &v)?;
     start_state("state", v[0], v[1], false)?;
     Ok([v[0], v[1]])
 }
@@ -179,9 +183,7 @@ pub(crate) fn parse_section(s: &str) -> Result<Section> {
     match s {
         "sym" | "half" | "G" => Ok(Section::HalfPeriod),
         "strob" | "P" => Ok(Section::Stroboscopic),
-        _ => Err(Error::InvalidInput(format!(
-            "section `{s}`: expected sym or strob"
-        ))),
+        _ => Err(Error::unknown_name("section", s, ["sym", "strob"])),
     }
 }
 
@@ -200,20 +202,16 @@ fn start_orbit(
         let pt = match which.as_str() {
             "stable" => lb.stable,
             "unstable" => lb.unstable,
-            _ => {
-                return Err(Error::InvalidInput(
-                    "--lock expects stable or unstable".into(),
-                ))
-            }
+            l => return Err(Error::unknown_name("--lock", l, ["stable", "unstable"])),
         };
         let p = a.winding.unwrap_or(pt.winding * a.period as i32);
         return shoot(gear, &mk_spec(p), pt.state, shooting);
     }
     if let Some(s) = &a.state {
         let x = parse_state(s)?;
-        let p = a
-            .winding
-            .ok_or_else(|| Error::InvalidInput("--state-rad needs --winding".into()))?;
+        let p = a.winding.ok_or_else(|| {
+            Error::inconsistent("--state-rad, --winding", "--state-rad needs --winding")
+        })?;
         return shoot(gear, &mk_spec(p), x, shooting);
     }
     let o = orbit_from_simulation(
@@ -284,7 +282,7 @@ pub fn run(a: Args) -> Result<()> {
     let sign = match a.direction.as_str() {
         "up" => 1.0,
         "down" => -1.0,
-        d => return Err(Error::InvalidInput(format!("direction `{d}`: up or down"))),
+        d => return Err(Error::unknown_name("--direction", d, ["up", "down"])),
     };
     check_args(&a)?;
     let shooting = ShootingOptions {
@@ -313,10 +311,11 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(n) = a.switch_at {
         let b0 = &branches[0];
         let sp = b0.specials.get(n).ok_or_else(|| {
-            Error::InvalidInput(format!(
-                "--switch-at {n}: the branch has {} special points",
-                b0.specials.len()
-            ))
+            Error::shape(
+                "--switch-at: index of a special point",
+                format!("< {} (the special points of the branch)", b0.specials.len()),
+                n,
+            )
         })?;
         // pinned switching: the new orbit is found at a fixed distance from the bifurcating one,
         // with the parameter free, so it lands on the side where the new branch exists; the new
@@ -376,9 +375,7 @@ fn check_args(a: &Args) -> Result<()> {
     }
     if let Some(l) = a.lock.as_deref() {
         if !matches!(l, "stable" | "unstable") {
-            return Err(Error::InvalidInput(format!(
-                "--lock `{l}`: expected stable or unstable"
-            )));
+            return Err(Error::unknown_name("--lock", l, ["stable", "unstable"]));
         }
     }
     parse_section(&a.section)?;
@@ -396,8 +393,9 @@ pub(crate) fn check_winding(p: i32) -> Result<i32> {
     if p.unsigned_abs() <= 1000 {
         Ok(p)
     } else {
-        Err(Error::InvalidInput(format!(
-            "--winding = {p} must be in -1000..=1000"
-        )))
+        Err(Error::option(
+            "--winding",
+            format!("{p} must be in -1000..=1000"),
+        ))
     }
 }

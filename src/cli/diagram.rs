@@ -103,10 +103,10 @@ fn summary(d: &Diagram) -> String {
 fn check_args(a: &Args) -> Result<()> {
     BranchArgs::check_steps(a.ds, a.ds_max, a.max_steps)?;
     if a.ds < 0.0 {
-        return Err(Error::InvalidInput(format!(
-            "--ds = {} must be > 0 (the diagram continues both ways)",
-            a.ds
-        )));
+        return Err(Error::option(
+            "--ds",
+            format!("{} must be > 0 (the diagram continues both ways)", a.ds),
+        ));
     }
     count("grid", a.grid, 1, 1000)?;
     count("max-period", a.max_period, 1, 64)?;

@@ -240,9 +240,7 @@ pub fn make(
                 .run()?
             {
                 SweepOutcome::Complete(r) => r,
-                SweepOutcome::Stopped { .. } => {
-                    return Err(Error::InvalidInput("sweep stopped".into()))
-                }
+                SweepOutcome::Stopped { .. } => return Err(Error::Stopped { what: "the sweep" }),
             };
             res.write(dir.join(format!("{stem}-data")))?;
             let mut fig = RmsMap::from_sweep(&res);

@@ -67,11 +67,7 @@ pub(crate) fn parse_kind(s: &str) -> Result<SpecialKind> {
         "flip" => SpecialKind::Flip,
         "sb" | "symmetry-breaking" => SpecialKind::SymmetryBreaking,
         "ns" => SpecialKind::NeimarkSacker,
-        _ => {
-            return Err(Error::InvalidInput(format!(
-                "kind `{s}`: expected fold, flip, sb or ns"
-            )))
-        }
+        _ => return Err(Error::unknown_name("kind", s, ["fold", "flip", "sb", "ns"])),
     })
 }
 

@@ -118,14 +118,15 @@ impl DriveArgs {
 pub fn parse_x0(s: &str) -> Result<[f64; 2]> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != 2 {
-        return Err(Error::InvalidInput(format!(
-            "--x0-deg expects BETA_DEG,OMEGA (two numbers), got `{s}`"
-        )));
+        return Err(Error::option(
+            "--x0-deg",
+            format!("expected BETA_DEG,OMEGA (two numbers), got `{s}`"),
+        ));
     }
     let num = |name: &'static str, t: &str| -> Result<f64> {
         let v: f64 = t
             .parse()
-            .map_err(|_| Error::InvalidInput(format!("--x0-deg: `{t}` is not a number")))?;
+            .map_err(|_| Error::option("--x0-deg", format!("`{t}` is not a number")))?;
         finite(name, v)
     };
     let beta = num("x0-deg beta", parts[0])?;

@@ -113,9 +113,10 @@ pub fn run(a: Args) -> Result<()> {
     let t_end = a.periods * period;
     let n = (a.periods * a.samples_per_period as f64).floor() as usize;
     if n > 50_000_000 {
-        return Err(Error::InvalidInput(format!(
-            "{n} samples requested: reduce --periods or --samples-per-period"
-        )));
+        return Err(Error::inconsistent(
+            "--periods, --samples-per-period",
+            format!("{n} samples requested (at most 5e7): reduce one of them"),
+        ));
     }
     let dt = period / a.samples_per_period as f64;
     let times: Vec<f64> = (0..=n).map(|i| (i as f64 * dt).min(t_end)).collect();

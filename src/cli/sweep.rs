@@ -4,6 +4,7 @@
 
 use super::common::{angle_deg, count, frequency, limits, output_dir, tolerance, GearArgs};
 use crate::analysis::ClassifyOptions;
+use crate::model::{GearParam, Parameter};
 use crate::sweep::{
     merge_shards, spec_hash, Axis, Method, Protocol, Shard, SweepOutcome, SweepParam, SweepResult,
     SweepRunner, SweepSpec,
@@ -21,7 +22,8 @@ pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
     /// Row axis (parallel): param:start:stop:step or param:start:stop:n:log
-    /// (param: theta [deg, within ±360], f [Hz, in [1e-3, 1e4]], zeta, eta [>= 0], inertia [> 0]).
+    /// (param: a name of the gear's lens — theta [deg, within ±360], f [Hz, in [1e-3, 1e4]], zeta,
+    /// eta, g [>= 0], delta — or inertia [> 0]).
     #[arg(long, default_value = "theta:0:50:10")]
     rows: String,
     /// Column axis (sequential; the semi-static protocol carries the state along it).
@@ -335,10 +337,12 @@ fn check_args(a: &Args) -> Result<()> {
 fn check_axis(axis: &Axis) -> Result<()> {
     for &v in &axis.values {
         match axis.param {
-            SweepParam::ThetaDeg => angle_deg("theta_deg", v).map(drop)?,
-            SweepParam::F => frequency("f", v).map(drop)?,
-            SweepParam::Zeta => crate::error::non_negative("zeta", v).map(drop)?,
-            SweepParam::Eta => crate::error::non_negative("eta", v).map(drop)?,
+            SweepParam::Lens(GearParam::ThetaDeg) => angle_deg("theta_deg", v).map(drop)?,
+            SweepParam::Lens(GearParam::F) => frequency("f", v).map(drop)?,
+            SweepParam::Lens(p @ (GearParam::G | GearParam::Zeta | GearParam::Eta)) => {
+                crate::error::non_negative(p.name(), v).map(drop)?
+            }
+            SweepParam::Lens(GearParam::Delta) => crate::error::finite("delta", v).map(drop)?,
             SweepParam::Inertia => crate::error::positive("inertia", v).map(drop)?,
         }
     }

@@ -75,8 +75,9 @@ pub fn run(a: Args) -> Result<()> {
         return Ok(());
     }
     let (Some(effect), Some(out)) = (a.effect.clone(), a.out.clone()) else {
-        return Err(crate::Error::InvalidInput(
-            "synth needs --effect and --out".into(),
+        return Err(crate::Error::inconsistent(
+            "--effect, --out",
+            "synth needs --effect and --out (or --list)",
         ));
     };
     check_args(&a, &out)?;
@@ -132,8 +133,9 @@ fn check_args(a: &Args, out: &std::path::Path) -> Result<()> {
     count("ringdowns", a.ringdowns, 0, 1000)?;
     count("driven", a.driven, 0, 1000)?;
     if a.ringdowns + a.driven == 0 {
-        return Err(crate::Error::InvalidInput(
-            "--ringdowns and --driven are both 0: nothing to record".into(),
+        return Err(crate::Error::inconsistent(
+            "--ringdowns, --driven",
+            "both are 0: nothing to record",
         ));
     }
     within(
@@ -146,10 +148,13 @@ fn check_args(a: &Args, out: &std::path::Path) -> Result<()> {
     frequency("f_min", a.f_min)?;
     frequency("f_max", a.f_max)?;
     if a.f_min > a.f_max {
-        return Err(crate::Error::InvalidInput(format!(
-            "--f-min = {} must not exceed --f-max = {}",
-            a.f_min, a.f_max
-        )));
+        return Err(crate::Error::inconsistent(
+            "--f-min, --f-max",
+            format!(
+                "--f-min = {} must not exceed --f-max = {}",
+                a.f_min, a.f_max
+            ),
+        ));
     }
     count("samples-per-turn", a.samples_per_turn, 8, 10_000)?;
     within(

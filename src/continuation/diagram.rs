@@ -490,13 +490,15 @@ pub fn diagram<S: Parametrised>(
 ) -> Result<Diagram<S>> {
     let (lo, hi) = opts.range;
     if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-        return Err(Error::InvalidInput(
-            "diagram range must have lo < hi".into(),
+        return Err(Error::option(
+            "diagram range",
+            format!("{lo}:{hi} must be finite numbers with lo < hi"),
         ));
     }
     if opts.grid == 0 || opts.max_period == 0 {
-        return Err(Error::InvalidInput(
-            "grid and max_period must be >= 1".into(),
+        return Err(Error::option(
+            "diagram grid, max_period",
+            format!("must be >= 1, got {} and {}", opts.grid, opts.max_period),
         ));
     }
     let p = opts.param;

@@ -21,7 +21,7 @@
 
 use super::codim2::{test_functions, Codim2Kind, Codim2Point, CurveLocal};
 use super::minaug::{bordered_test, critical_multiplier, linearise_map, unit, MapLinearisation};
-use super::two_param::{Curve, CurvePoint, CurveStop};
+use super::two_param::{check_curve_args, lock_loss_starts, Curve, CurvePoint, CurveStop};
 use super::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::FlowMethod;
@@ -89,10 +89,13 @@ impl CurveOptions {
         if ok {
             Ok(())
         } else {
-            Err(Error::InvalidInput(format!(
-                "curve options: need 0 < ds_min <= |ds| <= ds_max, ordered ranges, positive \
-                 weights and tolerances ({self:?})"
-            )))
+            Err(Error::option(
+                "curve options",
+                format!(
+                    "need 0 < ds_min <= |ds| <= ds_max, ordered ranges, positive weights and \
+                     tolerances ({self:?})"
+                ),
+            ))
         }
     }
 }
@@ -321,14 +324,7 @@ pub fn continue_curve<S: Parametrised, M: FlowMethod<S>>(
     opts: &CurveOptions,
 ) -> Result<Curve<S>> {
     opts.validate()?;
-    if free == along {
-        return Err(Error::InvalidInput(
-            "the two parameters of a curve must differ".into(),
-        ));
-    }
-    if !(x0.iter().all(|z| z.is_finite()) && free0.is_finite()) {
-        return Err(Error::InvalidInput("non-finite start of a curve".into()));
-    }
+    check_curve_args(free, along, x0, free0)?;
     let test = match kind {
         SpecialKind::NeimarkSacker => Test::UnitDeterminant,
         k => Test::Bordered(critical_multiplier(k)?),
@@ -571,35 +567,25 @@ pub fn lock_loss_curves(
     opts: &CurveOptions,
 ) -> Result<Vec<(String, Curve<crate::model::Gear>)>> {
     use crate::model::GearParam;
-    use std::f64::consts::{FRAC_PI_2, TAU};
-    let fc = base
-        .lock_loss_frequency()
-        .ok_or_else(|| Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into()))?;
-    let th_rev = crate::model::gear::cogging_free_parallel_angles()
-        .2
-        .to_degrees();
     let mut out = Vec::new();
-    for (p, from) in [(1, 0.0), (-1, th_rev)] {
-        let g = base
-            .with_param(GearParam::ThetaDeg, from)?
-            .with_param(GearParam::F, fc)?;
+    for s in lock_loss_starts(base)? {
         let o = CurveOptions {
-            ds: opts.ds.abs() * if p > 0 { 1.0 } else { -1.0 },
-            along_range: (0.0, th_rev),
+            ds: opts.ds.abs() * if s.winding > 0 { 1.0 } else { -1.0 },
+            along_range: (0.0, s.theta_rev_deg),
             ..*opts
         };
         let c = continue_curve(
             &crate::integrator::EventDriven,
-            &g,
-            &OrbitSpec::symmetric(p),
+            &s.gear,
+            &s.spec,
             SpecialKind::Fold,
             GearParam::F,
             GearParam::ThetaDeg,
-            [FRAC_PI_2, p as f64 * TAU * fc],
-            fc,
+            s.x0,
+            s.fc,
             &o,
         )?;
-        out.push((format!("fold of the lock, winding {p:+}"), c));
+        out.push((s.label, c));
     }
     Ok(out)
 }

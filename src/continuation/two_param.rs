@@ -18,7 +18,7 @@ use super::minaug::linearise_map;
 use super::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, FlowMethod};
-use crate::model::{Gear, GearParam, Parametrised};
+use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::numerics::{newton, Linearisation, NewtonOptions};
 use crate::orbits::{EventCounts, Floquet, OrbitSpec, ShootingOptions};
 use nalgebra::{Matrix3, Vector3};
@@ -256,11 +256,7 @@ pub fn locate_augmented_with<S: Parametrised, M: FlowMethod<S>>(
     lambda0: f64,
     opts: &ShootingOptions,
 ) -> Result<CurvePoint> {
-    if !(x0[0].is_finite() && x0[1].is_finite() && lambda0.is_finite()) {
-        return Err(Error::InvalidInput(
-            "non-finite start of the augmented Newton".into(),
-        ));
-    }
+    crate::error::finite_state("start of the augmented Newton", &[x0[0], x0[1], lambda0])?;
     let problem = Problem {
         method,
         sys,
@@ -367,11 +363,7 @@ pub fn follow_with<S: Parametrised, M: FlowMethod<S>>(
     values: &[f64],
     opts: &ShootingOptions,
 ) -> Result<Curve<S>> {
-    if free == along {
-        return Err(Error::InvalidInput(
-            "the free and the stepped parameter must differ".into(),
-        ));
-    }
+    check_curve_args(free, along, x0, free0)?;
     let mut pts: Vec<CurvePoint> = Vec::new();
     let mut stopped = None;
     'values: for (i, &v) in values.iter().enumerate() {
@@ -436,6 +428,68 @@ pub fn follow_with<S: Parametrised, M: FlowMethod<S>>(
     })
 }
 
+/// Checks the arguments shared by the two-parameter curves ([`follow_with`] and
+/// [`super::palc2::continue_curve`]): two different parameters and a finite start (x0, λ₁ = `free0`).
+pub(crate) fn check_curve_args<P: Parameter>(
+    free: P,
+    along: P,
+    x0: [f64; 2],
+    free0: f64,
+) -> Result<()> {
+    if free == along {
+        return Err(Error::inconsistent(
+            "free, along",
+            format!(
+                "the two parameters of a curve must differ (both are `{}`)",
+                free.name()
+            ),
+        ));
+    }
+    crate::error::finite_state("start of a curve", &[x0[0], x0[1], free0])
+}
+
+/// One start of the lock-loss boundary f_c(Θ) for parallel shafts ([`lock_loss_starts`]).
+pub(crate) struct LockLossStart {
+    /// The winding p of the lock: +1 forward, −1 reversed.
+    pub winding: i32,
+    /// The gear at the start: Θ = 0 (p = +1) or 54.74° (p = −1, Δ = −1), f = f_c.
+    pub gear: Gear,
+    /// The symmetric orbit (half-period section) of winding p.
+    pub spec: OrbitSpec,
+    /// The start state (π/2, 2πp f_c).
+    pub x0: [f64; 2],
+    /// The analytic lock-loss frequency f_c (model.md).
+    pub fc: f64,
+    /// 54.74°: the end of the Θ range of both curves.
+    pub theta_rev_deg: f64,
+    /// A short label: "fold of the lock, winding +1".
+    pub label: String,
+}
+
+/// The two starts of the lock-loss boundary, shared by [`lock_loss_boundary`] (natural
+/// parameter) and [`super::palc2::lock_loss_curves`] (pseudo-arclength): the forward lock from
+/// Θ = 0 and the reversed lock from Θ = 54.74°, each at the analytic f_c of `base`.
+pub(crate) fn lock_loss_starts(base: &Gear) -> Result<[LockLossStart; 2]> {
+    let fc = base
+        .lock_loss_frequency()
+        .ok_or_else(|| Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into()))?;
+    let th_rev = crate::model::gear::cogging_free_parallel_angles()
+        .2
+        .to_degrees();
+    let start = |p: i32, from: f64| -> Result<LockLossStart> {
+        Ok(LockLossStart {
+            winding: p,
+            gear: base.with_param(GearParam::ThetaDeg, from)?.with_f(fc)?,
+            spec: OrbitSpec::symmetric(p),
+            x0: [FRAC_PI_2, p as f64 * TAU * fc],
+            fc,
+            theta_rev_deg: th_rev,
+            label: format!("fold of the lock, winding {p:+}"),
+        })
+    };
+    Ok([start(1, 0.0)?, start(-1, th_rev)?])
+}
+
 /// An inclusive grid from `lo` to `hi` with spacing `step` (the last step may be shorter), reversed if
 /// asked.
 pub fn grid(lo: f64, hi: f64, step: f64, reverse: bool) -> Vec<f64> {
@@ -456,30 +510,27 @@ pub fn lock_loss_boundary(
     opts: &ShootingOptions,
 ) -> Result<Vec<(String, Curve<Gear>)>> {
     if !(step_deg > 0.0 && step_deg.is_finite()) {
-        return Err(Error::InvalidInput("step must be > 0".into()));
+        return Err(Error::InvalidParameter {
+            name: "step",
+            value: step_deg,
+            reason: "the Θ step must be finite and > 0",
+        });
     }
-    let fc = base
-        .lock_loss_frequency()
-        .ok_or_else(|| Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into()))?;
-    let th_rev = crate::model::gear::cogging_free_parallel_angles()
-        .2
-        .to_degrees();
     let mut out = Vec::new();
-    for (p, from) in [(1, 0.0), (-1, th_rev)] {
-        let g = base.with_param(GearParam::ThetaDeg, from)?;
-        let vals = grid(0.0, th_rev, step_deg, p < 0);
+    for s in lock_loss_starts(base)? {
+        let vals = grid(0.0, s.theta_rev_deg, step_deg, s.winding < 0);
         let c = follow(
-            &g.with_f(fc)?,
-            &OrbitSpec::symmetric(p),
+            &s.gear,
+            &s.spec,
             SpecialKind::Fold,
             GearParam::F,
             GearParam::ThetaDeg,
-            [FRAC_PI_2, p as f64 * TAU * fc],
-            fc,
+            s.x0,
+            s.fc,
             &vals,
             opts,
         )?;
-        out.push((format!("fold of the lock, winding {p:+}"), c));
+        out.push((s.label, c));
     }
     Ok(out)
 }

@@ -165,7 +165,7 @@ pub fn catalog() -> Vec<Effect> {
                 from small amplitudes)",
         },
     ]);
-    for p in [DriftParam::Eta, DriftParam::Zeta, DriftParam::Coupling] {
+    for p in DriftParam::ALL {
         for clock in [Clock::DriveFrequency, Clock::VelocityRange] {
             v.push(Effect {
                 id: "condition_dependence",

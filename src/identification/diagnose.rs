@@ -20,7 +20,7 @@ use super::nominal;
 use super::predict::{predict, Prediction};
 use super::preprocess::{clean, CleanRun};
 use super::propose::ProposeCtx;
-use super::regression::{build, fit, Design, LinFit, Term, WeakOptions, BASE_TERMS};
+use super::regression::{build, fit_checked, Design, LinFit, Term, WeakOptions, BASE_TERMS};
 use super::report::{Baseline, Finding, Mismatch, Report, RunRms, SCHEMA};
 use super::ringdown::{fit_kappa, fit_ringdown, KappaFit, RingdownFit};
 use super::select::{select, ModelState, SelectCtx, Tried};
@@ -128,7 +128,7 @@ pub fn prepare(
     progress: &dyn Fn(&str),
 ) -> Result<Prepared> {
     if set.runs.is_empty() {
-        return Err(Error::InvalidInput("the recording set has no runs".into()));
+        return Err(Error::shape("runs of the recording set", ">= 1", 0));
     }
     let setup = &set.gear;
     let hint = setup.beta_noise_deg.map(|d| d.to_radians());
@@ -218,10 +218,13 @@ pub fn fit_base(
         }
     }
     let design = build(&prep.runs, &geo0, &terms, &opts.weak, 0.0);
-    let weak = fit(&design, &[0, 1, 2, 3]).ok_or_else(|| {
-        Error::InvalidInput(
-            "too few usable samples for the equation-error fit (runs too short or always at rest)"
-                .into(),
+    let weak = fit_checked(&design, &[0, 1, 2, 3]).map_err(|e| {
+        Error::shape(
+            format!(
+                "usable samples for the equation-error fit (runs too short or always at rest; {e})"
+            ),
+            "more than 6 with independent columns",
+            design.y.len(),
         )
     })?;
     let geo = refine_geometry(&geo0, weak.coef[3] / -weak.coef[2]);

@@ -5,7 +5,7 @@ use super::catalog::{effect_params, Effect};
 use super::judge::{rms_rad, Comparison};
 use super::model::{Shape, DRAG_REFERENCE_SPEED};
 use super::preprocess::CleanRun;
-use super::regression::Term;
+use super::regression::{DriftParam, Term};
 use super::report::{EffectSize, Finding};
 use super::select::{ModelState, Tried};
 use super::shooting::Win;
@@ -27,6 +27,29 @@ pub fn base_values(map: &BTreeMap<String, (f64, f64)>) -> (f64, f64, f64) {
     (v(Term::Zeta), v(Term::Eta), -v(Term::SinACosB))
 }
 
+/// The headline size of a static torque Σ_k A_k sin(kβ − φ_k): the amplitude A_k of its largest
+/// harmonic (`amplitude` for k = 1, `amplitude_k` for k = 2, 3), so that a torque with only a
+/// higher harmonic is not headlined by a first harmonic fitted at zero.
+fn dominant_harmonic(p: &BTreeMap<String, f64>) -> Option<EffectSize> {
+    (1..=3)
+        .filter_map(|k| {
+            let name = if k == 1 {
+                "amplitude".to_string()
+            } else {
+                format!("amplitude_{k}")
+            };
+            let value = *p.get(&name)?;
+            let sigma = *p.get(&format!("{name}_err"))?;
+            Some(EffectSize {
+                name,
+                value,
+                sigma,
+                unit: "s^-2".into(),
+            })
+        })
+        .max_by(|a, b| a.value.total_cmp(&b.value))
+}
+
 /// The headline size of a finding from its parameters (docs/diagnosis.md, "Sizes").
 pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<EffectSize> {
     let mk = |name: &str, v: &str, e: &str, unit: &str| -> Option<EffectSize> {
@@ -38,7 +61,7 @@ pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<Effec
         })
     };
     match effect.id {
-        "static_torque" => mk("amplitude", "amplitude", "amplitude_err", "s^-2"),
+        "static_torque" => dominant_harmonic(p),
         "power_law_drag" => mk("exponent", "exponent", "exponent_err", "1"),
         "corotating_drag" => mk("c", "c", "c_err", "s^-1"),
         "load_dependent_friction" => {
@@ -59,15 +82,15 @@ pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<Effec
         ),
         "drive_steps" => mk("offset", "offset_deg", "offset_err_deg", "deg"),
         "static_friction" => mk("excess", "excess_relative", "excess_relative_err", "1"),
-        "parameter_drift" | "condition_dependence" => ["eta", "zeta", "g"].iter().find_map(|n| {
+        "parameter_drift" | "condition_dependence" => DriftParam::ALL.iter().find_map(|d| {
+            let n = d.name();
             mk(
                 &format!("{n}_change"),
                 &format!("{n}_change"),
                 &format!("{n}_change_err"),
-                match *n {
-                    "eta" => "s^-2",
-                    "zeta" => "s^-1",
-                    _ => "s^-2",
+                match d {
+                    DriftParam::Zeta => "s^-1",
+                    DriftParam::Eta | DriftParam::Coupling => "s^-2",
                 },
             )
         }),
@@ -359,4 +382,34 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_torque_with_only_a_third_harmonic_is_headlined_by_it() {
+        let p: BTreeMap<String, f64> = [
+            ("amplitude", 0.05),
+            ("amplitude_err", 0.05),
+            ("amplitude_2", 0.08),
+            ("amplitude_2_err", 0.06),
+            ("amplitude_3", 3.0),
+            ("amplitude_3_err", 0.07),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+        let s = dominant_harmonic(&p).unwrap();
+        assert_eq!(
+            (s.name.as_str(), s.value, s.sigma),
+            ("amplitude_3", 3.0, 0.07)
+        );
+        let first: BTreeMap<String, f64> = [("amplitude", 12.0), ("amplitude_err", 0.2)]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect();
+        assert_eq!(dominant_harmonic(&first).unwrap().name, "amplitude");
+    }
 }

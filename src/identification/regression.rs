@@ -15,6 +15,7 @@
 
 use super::model::{drag, force_shape, load_shape, Geometry, Shape};
 use super::preprocess::CleanRun;
+use crate::model::{GearParam, Parameter};
 use crate::numerics::least_squares::{weighted, LeastSquaresError, DEFAULT_RCOND};
 use nalgebra::DMatrix;
 
@@ -96,7 +97,9 @@ pub enum Term {
     DrivenOffsetRate,
 }
 
-/// The base parameter that drifts in [`Term::Drift`].
+/// The base parameter that drifts in [`Term::Drift`]: one of the gear's lens parameters ζ, η, g
+/// ([`DriftParam::lens`]), named by the lens ([`crate::model::GearParam`]), so a finding names
+/// the parameter as continuation and sweeps do.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum DriftParam {
     /// ζ (column −β̇·s).
@@ -108,13 +111,21 @@ pub enum DriftParam {
 }
 
 impl DriftParam {
-    /// Name of the parameter.
-    pub fn name(&self) -> &'static str {
+    /// Every drifting parameter, in the order of the catalogue: η, ζ, g.
+    pub const ALL: [DriftParam; 3] = [DriftParam::Eta, DriftParam::Zeta, DriftParam::Coupling];
+
+    /// The parameter of the gear's lens that drifts.
+    pub fn lens(self) -> GearParam {
         match self {
-            DriftParam::Zeta => "zeta",
-            DriftParam::Eta => "eta",
-            DriftParam::Coupling => "g",
+            DriftParam::Zeta => GearParam::Zeta,
+            DriftParam::Eta => GearParam::Eta,
+            DriftParam::Coupling => GearParam::G,
         }
+    }
+
+    /// Name of the parameter: its lens name ([`Parameter::name`] of [`DriftParam::lens`]).
+    pub fn name(&self) -> &'static str {
+        self.lens().name()
     }
 }
 

@@ -133,22 +133,20 @@ pub struct SynthTruth {
 /// Makes a synthetic recording set (not yet written; see [`crate::io::recordings::write_set`]).
 pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
     if !SYNTH_EFFECTS.iter().any(|(e, _)| *e == opts.effect) {
-        return Err(Error::InvalidInput(format!(
-            "unknown effect `{}` (known: {})",
-            opts.effect,
-            SYNTH_EFFECTS
-                .iter()
-                .map(|e| e.0)
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
+        return Err(Error::unknown_name(
+            "effect",
+            opts.effect.as_str(),
+            SYNTH_EFFECTS.iter().map(|e| e.0),
+        ));
     }
-    if !opts.size.is_finite() || !opts.noise_deg.is_finite() || opts.noise_deg < 0.0 {
-        return Err(Error::InvalidInput("size and noise must be finite".into()));
-    }
-    if opts.samples_per_turn < 8 || opts.fps <= 0.0 || opts.turns <= 0.0 {
-        return Err(Error::InvalidInput(
-            "need ≥ 8 samples per turn, fps > 0, turns > 0".into(),
+    crate::error::finite("size", opts.size)?;
+    crate::error::non_negative("noise_deg", opts.noise_deg)?;
+    crate::error::positive("fps", opts.fps)?;
+    crate::error::positive("turns", opts.turns)?;
+    if opts.samples_per_turn < 8 {
+        return Err(Error::option(
+            "samples_per_turn",
+            format!("{} (need >= 8)", opts.samples_per_turn),
         ));
     }
     let mut rng = Rng::new(opts.seed);
@@ -182,9 +180,11 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
         "sensor_latency" => latency += opts.size,
         "input_compliance" => extra.compliance = opts.size.to_radians() / g,
         "drive_steps" if !(0.0..1.0).contains(&opts.size) => {
-            return Err(Error::InvalidInput(
-                "drive_steps: the size is a probability per step, in [0, 1)".into(),
-            ))
+            return Err(Error::InvalidParameter {
+                name: "size",
+                value: opts.size,
+                reason: "the size of drive_steps is a probability per step, in [0, 1)",
+            })
         }
         "static_friction" => extra.eta_static_excess = opts.size * eta,
         _ => {}

@@ -45,7 +45,7 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for FixedStep {
         check_interval(t0, x0, t1)?;
         opts.validate()?;
         if self.steps_per_period == 0 {
-            return Err(Error::InvalidInput("steps_per_period must be >= 1".into()));
+            return Err(Error::option("steps_per_period", "must be >= 1, got 0"));
         }
         let period = positive("period", sys.period())?;
         let layout = Layout::new(sys, opts.sensitivity);

@@ -177,12 +177,19 @@ impl FlowOptions {
         crate::error::positive("rtol", self.rtol)?;
         crate::error::non_negative("atol", self.atol)?;
         crate::error::positive("max_step_fraction", self.max_step_fraction)?;
-        if self.sample_times.iter().any(|t| !t.is_finite())
-            || self.sample_times.windows(2).any(|w| w[0] > w[1])
-        {
-            return Err(Error::InvalidInput(
-                "sample times must be finite and sorted ascending".into(),
-            ));
+        if let Some(&t) = self.sample_times.iter().find(|t| !t.is_finite()) {
+            return Err(Error::InvalidTimes {
+                t0: t,
+                t1: t,
+                reason: "sample times must be finite",
+            });
+        }
+        if let Some(w) = self.sample_times.windows(2).find(|w| w[0] > w[1]) {
+            return Err(Error::InvalidTimes {
+                t0: w[0],
+                t1: w[1],
+                reason: "sample times must be sorted ascending",
+            });
         }
         Ok(())
     }
@@ -287,20 +294,18 @@ pub fn vector_field<S: DrivenOscillator + ?Sized>(
 
 pub(crate) fn check_interval(t0: f64, x0: [f64; 2], t1: f64) -> Result<()> {
     if !t0.is_finite() || !t1.is_finite() {
-        return Err(Error::InvalidInput(format!(
-            "times must be finite (t0 = {t0}, t1 = {t1})"
-        )));
+        return Err(Error::InvalidTimes {
+            t0,
+            t1,
+            reason: "times must be finite",
+        });
     }
     if t1 < t0 {
-        return Err(Error::InvalidInput(format!(
-            "t1 = {t1} is before t0 = {t0}: only forward integration is supported"
-        )));
+        return Err(Error::InvalidTimes {
+            t0,
+            t1,
+            reason: "t1 is before t0: only forward integration is supported",
+        });
     }
-    if !x0[0].is_finite() || !x0[1].is_finite() {
-        return Err(Error::InvalidInput(format!(
-            "initial state must be finite, got ({}, {})",
-            x0[0], x0[1]
-        )));
-    }
-    Ok(())
+    crate::error::finite_state("initial state", &x0)
 }

@@ -40,9 +40,6 @@ pub struct NonStopOrbit {
     pub phase: f64,
     /// F cos ψ + ω₀² X − μ: the net force beyond friction at a reversal; stops begin where it is 0.
     pub reversal_margin: f64,
-    /// Smallest ẋ on the open upward half period divided by the largest: negative if the velocity
-    /// reverses inside the half period (the closed form then does not describe the motion).
-    pub min_velocity_ratio: f64,
     omega: f64,
     omega0: f64,
     xi: f64,
@@ -52,9 +49,22 @@ pub struct NonStopOrbit {
 
 impl NonStopOrbit {
     /// True if the closed form is a motion without stops: positive reversal margin and no velocity
-    /// reversal inside a half period.
+    /// reversal inside a half period ([`NonStopOrbit::interior_velocity_min`] > 0).
     pub fn is_valid(&self) -> bool {
-        self.reversal_margin > 0.0 && self.min_velocity_ratio > 0.0
+        self.reversal_margin > 0.0 && self.interior_velocity_min().1 > 0.0
+    }
+
+    /// Smallest ẋ on the open upward half period divided by the largest, both located as in
+    /// [`NonStopOrbit::interior_velocity_min`]: negative if the velocity reverses inside the half
+    /// period (the closed form then does not describe the motion), −1 if ẋ ≤ 0 throughout.
+    pub fn min_velocity_ratio(&self) -> f64 {
+        let vmin = self.interior_velocity_min().1;
+        let vmax = -self.interior_extremum(-1.0).1;
+        if vmax > 0.0 {
+            vmin / vmax
+        } else {
+            -1.0
+        }
     }
 
     /// (x, ẋ) at time s after the lower reversal, 0 ≤ s ≤ T/2.
@@ -76,8 +86,14 @@ impl NonStopOrbit {
     /// the lower reversal. Where it is negative the velocity reverses inside the half period: a
     /// stop begins there before the reversal becomes tangential (an interior grazing).
     pub fn interior_velocity_min(&self) -> (f64, f64) {
+        self.interior_extremum(1.0)
+    }
+
+    /// The minimum of `sign`·ẋ on the open upward half period (`sign` = −1: the maximum of ẋ, as
+    /// (s, −ẋ(s))): a grid of 400 points, then golden-section search around the smallest.
+    fn interior_extremum(&self, sign: f64) -> (f64, f64) {
         let h = PI / self.omega;
-        let v = |s: f64| self.upward(s)[1];
+        let v = |s: f64| sign * self.upward(s)[1];
         let n = 400;
         let (mut best, mut vbest) = (1, f64::INFINITY);
         for i in 1..n {
@@ -178,25 +194,16 @@ pub fn non_stop_orbit(osc: &CoulombOscillator) -> Result<NonStopOrbit> {
     // F cos(Ωs + ψ) with a = R cos(ψ − θ), b = −R sin(ψ − θ); F < 0 is F > 0 shifted by π
     let shift = if force < 0.0 { PI } else { 0.0 };
     let phase = (theta + (-b).atan2(a) + shift).rem_euclid(TAU);
-    let mut orbit = NonStopOrbit {
+    Ok(NonStopOrbit {
         amplitude: x_amp,
         phase,
         reversal_margin: force * phase.cos() + w0 * w0 * x_amp - mu,
-        min_velocity_ratio: 0.0,
         omega: w,
         omega0: w0,
         xi,
         mu,
         coef: [a, b, z[2], z[3]],
-    };
-    let n = 400;
-    let v: Vec<f64> = (1..n)
-        .map(|i| orbit.upward(tau * i as f64 / n as f64)[1])
-        .collect();
-    let vmax = v.iter().copied().fold(f64::MIN, f64::max);
-    let vmin = v.iter().copied().fold(f64::MAX, f64::min);
-    orbit.min_velocity_ratio = if vmax > 0.0 { vmin / vmax } else { -1.0 };
-    Ok(orbit)
+    })
 }
 
 /// Den Hartog's amplitude for Coulomb friction alone (ξ = 0):

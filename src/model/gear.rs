@@ -313,6 +313,16 @@ impl Parameter for GearParam {
             GearParam::ThetaDeg => "theta",
         }
     }
+    fn symbol(self) -> &'static str {
+        match self {
+            GearParam::F => "f",
+            GearParam::G => "g",
+            GearParam::Zeta => "ζ",
+            GearParam::Eta => "η",
+            GearParam::Delta => "Δ",
+            GearParam::ThetaDeg => "Θ",
+        }
+    }
     fn unit(self) -> &'static str {
         match self {
             GearParam::F => "Hz",

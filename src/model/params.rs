@@ -35,6 +35,11 @@ pub trait Parameter:
         ""
     }
 
+    /// The symbol for axis labels (e.g. `Θ`); the name unless the system gives one.
+    fn symbol(self) -> &'static str {
+        self.name()
+    }
+
     /// Parses a name (one of [`Parameter::name`] over [`Parameter::ALL`]).
     fn from_name(s: &str) -> Result<Self> {
         Self::ALL
@@ -51,11 +56,11 @@ pub trait Parameter:
             })
     }
 
-    /// `name [unit]` for axis labels.
+    /// `symbol [unit]` for axis labels (`Θ [deg]`), `symbol (dimensionless)` without a unit.
     fn label(self) -> String {
         match self.unit() {
-            "" => self.name().to_string(),
-            u => format!("{} [{u}]", self.name()),
+            "" => format!("{} (dimensionless)", self.symbol()),
+            u => format!("{} [{u}]", self.symbol()),
         }
     }
 }

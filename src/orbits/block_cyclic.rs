@@ -62,7 +62,7 @@ impl CyclicBlockSystem {
     fn dims(&self) -> Result<(usize, usize, usize)> {
         let m = self.diagonal.len();
         if m == 0 {
-            return Err(Error::InvalidInput("no segments".into()));
+            return Err(Error::shape("segments of the cyclic system", ">= 1", 0));
         }
         let n = self.diagonal[0].nrows();
         let p = self.border_param.nrows();
@@ -74,8 +74,10 @@ impl CyclicBlockSystem {
         if ok {
             Ok((m, n, p))
         } else {
-            Err(Error::InvalidInput(
-                "inconsistent block sizes in the cyclic system".into(),
+            Err(Error::shape(
+                "blocks of the cyclic system",
+                format!("{m} diagonal and parameter blocks of sizes {n}×{n}, {n}×{p}"),
+                self.param_columns.len(),
             ))
         }
     }
@@ -107,8 +109,10 @@ impl CyclicBlockSystem {
     pub fn solve(&self, rhs: &[DVector<f64>], rhs_border: &DVector<f64>) -> Result<CyclicSolution> {
         let (m, n, p) = self.dims()?;
         if rhs.len() != m || rhs.iter().any(|r| r.len() != n) || rhs_border.len() != p {
-            return Err(Error::InvalidInput(
-                "right-hand side does not match the cyclic system".into(),
+            return Err(Error::shape(
+                "right-hand sides of the cyclic system",
+                format!("{m} of length {n} and a border of length {p}"),
+                rhs.len(),
             ));
         }
         if m == 1 {

@@ -128,15 +128,10 @@ pub fn evaluate<S: DrivenOscillator + ?Sized>(
 ) -> Result<Segments> {
     let m = states.len();
     if m == 0 {
-        return Err(Error::InvalidInput(
-            "multiple shooting needs >= 1 segment".into(),
-        ));
+        return Err(Error::shape("multiple-shooting segments", ">= 1", 0));
     }
-    if states
-        .iter()
-        .any(|x| !(x[0].is_finite() && x[1].is_finite()))
-    {
-        return Err(Error::InvalidInput("non-finite segment state".into()));
+    for x in states {
+        crate::error::finite_state("segment state", x)?;
     }
     let s = spec.shift(sys)?;
     let sym =
@@ -218,9 +213,7 @@ pub fn segment_states<S: DrivenOscillator + ?Sized>(
     tol: f64,
 ) -> Result<Vec<[f64; 2]>> {
     if m == 0 {
-        return Err(Error::InvalidInput(
-            "multiple shooting needs >= 1 segment".into(),
-        ));
+        return Err(Error::shape("multiple-shooting segments", ">= 1", 0));
     }
     let times = segment_times(sys, spec, m);
     let o = FlowOptions::with_tol(tol);

@@ -7,7 +7,8 @@ use super::{plot_err, Figure, LinePlot, Series};
 use crate::analysis::classify::WindowSample;
 use crate::analysis::HarmonicFit;
 use crate::error::Result;
-use crate::sweep::{PointRecord, SweepParam, SweepResult};
+use crate::model::Parameter;
+use crate::sweep::{PointRecord, SweepResult};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::f64::consts::TAU;
@@ -88,16 +89,6 @@ pub struct RmsMap {
     pub markers: Markers,
 }
 
-fn axis_label(p: SweepParam) -> &'static str {
-    match p {
-        SweepParam::ThetaDeg => "Θ [deg]",
-        SweepParam::F => "f [Hz]",
-        SweepParam::Zeta => "ζ [1/s]",
-        SweepParam::Eta => "η [1/s²]",
-        SweepParam::Inertia => "I [kg m²]",
-    }
-}
-
 impl RmsMap {
     /// The map of a finished sweep (markers: the paper's classes; log x for a wide f axis).
     pub fn from_sweep(res: &SweepResult) -> Self {
@@ -109,8 +100,8 @@ impl RmsMap {
             title: format!("RMS_δ, {:?} protocol", res.spec.protocol),
             rows: res.spec.rows.values.clone(),
             cols,
-            row_label: axis_label(res.spec.rows.param).into(),
-            col_label: axis_label(res.spec.cols.param).into(),
+            row_label: res.spec.rows.param.label(),
+            col_label: res.spec.cols.param.label(),
             log_x: lo > 0.0 && hi / lo > 20.0,
             points: res.points().cloned().collect(),
             vmax: 60.0,

@@ -69,18 +69,6 @@ fn kind_marker<DB: DrawingBackend>(
     }
 }
 
-/// Axis label with unit of a parameter: the gear's with their symbols (Θ [deg], ζ [1/s], …), any
-/// other as [`Parameter::label`].
-pub fn param_axis_label<P: Parameter>(p: P) -> String {
-    match p.name() {
-        "theta" => "Θ [deg]".into(),
-        "zeta" => "ζ [1/s]".into(),
-        "eta" => "η [1/s²]".into(),
-        "delta" => "Δ (dimensionless)".into(),
-        _ => p.label(),
-    }
-}
-
 impl<S: Parametrised> Default for BranchDiagram<S> {
     fn default() -> Self {
         Self {
@@ -287,7 +275,7 @@ impl<S: Parametrised> Figure for BranchDiagram<S> {
         let (pname, xlabel) = self
             .branches
             .first()
-            .map(|b| (b.param.name(), param_axis_label(b.param)))
+            .map(|b| (b.param.name(), b.param.label()))
             .unwrap_or(("parameter", "parameter".into()));
         let mut chart = ChartBuilder::on(&main)
             .caption(&self.title, ("sans-serif", 20))
@@ -485,7 +473,7 @@ impl<S: Parametrised> Figure for BoundaryPlot<S> {
         let (xl, yl) = self
             .curves
             .first()
-            .map(|c| (param_axis_label(c.1.along), param_axis_label(c.1.free)))
+            .map(|c| (c.1.along.label(), c.1.free.label()))
             .unwrap_or_default();
         let mut labels: Vec<&str> = Vec::new();
         for (l, _) in &self.curves {

@@ -87,10 +87,10 @@ pub fn save(fig: &impl Figure, path: impl AsRef<Path>) -> Result<()> {
                 Error::file("move into place", path, e)
             })
         }
-        _ => Err(Error::InvalidInput(format!(
-            "figure path {} must end in .svg or .png",
-            path.display()
-        ))),
+        _ => Err(Error::option(
+            format!("figure path {}", path.display()),
+            "must end in .svg or .png",
+        )),
     }
 }
 

@@ -842,7 +842,9 @@ pub fn compute_report(
     let map = match SweepRunner::new(spec).observer(observer).run()? {
         SweepOutcome::Complete(r) => *r,
         SweepOutcome::Stopped { .. } => {
-            return Err(crate::Error::InvalidInput("report sweep stopped".into()))
+            return Err(crate::Error::Stopped {
+                what: "the report's sweep",
+            })
         }
     };
     let hysteresis =

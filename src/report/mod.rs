@@ -170,8 +170,7 @@ struct Links {
 
 #[cfg(feature = "plot")]
 fn draw_figures(d: &ReportData, dir: &Path) -> Result<Links> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| crate::Error::Io(format!("cannot create {}: {e}", dir.display())))?;
+    std::fs::create_dir_all(dir).map_err(|e| crate::Error::file("create", dir, e))?;
     let f = figures::draw(d, dir)?;
     Ok(Links {
         lock_branch: f.lock_branch,

@@ -22,16 +22,17 @@ impl Shard {
     /// Shard `index` of `count`; an error unless 0 ≤ index < count.
     pub fn new(index: usize, count: usize) -> Result<Self> {
         if count == 0 || index >= count {
-            return Err(Error::InvalidInput(format!(
-                "shard {index}/{count}: need 0 <= index < count"
-            )));
+            return Err(Error::option(
+                format!("shard {index}/{count}"),
+                "need 0 <= index < count",
+            ));
         }
         Ok(Self { index, count })
     }
 
     /// Parses `i/N` (e.g. `3/8`; i is 0-based, as SLURM_ARRAY_TASK_ID with `--array=0-7`).
     pub fn parse(s: &str) -> Result<Self> {
-        let bad = || Error::InvalidInput(format!("--shard `{s}`: expected i/N with 0 <= i < N"));
+        let bad = || Error::option(format!("--shard `{s}`"), "expected i/N with 0 <= i < N");
         let (i, n) = s.split_once('/').ok_or_else(bad)?;
         let i: usize = i.trim().parse().map_err(|_| bad())?;
         let n: usize = n.trim().parse().map_err(|_| bad())?;
@@ -51,10 +52,14 @@ impl Shard {
     /// An error if the shard would hold no row of a sweep with `nrows` rows.
     pub(super) fn check_rows(&self, nrows: usize) -> Result<()> {
         if self.index >= nrows {
-            return Err(Error::InvalidInput(format!(
-                "shard {}/{} is empty: the sweep has only {nrows} rows (use at most {nrows} shards)",
-                self.index, self.count
-            )));
+            return Err(Error::inconsistent(
+                "--shard, rows",
+                format!(
+                    "shard {}/{} is empty: the sweep has only {nrows} rows (use at most {nrows} \
+                     shards)",
+                    self.index, self.count
+                ),
+            ));
         }
         Ok(())
     }
@@ -115,16 +120,18 @@ pub(super) fn check_or_write_manifest(dir: &Path, spec: &SweepSpec, shard: Shard
     if path.exists() {
         let have: Manifest = read_json(&path)?;
         if have != want {
-            return Err(Error::InvalidInput(format!(
-                "checkpoint {} holds shard {}/{} of spec {}, not shard {}/{} of spec {}; use another directory",
-                dir.display(),
+            return Err(Error::checkpoint(
+                dir,
+                format!(
+                "the checkpoint holds shard {}/{} of spec {}, not shard {}/{} of spec {}; use another directory",
                 have.shard.index,
                 have.shard.count,
                 have.spec_hash,
                 shard.index,
                 shard.count,
                 want.spec_hash
-            )));
+            ),
+            ));
         }
         return Ok(());
     }
@@ -142,29 +149,31 @@ fn read_shard(dir: &Path) -> Result<ShardData> {
     let spec_path = dir.join("spec.json");
     let man_path = dir.join(MANIFEST);
     if !man_path.exists() {
-        return Err(Error::InvalidInput(format!(
-            "{} is not a shard checkpoint (no {MANIFEST}; was it run with --shard?)",
-            dir.display()
-        )));
+        return Err(Error::checkpoint(
+            dir,
+            format!("not a shard checkpoint (no {MANIFEST}; was it run with --shard?)"),
+        ));
     }
     let spec: SweepSpec = read_json(&spec_path)?;
     let manifest: Manifest = read_json(&man_path)?;
     let hash = spec_hash(&spec)?;
     if hash != manifest.spec_hash {
-        return Err(Error::InvalidInput(format!(
-            "{}: spec.json hashes to {hash} but the manifest records {}",
-            dir.display(),
-            manifest.spec_hash
-        )));
+        return Err(Error::checkpoint(
+            dir,
+            format!(
+                "spec.json hashes to {hash} but the manifest records {}",
+                manifest.spec_hash
+            ),
+        ));
     }
     // a shard no run can have written (run_shard checks 0 <= i < N and i < rows)
     let Shard { index, count } = manifest.shard;
     let nrows = spec.rows.values.len();
     if count == 0 || index >= count || count > nrows {
-        return Err(Error::InvalidInput(format!(
-            "{}: shard {index}/{count} is impossible for a sweep of {nrows} rows",
-            man_path.display()
-        )));
+        return Err(Error::checkpoint(
+            &man_path,
+            format!("shard {index}/{count} is impossible for a sweep of {nrows} rows"),
+        ));
     }
     Ok(ShardData {
         dir: dir.to_path_buf(),
@@ -179,7 +188,7 @@ fn read_shard(dir: &Path) -> Result<ShardData> {
 pub fn merge_shards(dirs: &[PathBuf]) -> Result<SweepResult> {
     let first = dirs
         .first()
-        .ok_or_else(|| Error::InvalidInput("merge needs at least one shard directory".into()))?;
+        .ok_or_else(|| Error::shape("shard directories to merge", ">= 1", 0))?;
     let shards = dirs
         .iter()
         .map(|d| read_shard(d))
@@ -189,30 +198,36 @@ pub fn merge_shards(dirs: &[PathBuf]) -> Result<SweepResult> {
     let mut seen: Vec<Option<&Path>> = vec![None; count];
     for sd in &shards {
         if sd.manifest.spec_hash != base.manifest.spec_hash || sd.spec != base.spec {
-            return Err(Error::InvalidInput(format!(
-                "shards belong to different sweeps: {} has spec {}, {} has spec {}",
-                first.display(),
-                base.manifest.spec_hash,
-                sd.dir.display(),
-                sd.manifest.spec_hash
-            )));
+            return Err(Error::checkpoint(
+                &sd.dir,
+                format!(
+                    "shards belong to different sweeps: {} has spec {}, this one spec {}",
+                    first.display(),
+                    base.manifest.spec_hash,
+                    sd.manifest.spec_hash
+                ),
+            ));
         }
         let sh = sd.manifest.shard;
         if sh.count != count {
-            return Err(Error::InvalidInput(format!(
-                "shards of different partitions: {} is 1 of {}, {} is 1 of {count}",
-                sd.dir.display(),
-                sh.count,
-                first.display()
-            )));
+            return Err(Error::checkpoint(
+                &sd.dir,
+                format!(
+                    "shards of different partitions: this one is 1 of {}, {} is 1 of {count}",
+                    sh.count,
+                    first.display()
+                ),
+            ));
         }
         if let Some(prev) = seen[sh.index] {
-            return Err(Error::InvalidInput(format!(
-                "shard {}/{count} given twice: {} and {}",
-                sh.index,
-                prev.display(),
-                sd.dir.display()
-            )));
+            return Err(Error::checkpoint(
+                &sd.dir,
+                format!(
+                    "shard {}/{count} given twice: {} and this one",
+                    sh.index,
+                    prev.display()
+                ),
+            ));
         }
         seen[sh.index] = Some(&sd.dir);
     }
@@ -221,10 +236,10 @@ pub fn merge_shards(dirs: &[PathBuf]) -> Result<SweepResult> {
         .map(|i| format!("{i}/{count}"))
         .collect();
     if !missing.is_empty() {
-        return Err(Error::InvalidInput(format!(
-            "shards missing: {}",
-            missing.join(", ")
-        )));
+        return Err(Error::checkpoint(
+            first,
+            format!("shards of this sweep missing: {}", missing.join(", ")),
+        ));
     }
     let spec = base.spec.clone();
     let nrows = spec.rows.values.len();
@@ -241,22 +256,24 @@ pub fn merge_shards(dirs: &[PathBuf]) -> Result<SweepResult> {
             }
             let r: RowResult = read_json(&p)?;
             if !spec.row_matches(i, &r) {
-                return Err(Error::InvalidInput(format!(
-                    "{}: row file does not hold row {i} of this spec with {ncols} points",
-                    p.display()
-                )));
+                return Err(Error::checkpoint(
+                    &p,
+                    format!("the row file does not hold row {i} of this spec with {ncols} points"),
+                ));
             }
             rows[i] = Some(r);
         }
         if !absent.is_empty() {
-            return Err(Error::InvalidInput(format!(
-                "shard {}/{count} in {} is incomplete: {} of its {} rows missing (first: row {}); rerun its command to resume",
+            return Err(Error::checkpoint(
+                &sd.dir,
+                format!(
+                "shard {}/{count} is incomplete: {} of its {} rows missing (first: row {}); rerun its command to resume",
                 sh.index,
-                sd.dir.display(),
                 absent.len(),
                 sh.rows(nrows).count(),
                 absent[0]
-            )));
+            ),
+            ));
         }
     }
     Ok(SweepResult {
