@@ -170,7 +170,7 @@ pub enum Error {
     /// A continuation could not proceed.
     #[error("continuation stopped: {0}")]
     Continuation(String),
-    /// Reading or parsing input files failed (without an underlying error to carry).
+    /// A plotting backend failed; its message is kept as text.
     #[error("{0}")]
     Io(String),
     /// A file or folder could not be read, written, created or moved into place.
@@ -195,7 +195,29 @@ pub enum Error {
         #[source]
         source: Source,
     },
-    /// The requested operation is not available for this system (e.g. no half-period symmetry).
+    /// The half-period section G was asked of a system that declares no half-period symmetry
+    /// ([`crate::model::DrivenOscillator::half_period_symmetry`]).
+    #[error("unsupported: this system has no half-period symmetry (use the stroboscopic section)")]
+    NoHalfPeriodSymmetry,
+    /// A flow method returned no Jacobian where one was asked for (`what`: "state" for ∂x/∂x₀,
+    /// "parameter" for ∂x/∂p): the method does not propagate sensitivities.
+    #[error("unsupported: the flow method returned no {what} Jacobian")]
+    MissingJacobian {
+        /// "state" or "parameter".
+        what: &'static str,
+    },
+    /// The gear never locks or has no viscous limit: f_c = (g − η)/(2πζ) needs ζ > 0 and g > η.
+    #[error("unsupported: no lock-loss frequency f_c = (g − η)/(2πζ) for g = {}, ζ = {}, η = {} (needs ζ > 0 and g > η)", show(*g), show(*zeta), show(*eta))]
+    NoLockLossFrequency {
+        /// Coupling g, s⁻².
+        g: f64,
+        /// Viscous damping ζ, s⁻¹.
+        zeta: f64,
+        /// Dry friction η, s⁻².
+        eta: f64,
+    },
+    /// The requested operation is not available for this system (e.g. the gear's lock branch of
+    /// an oscillator, a closed form outside its range).
     #[error("unsupported: {0}")]
     Unsupported(String),
     /// An input file is malformed: a recording set's experiment.toml or CSV file, a `--config`
@@ -363,48 +385,6 @@ pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::{fit_harmonics, ClassifyOptions};
-    use crate::integrator::{EventDriven, FlowMethod, FlowOptions};
-    use crate::model::Gear;
-    use crate::sweep::{merge_shards, Axis, SweepSpec};
-
-    #[test]
-    fn bad_inputs_give_their_specific_variant() {
-        let gear = Gear::paper(0.0, 1.0).unwrap();
-        let o = FlowOptions::with_tol(1e-8);
-        let m = &EventDriven;
-        assert!(matches!(
-            m.flow(&gear, 1.0, [0.0, 0.0], 0.5, &o),
-            Err(Error::InvalidTimes { t0, t1, .. }) if t0 == 1.0 && t1 == 0.5
-        ));
-        assert!(matches!(
-            m.flow(&gear, 0.0, [f64::NAN, 0.0], 1.0, &o),
-            Err(Error::NonFiniteState { what: "initial state", ref state })
-                if state[0].is_nan() && state[1] == 0.0
-        ));
-        let opts = ClassifyOptions {
-            record_turns: 0,
-            ..ClassifyOptions::default()
-        };
-        assert!(matches!(
-            opts.validate(),
-            Err(Error::InvalidOption { ref option, .. }) if option == "record_turns"
-        ));
-        assert!(matches!(
-            fit_harmonics(&[0.0; 20], &[0.0; 19], 7),
-            Err(Error::Shape { expected, got: 19, .. }) if expected.starts_with("20")
-        ));
-        let axis = Axis::parse("f:1:2:0.5").unwrap();
-        let spec = SweepSpec::paper_fig7(axis.clone(), axis);
-        assert!(matches!(
-            spec.validate(),
-            Err(Error::InconsistentOptions { ref options, .. }) if options == "rows, cols"
-        ));
-        assert!(matches!(
-            merge_shards(&[]),
-            Err(Error::Shape { got: 0, .. })
-        ));
-    }
 
     #[test]
     fn unknown_names_list_the_accepted_ones() {

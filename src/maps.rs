@@ -81,13 +81,13 @@ where
     if iterations == 0 {
         return Err(Error::option("iterations", "must be >= 1, got 0"));
     }
-    let sym =
-        match section {
-            Section::Stroboscopic => None,
-            Section::HalfPeriod => Some(sys.half_period_symmetry().ok_or_else(|| {
-                Error::Unsupported("this system has no half-period symmetry".into())
-            })?),
-        };
+    let sym = match section {
+        Section::Stroboscopic => None,
+        Section::HalfPeriod => Some(
+            sys.half_period_symmetry()
+                .ok_or(Error::NoHalfPeriodSymmetry)?,
+        ),
+    };
     let k = iterations as f64 * section.periods();
     let t1 = k * sys.period();
     let flow = method.flow(sys, 0.0, x, t1, opts)?;

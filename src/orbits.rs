@@ -75,9 +75,9 @@ impl OrbitSpec {
         match self.section {
             Section::Stroboscopic => Ok(TAU * self.winding as f64),
             Section::HalfPeriod => {
-                let r = sys.half_period_symmetry().ok_or_else(|| {
-                    Error::Unsupported("this system has no half-period symmetry".into())
-                })?;
+                let r = sys
+                    .half_period_symmetry()
+                    .ok_or(Error::NoHalfPeriodSymmetry)?;
                 if r.sign > 0.0 {
                     Ok(self.iterations as f64 * (PI * self.winding as f64 - r.shift))
                 } else if self.winding == 0 {
@@ -381,11 +381,7 @@ where
     check_state(x0)?;
     let eval = |x: &Vector2<f64>| -> Result<Linearisation<2, MapImage>> {
         let (r, img) = residual_with(method, sys, spec, [x[0], x[1]], opts, true)?;
-        let jac = img.jac_x.ok_or_else(|| Error::NewtonFailed {
-            iterations: 0,
-            residual: f64::NAN,
-            reason: "map returned no Jacobian".into(),
-        })?;
+        let jac = img.jac_x.ok_or(Error::MissingJacobian { what: "state" })?;
         Ok(Linearisation {
             residual: Vector2::from(r),
             jacobian: jac - Matrix2::identity(),

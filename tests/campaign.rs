@@ -129,11 +129,9 @@ fn every_effect_generates_a_readable_set() {
 
 /// The CI campaign, run once for the tests below: tiny sets (4 ring-downs of 2 s, 2 driven runs of
 /// 8 turns); 20 seeds of the plain control; 8 seeds of a static torque with a sin 2β part
-/// (A₁ = 12 s⁻², twice its reference size). The latency effect is left out here: on these tiny
-/// sets one seed in eight takes minutes (runaway held-out simulations of a
-/// condition-dependent candidate with one of the two driven runs left out: docs/performance.md);
-/// tests/identification.rs covers latency with a static torque. Measured: the whole file 89 s CPU
-/// (`user`) in the test profile, 2026-11-24.
+/// (A₁ = 12 s⁻², twice its reference size). The latency effect is left out for its cost: 8 seeds
+/// of it at level 2 took 68 s CPU in the release build (docs/diagnosis.md, "Campaigns");
+/// tests/identification.rs covers latency with a static torque.
 fn ci_campaign() -> &'static CampaignDoc {
     static DOC: OnceLock<CampaignDoc> = OnceLock::new();
     DOC.get_or_init(|| {

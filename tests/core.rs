@@ -394,30 +394,89 @@ fn fixed_step_converges_to_event_driven() {
 
 #[test]
 fn bad_input_gives_errors_not_panics() {
+    use gearbif::Error;
     let gear = Gear::paper(25.0, 2.7).unwrap();
     let o = FlowOptions::default();
-    assert!(EventDriven
-        .flow(&gear, 0.0, [f64::NAN, 0.0], 1.0, &o)
-        .is_err());
-    assert!(EventDriven
-        .flow(&gear, 0.0, [0.0, 0.0], f64::INFINITY, &o)
-        .is_err());
-    assert!(EventDriven.flow(&gear, 1.0, [0.0, 0.0], 0.0, &o).is_err());
+    assert!(matches!(
+        EventDriven.flow(&gear, 0.0, [f64::NAN, 0.0], 1.0, &o),
+        Err(Error::NonFiniteState { what: "initial state", ref state })
+            if state[0].is_nan() && state[1] == 0.0
+    ));
+    assert!(matches!(
+        EventDriven.flow(&gear, 0.0, [0.0, 0.0], f64::INFINITY, &o),
+        Err(Error::InvalidTimes { t1, .. }) if t1 == f64::INFINITY
+    ));
+    assert!(matches!(
+        EventDriven.flow(&gear, 1.0, [0.0, 0.0], 0.0, &o),
+        Err(Error::InvalidTimes { t0, t1, .. }) if t0 == 1.0 && t1 == 0.0
+    ));
     let bad = FlowOptions {
         rtol: -1.0,
         ..FlowOptions::default()
     };
-    assert!(EventDriven.flow(&gear, 0.0, [0.0, 0.0], 1.0, &bad).is_err());
-    assert!(Gear::paper(f64::NAN, 1.0).is_err());
-    assert!(poincare_map(
-        &EventDriven,
-        &gear,
-        Section::Stroboscopic,
-        [0.0, 0.0],
-        0,
-        &o
-    )
-    .is_err());
+    assert!(matches!(
+        EventDriven.flow(&gear, 0.0, [0.0, 0.0], 1.0, &bad),
+        Err(Error::InvalidParameter { name: "rtol", .. })
+    ));
+    let unsorted = FlowOptions::default().samples(vec![0.5, 0.2]);
+    assert!(matches!(
+        EventDriven.flow(&gear, 0.0, [0.0, 0.0], 1.0, &unsorted),
+        Err(Error::InvalidTimes { t0, t1, .. }) if t0 == 0.5 && t1 == 0.2
+    ));
+    assert!(matches!(
+        Gear::paper(f64::NAN, 1.0),
+        Err(Error::InvalidParameter { .. })
+    ));
+    assert!(matches!(
+        poincare_map(
+            &EventDriven,
+            &gear,
+            Section::Stroboscopic,
+            [0.0, 0.0],
+            0,
+            &o
+        ),
+        Err(Error::InvalidOption { ref option, .. }) if option == "iterations"
+    ));
+}
+
+/// Bad options of the analyses, sweeps and curves give their specific error variant.
+#[test]
+fn bad_options_give_their_specific_variant() {
+    use gearbif::analysis::{fit_harmonics, ClassifyOptions};
+    use gearbif::continuation::two_param::lock_loss_boundary;
+    use gearbif::sweep::{merge_shards, Axis, SweepSpec};
+    use gearbif::Error;
+    let opts = ClassifyOptions {
+        record_turns: 0,
+        ..ClassifyOptions::default()
+    };
+    assert!(matches!(
+        opts.validate(),
+        Err(Error::InvalidOption { ref option, .. }) if option == "record_turns"
+    ));
+    assert!(matches!(
+        fit_harmonics(&[0.0; 20], &[0.0; 19], 7),
+        Err(Error::Shape { expected, got: 19, .. }) if expected.starts_with("20")
+    ));
+    let axis = Axis::parse("f:1:2:0.5").unwrap();
+    assert!(matches!(
+        SweepSpec::paper_fig7(axis.clone(), axis).validate(),
+        Err(Error::InconsistentOptions { ref options, .. }) if options == "rows, cols"
+    ));
+    assert!(matches!(
+        Axis::parse("mass:0:1:1"),
+        Err(Error::UnknownParameter { ref name, .. }) if name == "mass"
+    ));
+    assert!(matches!(
+        merge_shards(&[]),
+        Err(Error::Shape { got: 0, .. })
+    ));
+    let no_viscosity = Gear::new(400.0, 1.0, 0.0, 23.1, 1.0).unwrap();
+    assert!(matches!(
+        lock_loss_boundary(&no_viscosity, 5.0, &Default::default()),
+        Err(Error::NoLockLossFrequency { zeta, .. }) if zeta == 0.0
+    ));
 }
 
 #[test]

@@ -65,12 +65,13 @@ impl ClassifyArgs {
     }
 }
 
-/// The default start: (π/2, 0) for the gear (the paper's Fig. 6 start β = 90°), the rest state
-/// (0, 0) otherwise.
-fn default_start(sys: &System) -> [f64; 2] {
-    match sys {
-        System::Gear(_) => [std::f64::consts::FRAC_PI_2, 0.0],
-        _ => [0.0, 0.0],
+/// The start state `x0` of `classify` and `sweep_grid`, validated; by default (π/2, 0) for the
+/// gear (the paper's Fig. 6 start β = 90°), the rest state (0, 0) otherwise.
+fn start(sys: &System, x0: Option<&Bound<'_, PyAny>>) -> PyResult<[f64; 2]> {
+    match (x0, sys) {
+        (Some(x), _) => state(x, "x0"),
+        (None, System::Gear(_)) => Ok([std::f64::consts::FRAC_PI_2, 0.0]),
+        (None, _) => Ok([0.0, 0.0]),
     }
 }
 
@@ -103,10 +104,7 @@ fn classify<'py>(
     keep_samples: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let sys = crate::systems::system(system)?;
-    let x0 = match x0 {
-        Some(x) => state(x, "x0")?,
-        None => default_start(&sys),
-    };
+    let x0 = start(&sys, x0)?;
     let opts = ClassifyArgs {
         settle_turns,
         record_turns,
@@ -217,10 +215,7 @@ fn sweep_grid_py<'py>(
     let sys = crate::systems::system(system)?;
     let (rname, rvals) = grid_axis(rows, "rows")?;
     let (cname, cvals) = grid_axis(cols, "cols")?;
-    let x0 = match x0 {
-        Some(x) => state(x, "x0")?,
-        None => default_start(&sys),
-    };
+    let x0 = start(&sys, x0)?;
     let protocol = self::protocol(protocol)?;
     let opts = ClassifyArgs {
         settle_turns,

@@ -99,7 +99,10 @@ pub fn to_py(e: Error) -> PyErr {
         Error::NewtonFailed { .. } => NewtonError::new_err(msg),
         Error::Continuation(_) => ContinuationError::new_err(msg),
         Error::Io(_) | Error::File { .. } | Error::Format { .. } => GearbifIOError::new_err(msg),
-        Error::Unsupported(_) => UnsupportedError::new_err(msg),
+        Error::Unsupported(_)
+        | Error::NoHalfPeriodSymmetry
+        | Error::MissingJacobian { .. }
+        | Error::NoLockLossFrequency { .. } => UnsupportedError::new_err(msg),
         Error::Recording { file, line, .. } => {
             let err = RecordingError::new_err(msg);
             Python::attach(|py| {

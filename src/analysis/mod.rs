@@ -6,6 +6,7 @@ pub mod classify;
 pub mod global_events;
 pub mod harmonic;
 pub mod lyapunov;
+pub mod relock;
 
 pub use classify::{
     classify_point, paper_fig6_start, rigorous_classify, ClassifyOptions, Dynamics, PointResult,

@@ -59,6 +59,10 @@ pub struct CaseResult {
     pub coverage: Vec<CoverageEntry>,
     /// Wall time of the diagnosis, s.
     pub seconds: f64,
+    /// Whether the report says a held-out mismatch above the camera noise remains after the
+    /// findings (report key `remaining`; `None` when it has none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub remaining_above_noise: Option<bool>,
     /// The error, if the diagnosis failed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,

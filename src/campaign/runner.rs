@@ -64,11 +64,10 @@ impl CampaignSpec {
         }
         for &l in &self.levels {
             if !(l.is_finite() && l > 0.0) {
-                return Err(Error::InvalidParameter {
-                    name: "level",
-                    value: l,
-                    reason: "must be finite and > 0",
-                });
+                return Err(Error::option(
+                    format!("level {l}"),
+                    "must be finite and > 0",
+                ));
             }
         }
         if !(self.rk4_step_s.is_finite() && self.rk4_step_s > 0.0 && self.rk4_step_s <= 0.01) {
@@ -146,6 +145,11 @@ pub fn run_case(
         let _ = std::fs::remove_dir_all(&dir);
     }
     let expected: Vec<String> = case.effect.expected.iter().map(|s| s.to_string()).collect();
+    let remaining_above_noise = diag
+        .as_ref()
+        .ok()
+        .and_then(|d| d.report.remaining.as_ref())
+        .map(|r| !r.within_noise);
     let (verdict, findings, error) = match diag {
         Ok(d) => (
             d.report.verdict.clone(),
@@ -174,6 +178,7 @@ pub fn run_case(
         findings,
         truths: g.truths,
         seconds,
+        remaining_above_noise,
         error,
     })
 }

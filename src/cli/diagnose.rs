@@ -48,11 +48,14 @@ pub fn run(a: Args) -> Result<()> {
     };
     let d = diagnose(&set, &opts, &|s| {
         if a.timing {
+            let sims = crate::identification::predict::simulations();
+            let (steps, over) = crate::identification::predict::simulation_steps();
             eprintln!(
-                "[{:6.1} s, cpu {:6.1} s, {:8} sims] {s}",
+                "[{:6.1} s, cpu {:6.1} s, {:8} sims, {:5.0} steps/sim, {over} over budget] {s}",
                 t0.elapsed().as_secs_f64(),
                 cpu_seconds().unwrap_or(f64::NAN),
-                crate::identification::predict::simulations()
+                sims,
+                steps as f64 / sims.max(1) as f64
             )
         } else {
             eprintln!("[{:6.1} s] {s}", t0.elapsed().as_secs_f64())

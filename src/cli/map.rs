@@ -90,12 +90,10 @@ pub fn run(a: Args) -> Result<()> {
     };
     let opts = FlowOptions::with_tol(a.method.tol).sensitivity(Sensitivity::StateAndParams);
     let img = poincare_map(method.as_ref(), &gear, section, x, a.iterations, &opts)?;
-    let jx = img
-        .jac_x
-        .ok_or_else(|| Error::Unsupported("the method returned no state Jacobian".into()))?;
+    let jx = img.jac_x.ok_or(Error::MissingJacobian { what: "state" })?;
     let jp = img
         .jac_p
-        .ok_or_else(|| Error::Unsupported("the method returned no parameter Jacobian".into()))?;
+        .ok_or(Error::MissingJacobian { what: "parameter" })?;
     let mu = multipliers(&jx);
     let np = gear.n_params();
     let report = MapReport {

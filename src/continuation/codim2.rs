@@ -13,6 +13,8 @@
 //! | symmetry-breaking (G-multiplier −1) | fold of the symmetric orbit at the SB point (μ₂,G = 1) | det G + 1 |
 //! | symmetry-breaking | double −1 of G (1:1 resonance of P_T = R²G²) | det G − 1 |
 //! | Neimark–Sacker (det M = 1) | 1:1, 1:2, 1:3, 1:4 resonances | tr M − 2, tr M + 2, tr M + 1, tr M |
+//! | grazing (one-sided orbit touches Σ) | fold–grazing (μ = 1) | 1 − tr M + det M |
+//! | grazing | flip–grazing (μ = −1; on G: symmetry-breaking–grazing) | 1 + tr M + det M |
 //! | any | turning point in either parameter | dλ/ds of the unit tangent |
 //!
 //! On a fold curve g_x·v = 0 is equivalent to the tangent having no λ-component (the fold equation's
@@ -42,6 +44,11 @@ pub enum Codim2Kind {
     Resonance1To3,
     /// Strong resonance 1:4 (multipliers ±i).
     Resonance1To4,
+    /// On a grazing curve: the grazing orbit also folds (multiplier +1 of the one-sided map).
+    FoldGrazing,
+    /// On a grazing curve: a multiplier −1 of the one-sided map (on the half-period map G, a
+    /// symmetry-breaking point of the grazing orbit).
+    FlipGrazing,
     /// The curve turns back in the solved-for parameter.
     TurningFree,
     /// The curve turns back in the other parameter (for symmetry-breaking curves: two
@@ -60,6 +67,8 @@ impl Codim2Kind {
             Codim2Kind::Resonance1To2 => "1:2 resonance",
             Codim2Kind::Resonance1To3 => "1:3 resonance",
             Codim2Kind::Resonance1To4 => "1:4 resonance",
+            Codim2Kind::FoldGrazing => "fold-grazing",
+            Codim2Kind::FlipGrazing => "flip-grazing",
             Codim2Kind::TurningFree => "turning point in the free parameter",
             Codim2Kind::TurningAlong => "turning point in the stepped parameter",
         }
@@ -131,7 +140,10 @@ pub fn test_functions(kind: SpecialKind, p: &CurveLocal) -> Vec<(Codim2Kind, f64
             out.push((Codim2Kind::Resonance1To3, tr + 1.0));
             out.push((Codim2Kind::Resonance1To4, tr));
         }
-        SpecialKind::Nonsmooth => {}
+        SpecialKind::Nonsmooth => {
+            out.push((Codim2Kind::FoldGrazing, p.floquet.fold_test()));
+            out.push((Codim2Kind::FlipGrazing, p.floquet.flip_test()));
+        }
     }
     out
 }

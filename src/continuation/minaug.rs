@@ -58,13 +58,11 @@ pub fn linearise_map<S: Parametrised, M: FlowMethod<S>>(
     opts: &ShootingOptions,
 ) -> Result<MapLinearisation> {
     let (residual, img) = residual_with(method, sys, spec, x, opts, true)?;
-    let jac = img
-        .jac_x
-        .ok_or_else(|| Error::Continuation("map returned no state Jacobian".into()))?;
+    let jac = img.jac_x.ok_or(Error::MissingJacobian { what: "state" })?;
     let jp = img
         .jac_p
         .as_ref()
-        .ok_or_else(|| Error::Continuation("map returned no parameter Jacobian".into()))?;
+        .ok_or(Error::MissingJacobian { what: "parameter" })?;
     let columns = params
         .iter()
         .map(|&p| param_derivative(sys, p, jp))
@@ -145,7 +143,8 @@ pub fn bordered_test(
 /// (over the orbit's map if longer), from `x` on the section. It is positive while the orbit stays
 /// on one side of Σ = {ω = 0}, and zero where it touches Σ with ω̇ = 0 there (grazing; for dry
 /// friction with |a| ≤ r at the touch point, the onset of sticking). The minimum is found on 400
-/// dense-output samples and refined on 40 samples around the smallest; ω is then evaluated by the
+/// dense-output samples (two more past the end, so a minimum at the section is found inside the
+/// window) and refined on 40 samples around the smallest; ω is then evaluated by the
 /// flow at the vertex time of the parabola through the three smallest samples (error ½ω̈δt² from
 /// the vertex time's error δt ~ ω‴h²/ω̈, h = T/16000, plus the integrator's).
 pub fn grazing_margin<S: Parametrised, M: FlowMethod<S>>(
@@ -156,7 +155,7 @@ pub fn grazing_margin<S: Parametrised, M: FlowMethod<S>>(
     side: f64,
     tol: f64,
 ) -> Result<f64> {
-    let t1 = spec.periods().ceil().max(1.0) * sys.period();
+    let t1 = spec.periods() * sys.period();
     let sample = |a: f64, b: f64, n: usize| -> Result<Vec<(f64, f64)>> {
         let times: Vec<f64> = (0..=n).map(|i| a + (b - a) * i as f64 / n as f64).collect();
         let opts = FlowOptions::with_tol(tol).samples(times);
@@ -168,12 +167,11 @@ pub fn grazing_margin<S: Parametrised, M: FlowMethod<S>>(
             .min_by(|&i, &j| v[i].1.total_cmp(&v[j].1))
             .unwrap_or(0)
     };
-    let coarse = sample(0.0, t1, 400)?;
-    let i = argmin(&coarse);
-    let (a, b) = (
-        coarse[i.saturating_sub(1)].0,
-        coarse[(i + 1).min(coarse.len() - 1)].0,
-    );
+    // two samples past the end, so that a minimum at t ≈ 0 ≡ t1 (mod the period) is interior
+    let n = 400;
+    let coarse = sample(0.0, t1 * (1.0 + 2.0 / n as f64), n + 2)?;
+    let i = 1 + argmin(&coarse[1..=n]);
+    let (a, b) = (coarse[i - 1].0, coarse[i + 1].0);
     let fine = sample(a, b, 40)?;
     let j = argmin(&fine);
     if j == 0 || j + 1 >= fine.len() {
@@ -190,6 +188,79 @@ pub fn grazing_margin<S: Parametrised, M: FlowMethod<S>>(
     let t_min = fine[j].0 + 0.5 * h * (y0 - y2) / curv;
     let fl = method.flow(sys, 0.0, x, t_min, &FlowOptions::with_tol(tol))?;
     Ok(side * fl.x[1])
+}
+
+/// The edge margin of one arrival on Σ: a(t, β, 0) − σ r_s(t, β) at the arrival's time `t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArrivalEdge {
+    /// The margin (zero where the arrival lies on the edge σ of the stick region).
+    pub margin: f64,
+    /// Time of the arrival.
+    pub t: f64,
+}
+
+/// The arrivals on Σ (stick entries and crossings) of the orbit from `x` over the map's duration.
+fn arrivals<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    x: [f64; 2],
+    tol: f64,
+) -> Result<Vec<crate::integrator::Event>> {
+    use crate::integrator::EventKind;
+    let t1 = spec.periods() * sys.period();
+    let fl = method.flow(
+        sys,
+        0.0,
+        x,
+        t1,
+        &FlowOptions::with_tol(tol).record_events(true),
+    )?;
+    Ok(fl
+        .events
+        .into_iter()
+        .filter(|e| matches!(e.kind, EventKind::StickStart | EventKind::Crossing { .. }))
+        .collect())
+}
+
+/// The edge margin a − σ r_s of the orbit's arrival on Σ nearest in time to `t_ref`.
+pub fn arrival_edge<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    x: [f64; 2],
+    sigma: f64,
+    t_ref: f64,
+    tol: f64,
+) -> Result<ArrivalEdge> {
+    let ev = arrivals(method, sys, spec, x, tol)?;
+    let e = ev
+        .iter()
+        .min_by(|a, b| (a.t - t_ref).abs().total_cmp(&(b.t - t_ref).abs()))
+        .ok_or_else(|| Error::Continuation("the orbit has no arrival on Σ to track".into()))?;
+    Ok(ArrivalEdge {
+        margin: sys.forces(e.t, e.beta, 0.0).a - sigma * sys.static_friction(e.t, e.beta),
+        t: e.t,
+    })
+}
+
+/// The arrival on Σ whose |a| is nearest to the static bound r_s: (σ = sgn a, its time).
+pub fn nearest_edge_arrival<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    x: [f64; 2],
+    tol: f64,
+) -> Result<(f64, f64)> {
+    let ev = arrivals(method, sys, spec, x, tol)?;
+    let gap = |e: &crate::integrator::Event| {
+        (sys.forces(e.t, e.beta, 0.0).a.abs() - sys.static_friction(e.t, e.beta)).abs()
+    };
+    let e = ev
+        .iter()
+        .min_by(|a, b| gap(a).total_cmp(&gap(b)))
+        .ok_or_else(|| Error::Continuation("the orbit has no arrival on Σ".into()))?;
+    Ok((sys.forces(e.t, e.beta, 0.0).a.signum(), e.t))
 }
 
 /// Unit vector along `v` (unchanged if it is zero or not finite).

@@ -85,14 +85,12 @@ impl<S: Parametrised> MsState<S> {
         let mut diagonal = Vec::with_capacity(seg.images.len());
         let mut param_columns = Vec::with_capacity(seg.images.len());
         for img in &seg.images {
-            let b = img
-                .jac_x
-                .ok_or_else(|| Error::Continuation("segment without Jacobian".into()))?;
+            let b = img.jac_x.ok_or(Error::MissingJacobian { what: "state" })?;
             diagonal.push(DMatrix::from_column_slice(2, 2, b.as_slice()));
             let jp = img
                 .jac_p
                 .as_ref()
-                .ok_or_else(|| Error::Continuation("segment without parameter Jacobian".into()))?;
+                .ok_or(Error::MissingJacobian { what: "parameter" })?;
             let c = param_derivative(&sys, self.param, jp)?;
             param_columns.push(DMatrix::from_column_slice(2, 1, &c));
         }
@@ -184,7 +182,7 @@ impl<S: Parametrised> MsState<S> {
         let floquet = self
             .seg
             .floquet()
-            .ok_or_else(|| Error::Continuation("segment without Jacobian".into()))?;
+            .ok_or(Error::MissingJacobian { what: "state" })?;
         Ok(BranchPoint {
             param: self.lam,
             x: self.y[0],

@@ -52,32 +52,65 @@ impl Default for ContinuationOptions {
 impl ContinuationOptions {
     /// Checks the step sizes and the parameter range.
     pub fn validate(&self) -> crate::Result<()> {
-        use crate::error::Error;
-        let bad = |name: &'static str, value: f64, reason: &'static str| {
-            Err(Error::InvalidParameter {
-                name,
-                value,
-                reason,
-            })
-        };
-        if !(self.ds.is_finite() && self.ds != 0.0) {
-            return bad("ds", self.ds, "must be finite and non-zero");
-        }
-        crate::error::positive("ds_min", self.ds_min)?;
-        if !(self.ds_max >= self.ds_min && self.ds.abs() >= self.ds_min) {
-            return bad("ds_max", self.ds_max, "need 0 < ds_min <= |ds| <= ds_max");
-        }
-        if self.param_min.is_nan() || self.param_max.is_nan() || self.param_min > self.param_max {
-            return bad(
-                "param_min",
-                self.param_min,
-                "the parameter range must be ordered",
-            );
-        }
-        crate::error::positive("shooting.newton_tol", self.shooting.newton_tol)?;
-        crate::error::positive("shooting.tol", self.shooting.tol)?;
-        crate::error::positive("locate_tol", self.locate_tol)?;
-        crate::error::positive("omega_weight", self.omega_weight)?;
-        Ok(())
+        check_steps(self.ds, self.ds_min, self.ds_max, self.max_steps)?;
+        check_range("param_min", (self.param_min, self.param_max))?;
+        check_accuracy(&self.shooting, self.locate_tol, self.omega_weight)
     }
+}
+
+/// The step checks shared by one- and two-parameter continuation ([`ContinuationOptions`],
+/// [`super::palc2::CurveOptions`]): ds finite and non-zero, 0 < ds_min ≤ |ds| ≤ ds_max, at least
+/// one step.
+pub(crate) fn check_steps(
+    ds: f64,
+    ds_min: f64,
+    ds_max: f64,
+    max_steps: usize,
+) -> crate::Result<()> {
+    use crate::error::Error;
+    if !(ds.is_finite() && ds != 0.0) {
+        return Err(Error::InvalidParameter {
+            name: "ds",
+            value: ds,
+            reason: "must be finite and non-zero",
+        });
+    }
+    crate::error::positive("ds_min", ds_min)?;
+    if !(ds_max >= ds_min && ds.abs() >= ds_min) {
+        return Err(Error::InvalidParameter {
+            name: "ds_max",
+            value: ds_max,
+            reason: "need 0 < ds_min <= |ds| <= ds_max",
+        });
+    }
+    if max_steps == 0 {
+        return Err(Error::option("max_steps", "must be >= 1, got 0"));
+    }
+    Ok(())
+}
+
+/// A parameter range (lo, hi) that is ordered and not NaN (infinite ends allowed); `name` names
+/// its lower end in the error.
+pub(crate) fn check_range(name: &'static str, (lo, hi): (f64, f64)) -> crate::Result<()> {
+    if lo.is_nan() || hi.is_nan() || lo > hi {
+        return Err(crate::Error::InvalidParameter {
+            name,
+            value: lo,
+            reason: "the parameter range must be ordered",
+        });
+    }
+    Ok(())
+}
+
+/// The tolerances and weights shared by one- and two-parameter continuation: all > 0.
+pub(crate) fn check_accuracy(
+    shooting: &ShootingOptions,
+    locate_tol: f64,
+    omega_weight: f64,
+) -> crate::Result<()> {
+    crate::error::positive("shooting.newton_tol", shooting.newton_tol)?;
+    crate::error::positive("shooting.tol", shooting.tol)?;
+    crate::error::positive("locate_tol", locate_tol)?;
+    crate::error::positive("omega_weight", omega_weight)?;
+    Ok(())
 }

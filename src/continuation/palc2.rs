@@ -20,12 +20,16 @@
 //! dropped.
 
 use super::codim2::{test_functions, Codim2Kind, Codim2Point, CurveLocal};
-use super::minaug::{bordered_test, critical_multiplier, linearise_map, unit, MapLinearisation};
+use super::minaug::{
+    arrival_edge, bordered_test, critical_multiplier, grazing_margin, linearise_map,
+    nearest_edge_arrival, unit, MapLinearisation,
+};
+use super::options::{check_accuracy, check_range, check_steps};
 use super::two_param::{check_curve_args, lock_loss_starts, Curve, CurvePoint, CurveStop};
 use super::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::FlowMethod;
-use crate::model::{Parameter, Parametrised};
+use crate::model::{OneSided, Parameter, Parametrised};
 use crate::numerics::{newton, Illinois, Linearisation, NewtonOptions};
 use crate::orbits::{OrbitSpec, ShootingOptions};
 use nalgebra::{Matrix4, Vector4};
@@ -54,6 +58,14 @@ pub struct CurveOptions {
     pub detect: bool,
     /// Width of the final bracket (scaled arclength) of a located codimension-two point.
     pub locate_tol: f64,
+    /// Stop when the spectral radius of the orbit's map exceeds this (single shooting loses about
+    /// log₁₀|μ| digits); unlimited by default.
+    #[serde(default = "unlimited")]
+    pub max_multiplier: f64,
+}
+
+fn unlimited() -> f64 {
+    f64::INFINITY
 }
 
 impl Default for CurveOptions {
@@ -69,34 +81,26 @@ impl Default for CurveOptions {
             shooting: ShootingOptions::default(),
             detect: true,
             locate_tol: 1e-9,
+            max_multiplier: f64::INFINITY,
         }
     }
 }
 
 impl CurveOptions {
-    /// Checks steps and ranges.
+    /// Checks steps, ranges and tolerances (the checks of [`super::ContinuationOptions`]).
     pub fn validate(&self) -> Result<()> {
-        let ok = self.ds.is_finite()
-            && self.ds != 0.0
-            && self.ds_min > 0.0
-            && self.ds_max >= self.ds_min
-            && self.ds.abs() >= self.ds_min
-            && self.max_steps > 0
-            && self.omega_weight > 0.0
-            && self.locate_tol > 0.0
-            && self.free_range.0 <= self.free_range.1
-            && self.along_range.0 <= self.along_range.1;
-        if ok {
-            Ok(())
-        } else {
-            Err(Error::option(
-                "curve options",
-                format!(
-                    "need 0 < ds_min <= |ds| <= ds_max, ordered ranges, positive weights and \
-                     tolerances ({self:?})"
-                ),
-            ))
+        check_steps(self.ds, self.ds_min, self.ds_max, self.max_steps)?;
+        check_range("free_range", self.free_range)?;
+        check_range("along_range", self.along_range)?;
+        check_accuracy(&self.shooting, self.locate_tol, self.omega_weight)?;
+        if self.max_multiplier.is_nan() || self.max_multiplier <= 1.0 {
+            return Err(Error::InvalidParameter {
+                name: "max_multiplier",
+                value: self.max_multiplier,
+                reason: "must be > 1",
+            });
         }
+        Ok(())
     }
 }
 
@@ -114,6 +118,8 @@ struct Node {
     tangent: Vector4<f64>,
     iterations: usize,
     step: f64,
+    /// Time of the tracked arrival on Σ (event-edge curves only).
+    event_time: f64,
 }
 
 /// The scalar equation that makes the orbit special.
@@ -123,6 +129,11 @@ enum Test {
     Bordered(f64),
     /// det M − 1 (Neimark–Sacker).
     UnitDeterminant,
+    /// The smallest side·ω over the (one-sided) orbit: zero where it grazes Σ.
+    Grazing(f64),
+    /// a − σ r_s at the tracked arrival on Σ: zero where the arrival lies on the edge σ of the stick
+    /// region (a stick phase starts or ends, a crossing appears).
+    ArrivalEdge(f64),
 }
 
 /// The augmented system of one curve.
@@ -136,6 +147,8 @@ struct System<'a, S: Parametrised, M> {
     b: [f64; 2],
     c: [f64; 2],
     opts: CurveOptions,
+    /// Time of the tracked arrival on Σ (event-edge curves), updated at every accepted point.
+    t_ref: f64,
 }
 
 impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
@@ -144,7 +157,8 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
     }
 
     /// The map's linearisation and the test function (g, v, w) at u.
-    fn eval(&self, u: &Vector4<f64>) -> Result<(MapLinearisation, f64, [f64; 2], [f64; 2])> {
+    #[allow(clippy::type_complexity)]
+    fn eval(&self, u: &Vector4<f64>) -> Result<(MapLinearisation, f64, [f64; 2], [f64; 2], f64)> {
         let sys = self
             .sys
             .with_param(self.params[0], u[2])?
@@ -163,13 +177,25 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
                 (t.g, t.v, t.w)
             }
             Test::UnitDeterminant => (lin.floquet().ns_test(), [0.0; 2], [0.0; 2]),
+            Test::Grazing(side) => {
+                let x = [u[0], u[1]];
+                let tol = self.opts.shooting.tol;
+                let g = grazing_margin(self.method, &sys, &self.spec, x, side, tol)?;
+                (g, [0.0; 2], [0.0; 2])
+            }
+            Test::ArrivalEdge(sigma) => {
+                let x = [u[0], u[1]];
+                let tol = self.opts.shooting.tol;
+                let e = arrival_edge(self.method, &sys, &self.spec, x, sigma, self.t_ref, tol)?;
+                return Ok((lin, e.margin, [0.0; 2], [0.0; 2], e.t));
+            }
         };
-        Ok((lin, g, v, w))
+        Ok((lin, g, v, w, f64::NAN))
     }
 
     /// The Newton matrix rows of F and g at u (∇g by forward differences) and the point data.
     fn rows(&self, u: &Vector4<f64>) -> Result<(Vector4<f64>, Matrix4<f64>, Node)> {
-        let (lin, g, v, w) = self.eval(u)?;
+        let (lin, g, v, w, event_time) = self.eval(u)?;
         let hs = [
             1e-6,
             1e-6 * u[1].abs().max(1.0),
@@ -201,6 +227,7 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
             tangent: Vector4::zeros(),
             iterations: 0,
             step: 0.0,
+            event_time,
         };
         Ok((r, jm, node))
     }
@@ -273,8 +300,21 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
         Ok(if t.dot(prev) < 0.0 { -t } else { t })
     }
 
+    /// The first node: corrected from (`x0`, `free0`) with the along parameter held at its value
+    /// in the system.
+    fn first_node(&self, x0: [f64; 2], free0: f64) -> Result<Node> {
+        let along0 = self.sys.param(self.params[1]);
+        let e4 = Vector4::new(0.0, 0.0, 0.0, 1.0);
+        let u0 = Vector4::new(x0[0], x0[1], free0, along0);
+        let orient = e4 * self.opts.ds.signum();
+        self.correct(u0, e4, e4 * along0, 0.0, orient)
+    }
+
     /// Resets the bordering vectors to the null vectors at `node` (a no-op for NS curves).
     fn rebord(&mut self, node: &Node) {
+        if matches!(self.test, Test::ArrivalEdge(_)) {
+            self.t_ref = node.event_time;
+        }
         if matches!(self.test, Test::Bordered(_)) {
             self.b = unit(node.w);
             self.c = unit(node.v);
@@ -340,6 +380,7 @@ pub fn continue_curve<S: Parametrised, M: FlowMethod<S>>(
         b: [1.0, 0.0],
         c: [1.0, 0.0],
         opts: *opts,
+        t_ref: f64::NAN,
     };
     // bordering vectors from the multiplier nearest σ at the start
     if let Test::Bordered(sg) = test {
@@ -355,10 +396,141 @@ pub fn continue_curve<S: Parametrised, M: FlowMethod<S>>(
         s.b = [uu[(0, k)], uu[(1, k)]];
         s.c = [vt[(k, 0)], vt[(k, 1)]];
     }
-    let e4 = Vector4::new(0.0, 0.0, 0.0, 1.0);
-    let u0 = Vector4::new(x0[0], x0[1], free0, along0);
-    let orient = e4 * opts.ds.signum();
-    let first = s.correct(u0, e4, e4 * along0, 0.0, orient)?;
+    let first = s.first_node(x0, free0)?;
+    s.rebord(&first);
+    walk(&mut s, first)
+}
+
+/// The augmented system of a grazing curve of `sys`: the one-sided flow of `side`.
+fn grazing_system<'a, S: Parametrised, M>(
+    method: &'a M,
+    one_sided: &'a OneSided<S>,
+    spec: &OrbitSpec,
+    params: [S::Param; 2],
+    opts: &CurveOptions,
+) -> System<'a, OneSided<S>, M> {
+    System {
+        method,
+        sys: one_sided,
+        spec: *spec,
+        kind: SpecialKind::Nonsmooth,
+        params,
+        test: Test::Grazing(one_sided.side()),
+        b: [1.0, 0.0],
+        c: [1.0, 0.0],
+        opts: *opts,
+        t_ref: f64::NAN,
+    }
+}
+
+/// Continues the curve of **grazing points** of the problem `spec` of `sys` in (`free`, `along`):
+/// orbits on side `side` of Σ = {ω = 0} that touch it, ω = ω̇ = 0 at one instant (for dry
+/// friction: the onset of sticking, |a| = r there). The defining system is a regular root problem
+/// on the one-sided flow ([`OneSided`], the smooth field of `side` continued across Σ):
+///
+/// ```text
+///   P̃ᵏ(x; λ₁, λ₂) − x − (s, 0) = 0,   g(x; λ₁, λ₂) = min_t side·ω̃(t) = 0,
+/// ```
+///
+/// with P̃ the one-sided map (equal to the true map on the side where the orbit does not touch
+/// Σ, and at the grazing point itself) and g the grazing margin ([`grazing_margin`]: a smooth
+/// function there, positive before the touch and negative past it, where the true orbit sticks).
+/// Continued by the same pseudo-arclength as the other curves, so it passes turning points; the
+/// codimension-two points located on it are fold–grazing and flip–grazing points (on G:
+/// symmetry-breaking–grazing) and turning points. `method` integrates the one-sided flow.
+#[allow(clippy::too_many_arguments)]
+pub fn continue_grazing_curve<S: Parametrised, M: FlowMethod<OneSided<S>>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    side: f64,
+    free: S::Param,
+    along: S::Param,
+    x0: [f64; 2],
+    free0: f64,
+    opts: &CurveOptions,
+) -> Result<Curve<S>> {
+    opts.validate()?;
+    check_curve_args(free, along, x0, free0)?;
+    let os = OneSided::new(sys.clone(), side)?;
+    let mut s = grazing_system(method, &os, spec, [free, along], opts);
+    let first = s.first_node(x0, free0)?;
+    let c = walk(&mut s, first)?;
+    Ok(Curve {
+        kind: c.kind,
+        along: c.along,
+        free: c.free,
+        spec: c.spec,
+        points: c.points,
+        stopped: c.stopped,
+        codim2: c.codim2,
+    })
+}
+
+/// The grazing point of the problem `spec` of `sys` at the present value of `along` (held fixed):
+/// the defining system of [`continue_grazing_curve`] solved for (x, `free`) by Newton from
+/// (`x0`, `free0`). Its `precision` is the last Newton step.
+#[allow(clippy::too_many_arguments)]
+pub fn locate_grazing<S: Parametrised, M: FlowMethod<OneSided<S>>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    side: f64,
+    free: S::Param,
+    along: S::Param,
+    x0: [f64; 2],
+    free0: f64,
+    opts: &CurveOptions,
+) -> Result<CurvePoint> {
+    check_curve_args(free, along, x0, free0)?;
+    let os = OneSided::new(sys.clone(), side)?;
+    let s = grazing_system(method, &os, spec, [free, along], opts);
+    Ok(s.point(&s.first_node(x0, free0)?))
+}
+
+/// Continues the curve of points where an **arrival on Σ lies on an edge of the stick region**:
+/// the orbit of `spec` reaches ω = 0 at t_e with a(t_e, β_e, 0) = σ r_s(t_e, β_e). Across it the
+/// event sequence changes without a touch of Σ: a stick phase starts (arrival from the side −σ:
+/// (0, 1) → (1, 1), a crossing appears) or a stick phase shrinks to nothing ((1, 1) → (2, 0)).
+/// Defining system on the real map (which is C¹ there: the crossing saltation
+/// diag(1, (a − s'r)/(a − s r)) tends to the stick saltation diag(1, 0) at the edge):
+///
+/// ```text
+///   Pᵏ(x; λ₁, λ₂) − x − (s, 0) = 0,   a(t_e, β_e, 0) − σ r_s(t_e, β_e) = 0,
+/// ```
+///
+/// with t_e the arrival tracked from point to point (the one nearest to the previous point's).
+/// The arrival and σ are chosen at the start as the arrival whose |a| is nearest to r_s (the
+/// nonsmooth point a one-parameter continuation located). Turning points and fold/flip points of
+/// the orbit on the curve are located as on the grazing curves.
+#[allow(clippy::too_many_arguments)]
+pub fn continue_event_edge_curve<S: Parametrised, M: FlowMethod<S>>(
+    method: &M,
+    sys: &S,
+    spec: &OrbitSpec,
+    free: S::Param,
+    along: S::Param,
+    x0: [f64; 2],
+    free0: f64,
+    opts: &CurveOptions,
+) -> Result<Curve<S>> {
+    opts.validate()?;
+    check_curve_args(free, along, x0, free0)?;
+    let start = sys.with_param(free, free0)?;
+    let (sigma, t_ref) = nearest_edge_arrival(method, &start, spec, x0, opts.shooting.tol)?;
+    let mut s = System {
+        method,
+        sys,
+        spec: *spec,
+        kind: SpecialKind::Nonsmooth,
+        params: [free, along],
+        test: Test::ArrivalEdge(sigma),
+        b: [1.0, 0.0],
+        c: [1.0, 0.0],
+        opts: *opts,
+        t_ref,
+    };
+    let first = s.first_node(x0, free0)?;
     s.rebord(&first);
     walk(&mut s, first)
 }
@@ -426,6 +598,15 @@ fn walk<S: Parametrised, M: FlowMethod<S>>(s: &mut System<S, M>, first: Node) ->
             _ => (ds * 0.6).max(s.opts.ds_min),
         };
         prev = next;
+        let radius = prev.lin.floquet().spectral_radius();
+        if radius > s.opts.max_multiplier {
+            stopped = Some(CurveStop::MultiplierLimit {
+                modulus: radius,
+                free: prev.u[2],
+                along: prev.u[3],
+            });
+            break;
+        }
         if let Some((k, b)) = bound {
             stopped = Some(CurveStop::ParameterBound {
                 param: s.params[k].name().to_string(),

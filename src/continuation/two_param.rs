@@ -89,6 +89,15 @@ pub enum CurveStop {
         /// The number of steps.
         steps: usize,
     },
+    /// Pseudo-arclength: a multiplier's modulus exceeded the limit at (free, along).
+    MultiplierLimit {
+        /// The spectral radius reached.
+        modulus: f64,
+        /// The free parameter at the last point.
+        free: f64,
+        /// The other parameter at the last point.
+        along: f64,
+    },
 }
 
 impl std::fmt::Display for CurveStop {
@@ -117,6 +126,14 @@ impl std::fmt::Display for CurveStop {
             CurveStop::MaxSteps { steps } => {
                 write!(f, "after the largest number of steps, {steps}")
             }
+            CurveStop::MultiplierLimit {
+                modulus,
+                free,
+                along,
+            } => write!(
+                f,
+                "at ({free}, {along}): a multiplier's modulus {modulus:.3e} exceeds the limit"
+            ),
         }
     }
 }
@@ -472,7 +489,11 @@ pub(crate) struct LockLossStart {
 pub(crate) fn lock_loss_starts(base: &Gear) -> Result<[LockLossStart; 2]> {
     let fc = base
         .lock_loss_frequency()
-        .ok_or_else(|| Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into()))?;
+        .ok_or(Error::NoLockLossFrequency {
+            g: base.g,
+            zeta: base.zeta,
+            eta: base.eta,
+        })?;
     let th_rev = crate::model::gear::cogging_free_parallel_angles()
         .2
         .to_degrees();

@@ -43,14 +43,15 @@ fn profile_on(
 }
 
 /// The judged `static_friction` finding on top of the final model `st` (`None` when the profile
-/// does not propose it); with the comparison when judged, and whether it stands.
+/// does not propose it); with the comparison when judged, whether it stands, the excess η_Δs
+/// (s⁻²) and the held-out errors of the model with it.
 pub fn judge(
     runs: &[CleanRun],
     st: &ModelState,
     geo: &Geometry,
     wins: &[Win],
     folds: &Folds,
-) -> Option<(Finding, Comparison, bool, f64)> {
+) -> Option<(Finding, Comparison, bool, f64, HeldOut)> {
     let all = profile_on(runs, st, &st.fit.theta, geo, &|_| true)?;
     if !(all.s_err.is_finite() && all.s_err > 0.0 && all.s / all.s_err >= PROPOSE_Z) {
         return None;
@@ -125,5 +126,5 @@ pub fn judge(
         evidence: ev,
         size,
     };
-    Some((f, cmp, stands, all.s * all.eta))
+    Some((f, cmp, stands, all.s * all.eta, held))
 }

@@ -149,11 +149,16 @@ pub fn catalog() -> Vec<Effect> {
             id: "static_friction",
             class: "friction",
             explanation: "breakaway (static) friction above the sliding friction that decays into \
-                          sliding over a Stribeck width w: the friction is η + η_Δs exp(−(|β̇|/w)²) \
-                          (w fitted by simulation; w → 0 is the excess at rest only): an output at \
-                          rest stays stuck until the torque exceeds η + η_Δs, and slow sliding is \
-                          braked more than fast sliding",
-            terms: vec![Term::StaticExcess, Term::Shape(Shape::StribeckWidth)],
+                          sliding over a Stribeck width w: the friction is η + η_Δs \
+                          exp(−(|β̇|/w)^δ) (w and the shape δ fitted by simulation: δ = 2 the \
+                          Gaussian, δ = 1 the exponential Stribeck curve; w → 0 is the excess at \
+                          rest only): an output at rest stays stuck until the torque exceeds \
+                          η + η_Δs, and slow sliding is braked more than fast sliding",
+            terms: vec![
+                Term::StaticExcess,
+                Term::Shape(Shape::StribeckWidth),
+                Term::Shape(Shape::StribeckPower),
+            ],
             candidates: vec![
                 "breakaway/Stribeck friction of the bearings",
                 "stiction of a seal or cable",
@@ -437,6 +442,10 @@ pub fn effect_params(
             if let Some((w, s)) = get(Term::Shape(Shape::StribeckWidth)) {
                 p.insert("stribeck_width".into(), w);
                 p.insert("stribeck_width_err".into(), s);
+            }
+            if let Some((d, s)) = get(Term::Shape(Shape::StribeckPower)) {
+                p.insert("stribeck_power".into(), d);
+                p.insert("stribeck_power_err".into(), s);
             }
         }
         "power_law_drag" => {

@@ -290,6 +290,7 @@ pub fn diagnose(
     let mut findings: Vec<Finding> = Vec::new();
     let mut final_state = base.state.clone();
     let mut excess = 0.0;
+    let mut remains = None;
     if let (Some(b), false) = (&base.state, opts.base_only) {
         let pctx = ProposeCtx {
             runs,
@@ -326,8 +327,10 @@ pub fn diagnose(
         } else {
             breakaway::judge(runs, &fin, &base.geo, &base.wins, &folds)
         };
-        if let Some((f, cmp, stands, ex)) = judged {
+        let mut final_held = fin.held.clone();
+        if let Some((f, cmp, stands, ex, held)) = judged {
             if stands {
+                final_held = held;
                 mismatch.push(Mismatch {
                     where_: "stick phases: the output stays at rest beyond the sliding friction \
                              (release later, with an acceleration jump)"
@@ -341,6 +344,13 @@ pub fn diagnose(
             }
         }
         remaining(&mut mismatch, &fin, &base.wins, runs, &prep.files);
+        remains = super::mismatch::remainder(
+            runs,
+            &base.wins,
+            &b.held.chi2,
+            &final_held.chi2,
+            (opts.weak.rest_sigmas, opts.weak.rest_run),
+        );
         final_state = Some(fin);
     }
     // nominal consistency of the base parameters
@@ -361,7 +371,7 @@ pub fn diagnose(
         findings.extend(nominal::shaft_angles(&set.gear, delta));
         findings.extend(nominal::coupling_strength(&set.gear, (g, ge)));
     }
-    report(
+    let mut d = report(
         set,
         opts,
         prep,
@@ -372,7 +382,9 @@ pub fn diagnose(
         findings,
         &tried,
         progress,
-    )
+    )?;
+    d.report.remaining = remains;
+    Ok(d)
 }
 
 /// What the accepted findings leave: the runs whose held-out prediction by the final model is
@@ -589,6 +601,7 @@ fn report(
             findings,
             verdict,
             fits: Some(fits),
+            remaining: None,
         },
         runs: prep.runs,
         files: prep.files,

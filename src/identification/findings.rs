@@ -217,6 +217,8 @@ pub fn judgement_evidence(
     ev.insert("heldout_chi2_gain".into(), json!(cmp.gain));
     ev.insert("windows".into(), json!(cmp.windows));
     ev.insert("runs".into(), json!(cmp.runs));
+    ev.insert("windows_failed_before".into(), json!(cmp.failed_before));
+    ev.insert("windows_failed_after".into(), json!(cmp.failed_after));
     ev.insert("folds".into(), json!(folds));
     ev.insert("delta_bic_weak_form".into(), json!(t.candidate.weak_dbic));
     ev.insert(
@@ -361,6 +363,7 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                 "heldout_chi2_gain": t.cmp.map(|m| m.gain),
                 "heldout_rms_before_rad": t.cmp.map(|m| m.rms_before),
                 "heldout_rms_after_rad": t.cmp.map(|m| m.rms_after),
+                "windows_failed": t.cmp.map(|m| m.failed_after),
                 "member_z_against_smaller": t.member_z,
                 "reason": match t.cmp {
                     None => match t.screen {

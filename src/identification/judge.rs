@@ -11,6 +11,12 @@
 //!   simulated by the exact Filippov integrator; the window's χ² (camera noise units) is its
 //!   held-out error.
 //! - **Paired comparison.** For the windows predicted by both models, d_w = χ²_current − χ²_new.
+//!   A window that only one of the two models can simulate (its integration exceeded the step
+//!   budget of [`super::predict::simulate`], or its state could not be fitted) is a loss for the
+//!   model that failed: its χ² is taken as the other model's plus [`FAILED_WINDOW_CHI2_PER_FRAME`]
+//!   per frame (never dropped: dropping the windows a candidate cannot simulate would judge it
+//!   only where it works and favour it). Windows neither model can simulate carry no information
+//!   and are left out.
 //!   The test statistic is z = Σ d_w / √(n/(n−1) Σ_w (d_w − d̄)²): the windows are near-independent
 //!   pairs (each has its own fitted initial state and independent camera noise; under the null
 //!   the parameter error of a fold that all its windows share only lowers d_w). The cluster-robust
@@ -113,6 +119,11 @@ pub fn rms_per_run(chi2: &[Option<f64>], wins: &[Win], runs: &[CleanRun]) -> Vec
         .collect()
 }
 
+/// The χ² per frame above the other model's that a window counts for a model that could not
+/// simulate it (a loss in the paired comparison): the poor-fit level (rms 2σ per frame) at which
+/// the refit and the predictions call a window one the model cannot follow.
+pub const FAILED_WINDOW_CHI2_PER_FRAME: f64 = 4.0;
+
 /// A paired comparison of two models' held-out errors.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Comparison {
@@ -123,26 +134,48 @@ pub struct Comparison {
     /// z with the windows of a run as a cluster (sandwich variance; reported, not decided on: it
     /// also counts the legitimate run-to-run variation of a real effect's size as noise).
     pub z_cluster: f64,
-    /// Windows compared.
+    /// Windows compared (including those only one model could simulate).
     pub windows: usize,
     /// Runs (clusters) compared.
     pub runs: usize,
-    /// Held-out rms of the current model on the compared windows, rad.
+    /// Held-out rms of the current model on the windows both models predicted, rad.
     pub rms_before: f64,
-    /// Held-out rms of the new model on the compared windows, rad.
+    /// Held-out rms of the new model on the windows both models predicted, rad.
     pub rms_after: f64,
+    /// Windows the current model could not simulate but the new one could (counted as its
+    /// losses).
+    pub failed_before: usize,
+    /// Windows the new model could not simulate but the current one could (counted as its
+    /// losses).
+    pub failed_after: usize,
+}
+
+/// The paired held-out χ² of window `k` under both models: (before, after, both simulated).
+/// A window only one model simulated counts for the other with its χ² plus
+/// [`FAILED_WINDOW_CHI2_PER_FRAME`] per frame; `None` when neither did.
+fn paired(before: &HeldOut, after: &HeldOut, w: &Win, k: usize) -> Option<(f64, f64, bool)> {
+    let loss = FAILED_WINDOW_CHI2_PER_FRAME * w.kept() as f64;
+    match (before.chi2[k], after.chi2[k]) {
+        (Some(b), Some(a)) => Some((b, a, true)),
+        (Some(b), None) => Some((b, b + loss, false)),
+        (None, Some(a)) => Some((a + loss, a, false)),
+        (None, None) => None,
+    }
 }
 
 /// Compares the held-out errors `after` against `before` (see the module).
 pub fn compare(before: &HeldOut, after: &HeldOut, wins: &[Win], runs: &[CleanRun]) -> Comparison {
-    let pairs: Vec<(usize, f64, f64)> = (0..wins.len())
-        .filter_map(|k| Some((k, before.chi2[k]?, after.chi2[k]?)))
+    let pairs: Vec<(usize, f64, f64, bool)> = (0..wins.len())
+        .filter_map(|k| {
+            let (b, a, both) = paired(before, after, &wins[k], k)?;
+            Some((k, b, a, both))
+        })
         .collect();
     let n = pairs.len();
     let gain: f64 = pairs.iter().map(|p| p.1 - p.2).sum();
     let mean = gain / n.max(1) as f64;
     let mut per_run = vec![(0.0, 0usize); runs.len()];
-    for &(k, b, a) in &pairs {
+    for &(k, b, a, _) in &pairs {
         let e = &mut per_run[wins[k].run];
         e.0 += b - a - mean;
         e.1 += 1;
@@ -159,13 +192,18 @@ pub fn compare(before: &HeldOut, after: &HeldOut, wins: &[Win], runs: &[CleanRun
         / n.saturating_sub(1).max(1) as f64;
     let z = if vw > 0.0 { gain / vw.sqrt() } else { 0.0 };
     let (mut sb, mut sa, mut m) = (0.0, 0.0, 0usize);
-    for &(k, b, a) in &pairs {
+    for &(k, b, a, _) in pairs.iter().filter(|p| p.3) {
         let s2 = runs[wins[k].run].sigma_camera.powi(2);
         sb += b * s2;
         sa += a * s2;
         m += wins[k].kept();
     }
     let m = m.max(1) as f64;
+    let failed = |x: &HeldOut, y: &HeldOut| {
+        (0..wins.len())
+            .filter(|&k| x.chi2[k].is_none() && y.chi2[k].is_some())
+            .count()
+    };
     Comparison {
         gain,
         z,
@@ -174,6 +212,8 @@ pub fn compare(before: &HeldOut, after: &HeldOut, wins: &[Win], runs: &[CleanRun
         runs: g,
         rms_before: (sb / m).sqrt(),
         rms_after: (sa / m).sqrt(),
+        failed_before: failed(before, after),
+        failed_after: failed(after, before),
     }
 }
 
@@ -221,6 +261,63 @@ pub fn upper_tail(z: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A window a candidate cannot simulate counts as its loss (χ² of the current model plus
+    /// 4 per frame), one the current model cannot simulate as the candidate's win; windows
+    /// neither simulates are left out. Dropping the failed windows would turn this candidate's
+    /// loss into a gain.
+    #[test]
+    fn windows_a_model_cannot_simulate_are_its_losses() {
+        let run = CleanRun {
+            t: vec![],
+            alpha: vec![],
+            beta: vec![],
+            v: vec![],
+            dt: 0.01,
+            outliers: 0,
+            sigma_beta: 0.01,
+            sigma_camera: 0.01,
+            v_gain: 1.0,
+            alpha_rate: 0.0,
+            ringdown: true,
+        };
+        let wins: Vec<Win> = (0..12)
+            .map(|k| Win {
+                run: 0,
+                lo: 20 * k,
+                hi: 20 * k + 20,
+                keep: vec![true; 20],
+            })
+            .collect();
+        let before = HeldOut {
+            chi2: (0..12)
+                .map(|k| (k != 11).then_some(20.0 + k as f64))
+                .collect(),
+            chi2_fit: vec![None; 12],
+        };
+        // better by 5 on windows 0..8, fails on 8 and 9, wins window 10 that the current model
+        // could not simulate, and neither simulates window 11
+        let after = HeldOut {
+            chi2: (0..12)
+                .map(|k| match k {
+                    8 | 9 | 11 => None,
+                    10 => Some(30.0),
+                    _ => Some(15.0 + k as f64),
+                })
+                .collect(),
+            chi2_fit: vec![None; 12],
+        };
+        let mut b2 = before.clone();
+        b2.chi2[10] = None;
+        let c = compare(&b2, &after, &wins, &[run]);
+        assert_eq!((c.windows, c.failed_after, c.failed_before), (11, 2, 1));
+        // 8 × 5 − 2 × 80 + 80
+        assert!((c.gain - (40.0 - 160.0 + 80.0)).abs() < 1e-12, "{}", c.gain);
+        assert!(c.gain < 0.0);
+        // the rms compare only windows both predicted (0..8)
+        let ss: f64 = (0..8).map(|k| 20.0 + k as f64).sum::<f64>() * 1e-4;
+        assert!((c.rms_before - (ss / 160.0).sqrt()).abs() < 1e-15);
+    }
     #[test]
     fn normal_tail_and_threshold() {
         // Φ(3) = 0.998650102, Φ(1.959964) = 0.975

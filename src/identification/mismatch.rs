@@ -5,8 +5,9 @@
 
 use super::preprocess::CleanRun;
 use super::regression::{delta_bic, fit, Design, LinFit, Term};
-use super::report::Mismatch;
+use super::report::{Mismatch, Remainder, RemainderBin};
 use super::ringdown::KappaFit;
+use super::shooting::Win;
 use crate::numerics::least_squares::{weighted, DEFAULT_RCOND};
 use serde_json::json;
 use std::collections::BTreeMap;
@@ -334,4 +335,217 @@ fn kappa_checks(k: &KappaFit, mismatch: &mut Vec<Mismatch>) {
             .collect(),
         });
     }
+}
+
+/// z above which a remainder (or a bin of it) counts as above the camera-noise floor: the
+/// judge's smallest threshold.
+pub const REMAINDER_Z: f64 = 3.0;
+
+/// E and σ_E of windows given as pairs (χ², dof), see [`Remainder`].
+fn ratio_excess(pairs: &[(f64, f64)]) -> (f64, f64) {
+    let n = pairs.len();
+    let (sc, sd): (f64, f64) = pairs.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    if n < 2 || sd <= 0.0 {
+        return (f64::NAN, f64::NAN);
+    }
+    let r = sc / sd;
+    let v: f64 = pairs.iter().map(|p| (p.0 - r * p.1).powi(2)).sum::<f64>() * n as f64
+        / (n - 1) as f64
+        / (sd * sd);
+    (r - 1.0, v.sqrt())
+}
+
+/// Bins of one grouping: (label, window indices).
+type Bins = Vec<(String, Vec<usize>)>;
+
+/// Per-window description used for binning: (run, middle β, mean |β̇|, contains a stick phase).
+#[derive(Debug, Clone, Copy)]
+struct WinInfo {
+    run: usize,
+    beta_mid: f64,
+    speed: f64,
+    stick: bool,
+}
+
+fn win_info(runs: &[CleanRun], w: &Win, rest_sigmas: f64, rest_run: usize) -> WinInfo {
+    let r = &runs[w.run];
+    let mid = (w.lo + w.hi) / 2;
+    let v = &r.v[w.lo..w.hi];
+    let speed = v.iter().map(|x| x.abs()).sum::<f64>() / v.len().max(1) as f64;
+    let thr = rest_sigmas * r.v_gain * r.sigma_beta;
+    let (mut longest, mut cur) = (0usize, 0usize);
+    for x in v {
+        cur = if x.abs() < thr { cur + 1 } else { 0 };
+        longest = longest.max(cur);
+    }
+    WinInfo {
+        run: w.run,
+        beta_mid: r.beta[mid].rem_euclid(std::f64::consts::TAU),
+        speed,
+        stick: longest >= rest_run.max(1),
+    }
+}
+
+/// The remainder of the final model's held-out χ² `fin` against the base model's `base` on the
+/// judging windows `wins` (see [`Remainder`]). A sample is at rest when |β̇| < `rest_sigmas` σ_v;
+/// a window with `rest_run` consecutive samples at rest is a stick window (the weak form's
+/// criterion). `None` without windows predicted by the final model.
+pub fn remainder(
+    runs: &[CleanRun],
+    wins: &[Win],
+    base: &[Option<f64>],
+    fin: &[Option<f64>],
+    rest: (f64, usize),
+) -> Option<Remainder> {
+    let dof = |w: &Win| (w.kept() as f64 - 2.0).max(1.0);
+    let used: Vec<usize> = (0..wins.len()).filter(|&k| fin[k].is_some()).collect();
+    if used.len() < 2 {
+        return None;
+    }
+    let pairs = |idx: &[usize]| -> Vec<(f64, f64)> {
+        idx.iter()
+            .filter_map(|&k| Some((fin[k]?, dof(&wins[k]))))
+            .collect()
+    };
+    let (e, se) = ratio_excess(&pairs(&used));
+    let both: Vec<usize> = used
+        .iter()
+        .copied()
+        .filter(|&k| base[k].is_some())
+        .collect();
+    let base_pairs: Vec<(f64, f64)> = both
+        .iter()
+        .filter_map(|&k| Some((base[k]?, dof(&wins[k]))))
+        .collect();
+    let (eb, seb) = ratio_excess(&base_pairs);
+    // fraction removed: 1 − Σ(χ²_fin − d)/Σ(χ²_base − d), ratio σ over windows
+    let (mut fraction, mut fraction_sigma) = (None, None);
+    if eb.is_finite() && eb >= REMAINDER_Z * seb && both.len() >= 2 {
+        let ab: Vec<(f64, f64)> = both
+            .iter()
+            .filter_map(|&k| {
+                let d = dof(&wins[k]);
+                Some((fin[k]? - d, base[k]? - d))
+            })
+            .collect();
+        let (sa, sb) = ab.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+        let r = sa / sb;
+        let n = ab.len() as f64;
+        let v = ab.iter().map(|p| (p.0 - r * p.1).powi(2)).sum::<f64>() * n / (n - 1.0) / (sb * sb);
+        fraction = Some(1.0 - r);
+        fraction_sigma = Some(v.sqrt());
+    }
+    let info: Vec<WinInfo> = wins
+        .iter()
+        .map(|w| win_info(runs, w, rest.0, rest.1))
+        .collect();
+    let total_excess: f64 = used
+        .iter()
+        .filter_map(|&k| Some(fin[k]? - dof(&wins[k])))
+        .sum();
+    let mut groups: Vec<(&str, Bins)> = Vec::new();
+    let by = |label: &dyn Fn(usize) -> Option<String>| -> Bins {
+        let mut m: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+        for &k in &used {
+            if let Some(l) = label(k) {
+                m.entry(l).or_default().push(k);
+            }
+        }
+        m.into_iter().collect()
+    };
+    groups.push((
+        "run_kind",
+        by(&|k| {
+            Some(if runs[info[k].run].ringdown {
+                "ringdown".into()
+            } else {
+                "driven".into()
+            })
+        }),
+    ));
+    groups.push((
+        "drive_hz",
+        by(&|k| {
+            let r = &runs[info[k].run];
+            (!r.ringdown).then(|| format!("{:.2}", r.alpha_rate.abs() / std::f64::consts::TAU))
+        }),
+    ));
+    groups.push((
+        "beta_phase_deg",
+        by(&|k| {
+            let b = (info[k].beta_mid.to_degrees() / 60.0)
+                .floor()
+                .clamp(0.0, 5.0) as i32;
+            Some(format!("[{}, {})", 60 * b, 60 * (b + 1)))
+        }),
+    ));
+    // speed: quartiles of the windows' mean |β̇|
+    let mut speeds: Vec<f64> = used.iter().map(|&k| info[k].speed).collect();
+    speeds.sort_by(f64::total_cmp);
+    let q = |p: f64| speeds[((speeds.len() - 1) as f64 * p).round() as usize];
+    let edges = [q(0.0), q(0.25), q(0.5), q(0.75), q(1.0)];
+    groups.push((
+        "speed_rad_s",
+        by(&|k| {
+            let s = info[k].speed;
+            let b = (1..4).filter(|&i| s >= edges[i]).count();
+            Some(format!("{}: [{:.2}, {:.2}]", b + 1, edges[b], edges[b + 1]))
+        }),
+    ));
+    groups.push((
+        "stick_slip",
+        by(&|k| {
+            Some(if info[k].stick {
+                "stick".into()
+            } else {
+                "slip".into()
+            })
+        }),
+    ));
+    let mut bins = Vec::new();
+    for (group, members) in groups {
+        for (bin, idx) in members {
+            let (be, bse) = ratio_excess(&pairs(&idx));
+            let ex: f64 = idx
+                .iter()
+                .filter_map(|&k| Some(fin[k]? - dof(&wins[k])))
+                .sum();
+            bins.push(RemainderBin {
+                group: group.to_string(),
+                bin,
+                windows: idx.len(),
+                excess_chi2_per_dof: be,
+                excess_sigma: bse,
+                share: if total_excess > 0.0 {
+                    ex / total_excess
+                } else {
+                    f64::NAN
+                },
+            });
+        }
+    }
+    let within_noise = !(e.is_finite() && e >= REMAINDER_Z * se);
+    let mut located: Vec<RemainderBin> = if within_noise {
+        vec![]
+    } else {
+        bins.iter()
+            .filter(|b| {
+                b.excess_sigma > 0.0 && b.excess_chi2_per_dof >= REMAINDER_Z * b.excess_sigma
+            })
+            .cloned()
+            .collect()
+    };
+    located.sort_by(|a, b| b.share.total_cmp(&a.share));
+    Some(Remainder {
+        excess_chi2_per_dof: e,
+        excess_sigma: se,
+        base_excess_chi2_per_dof: eb,
+        base_excess_sigma: seb,
+        fraction_removed: fraction,
+        fraction_removed_sigma: fraction_sigma,
+        within_noise,
+        windows: used.len(),
+        bins,
+        located,
+    })
 }

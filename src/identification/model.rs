@@ -66,9 +66,12 @@ pub enum Shape {
     /// Weight-to-force ratio ρ = |W|/F₀ of the load-dependent friction's bearing load
     /// |F − ρ ẑ| ([`load_shape`]; ρ = 0 is the dipole force alone).
     LoadWeight,
-    /// Width w of the Stribeck decay of the breakaway excess, Δη_s exp(−(|β̇|/w)²) in the
+    /// Width w of the Stribeck decay of the breakaway excess, Δη_s exp(−(|β̇|/w)^δ) in the
     /// sliding friction (`static_friction`; w → 0 is the excess at rest only).
     StribeckWidth,
+    /// Shape δ of the Stribeck decay exp(−(|β̇|/w)^δ) (δ = 2 the Gaussian, δ = 1 the
+    /// exponential decay).
+    StribeckPower,
 }
 
 impl Shape {
@@ -78,6 +81,7 @@ impl Shape {
             Shape::DragExponent => "drag_exponent",
             Shape::LoadWeight => "load_weight_over_force",
             Shape::StribeckWidth => "stribeck_width",
+            Shape::StribeckPower => "stribeck_power",
         }
     }
     /// Range the simulation clamps the parameter to (outside it the family member is not
@@ -87,6 +91,7 @@ impl Shape {
             Shape::DragExponent => (0.5, 4.0),
             Shape::LoadWeight => (-50.0, 50.0),
             Shape::StribeckWidth => (1e-3, 20.0),
+            Shape::StribeckPower => (0.5, 4.0),
         }
     }
 }
@@ -141,28 +146,39 @@ pub struct Coefficients {
     /// until |a| exceeds the sliding friction plus this excess (0: static = sliding friction).
     pub eta_static_excess: f64,
     /// Width w of the Stribeck decay, rad/s: the sliding friction carries the excess as
-    /// η_Δs exp(−(|β̇|/w)^[`STRIBECK_POWER`]) (0: the excess acts at rest only).
+    /// η_Δs exp(−(|β̇|/w)^δ) (0: the excess acts at rest only).
     pub stribeck_width: f64,
+    /// Shape δ of the Stribeck decay (`None`: [`STRIBECK_POWER`], the Gaussian), clamped to
+    /// [`Shape::range`].
+    pub stribeck_power: Option<f64>,
     /// Terms of the sparse search (`unexplained`) with their coefficients.
     pub extra: [(ExtraTerm, f64); 4],
 }
 
-/// The exponent δ of the Stribeck decay exp(−(|β̇|/w)^δ): fixed at 2, the Gaussian form of the
-/// Stribeck curve (Armstrong-Hélouvry); with w the only shape parameter fitted (δ and w are
-/// not separately identifiable from stick–slip recordings at the camera's velocity noise).
-pub const STRIBECK_POWER: i32 = 2;
+/// The default shape δ of the Stribeck decay exp(−(|β̇|/w)^δ): 2, the Gaussian form of the
+/// Stribeck curve (Armstrong-Hélouvry); the family fits δ by simulation
+/// ([`Shape::StribeckPower`]; δ = 1 is the exponential decay).
+pub const STRIBECK_POWER: f64 = 2.0;
 
-/// The Stribeck part of the sliding friction, e exp(−(|ω|/w)²), and its ω-derivative
-/// (0 for w = 0).
-pub fn stribeck(excess: f64, width: f64, omega: f64) -> (f64, f64) {
+/// The generalised Stribeck part of the sliding friction, e exp(−(|ω|/w)^δ) (δ = `power`, `None`
+/// for [`STRIBECK_POWER`]), and its ω-derivative −e δ |x|^(δ−1) sgn(ω)/w · exp(−|x|^δ), x = ω/w
+/// (0 for w = 0; at ω = 0 the derivative is taken as 0, the one-sided limits are ∓e/w for δ = 1
+/// and unbounded for δ < 1: the stick phase there is handled by the Filippov integrator).
+pub fn stribeck(excess: f64, width: f64, power: Option<f64>, omega: f64) -> (f64, f64) {
     if width <= 0.0 || excess == 0.0 {
         return (0.0, 0.0);
     }
     let (lo, hi) = Shape::StribeckWidth.range();
     let w = width.clamp(lo, hi);
-    let x = omega / w;
-    let v = excess * (-x.powi(STRIBECK_POWER)).exp();
-    (v, -2.0 * x / w * v)
+    let (plo, phi) = Shape::StribeckPower.range();
+    let d = power.unwrap_or(STRIBECK_POWER).clamp(plo, phi);
+    let x = (omega / w).abs();
+    if x == 0.0 {
+        return (excess, 0.0);
+    }
+    let xd = x.powf(d);
+    let v = excess * (-xd).exp();
+    (v, -d * xd / x * omega.signum() / w * v)
 }
 
 impl Coefficients {
@@ -404,6 +420,7 @@ impl AugmentedGear {
         stribeck(
             self.c.eta_static_excess.max(0.0),
             self.c.stribeck_width,
+            self.c.stribeck_power,
             omega,
         )
     }
@@ -691,19 +708,27 @@ mod tests {
         let mut c = Coefficients::base(300.0, 0.2, 1.0, 20.0);
         c.eta_static_excess = 8.0;
         c.stribeck_width = 0.4;
-        let sys = driven_test_gear(c);
         let h = 1e-6;
-        for k in 0..10 {
-            let (t, b, w) = (0.1 * k as f64, 0.5 * k as f64, 1.2 - 0.27 * k as f64);
-            let j = sys.forces_jet(t, b, w, false);
-            assert!((j.r - (20.0 + 8.0 * (-(w / 0.4f64).powi(2)).exp())).abs() < 1e-12);
-            let fd = (sys.forces(t, b, w + h).r - sys.forces(t, b, w - h).r) / (2.0 * h);
-            assert!(
-                (j.r_omega - fd).abs() < 1e-6 * (1.0 + fd.abs()),
-                "{} {fd}",
-                j.r_omega
-            );
+        for power in [None, Some(1.0), Some(1.5), Some(2.0)] {
+            let sys = driven_test_gear(Coefficients {
+                stribeck_power: power,
+                ..c
+            });
+            let d = power.unwrap_or(2.0);
+            for k in 0..10 {
+                let (t, b, w) = (0.1 * k as f64, 0.5 * k as f64, 1.2 - 0.27 * k as f64);
+                let j = sys.forces_jet(t, b, w, false);
+                let expect = 20.0 + 8.0 * (-(w.abs() / 0.4f64).powf(d)).exp();
+                assert!((j.r - expect).abs() < 1e-12, "δ = {d}: {} {expect}", j.r);
+                let fd = (sys.forces(t, b, w + h).r - sys.forces(t, b, w - h).r) / (2.0 * h);
+                assert!(
+                    (j.r_omega - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+                    "δ = {d}: {} {fd}",
+                    j.r_omega
+                );
+            }
         }
+        let sys = driven_test_gear(c);
         assert!((sys.static_friction(0.3, 1.0) - sys.forces(0.3, 1.0, 0.0).r).abs() < 1e-12);
         let at_rest_only = driven_test_gear(Coefficients {
             stribeck_width: 0.0,

@@ -134,8 +134,13 @@ pub const DRAG_EXPONENT_GRID: [u8; 6] = [12, 15, 18, 20, 25, 30];
 /// Weight-to-force ratios ρ (× 10) of the load family's weak-form profile.
 pub const LOAD_WEIGHT_GRID: [u8; 8] = [0, 5, 10, 15, 20, 30, 50, 80];
 
-/// Widths w (× 100, rad/s) of the Stribeck family's weak-form profile.
-pub const STRIBECK_WIDTH_GRID: [u8; 6] = [10, 20, 35, 50, 75, 120];
+/// Widths w (× 100, rad/s) of the Stribeck family's weak-form profile: output speeds from a
+/// tenth of a rad/s to the few rad/s of the driven runs.
+pub const STRIBECK_WIDTH_GRID: [u8; 7] = [10, 20, 35, 50, 75, 120, 200];
+
+/// Shapes δ (× 10) of the Stribeck family's weak-form profile: the exponential and the Gaussian
+/// decay (δ is then fitted by simulation).
+pub const STRIBECK_POWER_GRID: [u8; 2] = [10, 20];
 
 /// The weak-form grid columns of the families' profiles.
 fn grid_columns() -> Vec<Term> {
@@ -143,7 +148,13 @@ fn grid_columns() -> Vec<Term> {
         .iter()
         .map(|&p| Term::PowDrag(p))
         .collect();
-    v.extend(STRIBECK_WIDTH_GRID.iter().map(|&w| Term::StribeckGrid(w)));
+    for d in STRIBECK_POWER_GRID {
+        v.extend(
+            STRIBECK_WIDTH_GRID
+                .iter()
+                .map(|&w| Term::StribeckGrid(w, d)),
+        );
+    }
     for radial in [false, true] {
         v.extend(LOAD_WEIGHT_GRID.iter().map(|&r| Term::LoadGrid(r, radial)));
     }
@@ -158,9 +169,16 @@ fn shape_grid(e: &Effect) -> Vec<Vec<(Shape, f64)>> {
             .map(|&p| vec![(Shape::DragExponent, f64::from(p) / 10.0)])
             .collect()
     } else if e.terms.contains(&Term::Shape(Shape::StribeckWidth)) {
-        STRIBECK_WIDTH_GRID
+        STRIBECK_POWER_GRID
             .iter()
-            .map(|&w| vec![(Shape::StribeckWidth, f64::from(w) / 100.0)])
+            .flat_map(|&d| {
+                STRIBECK_WIDTH_GRID.iter().map(move |&w| {
+                    vec![
+                        (Shape::StribeckWidth, f64::from(w) / 100.0),
+                        (Shape::StribeckPower, f64::from(d) / 10.0),
+                    ]
+                })
+            })
             .collect()
     } else if e.terms.contains(&Term::Shape(Shape::LoadWeight)) {
         LOAD_WEIGHT_GRID

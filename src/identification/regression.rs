@@ -13,7 +13,7 @@
 //! correlated: the effective sample size n_eff = Σ_runs n_run / τ_run, with τ the integrated
 //! autocorrelation time of the standardised residuals, scales the covariance and the BIC.
 
-use super::model::{drag, force_shape, load_shape, Geometry, Shape};
+use super::model::{drag, force_shape, load_shape, stribeck, Geometry, Shape};
 use super::preprocess::CleanRun;
 use crate::model::{GearParam, Parameter};
 use crate::numerics::least_squares::{weighted, LeastSquaresError, DEFAULT_RCOND};
@@ -50,13 +50,13 @@ pub enum Term {
     /// −sgn β̇ · bearing load at ρ = the value / 10, radial when the flag is set: a weak-form
     /// column on the grid of the load family's profile.
     LoadGrid(u8, bool),
-    /// −sgn β̇ · exp(−(β̇/w)²): the breakaway excess carried into sliding by a Stribeck decay
-    /// (`static_friction` family; w from a [`Term::Shape`] `StribeckWidth`, 0.5 rad/s for the
-    /// weak-form column without one).
+    /// −sgn β̇ · exp(−(|β̇|/w)^δ): the breakaway excess carried into sliding by a Stribeck decay
+    /// (`static_friction` family; w and δ from the [`Term::Shape`]s `StribeckWidth` and
+    /// `StribeckPower`; the weak-form column without them: w = 0.5 rad/s, δ = 2).
     StaticExcess,
-    /// −sgn β̇ · exp(−(β̇/w)²) at w = the value / 100 rad/s: a weak-form column on the grid of
-    /// the Stribeck family's profile.
-    StribeckGrid(u8),
+    /// −sgn β̇ · exp(−(|β̇|/w)^δ) at w = the first value / 100 rad/s and δ = the second / 10: a
+    /// weak-form column on the grid of the Stribeck family's profile.
+    StribeckGrid(u8, u8),
     /// A family's shape parameter: no weak-form column (zero), its θ entry in the refit by
     /// simulation is the parameter's value.
     Shape(Shape),
@@ -175,10 +175,12 @@ impl Term {
             Term::PowDrag(t) => format!("-(|dbeta|/V)^{}sgn(dbeta)", f64::from(*t) / 10.0),
             Term::Shape(s) => s.name().into(),
             Term::RadialLoadFric => "-sgn(dbeta)h_radial(alpha,beta)".into(),
-            Term::StaticExcess => "-sgn(dbeta)exp(-(dbeta/w)^2)".into(),
-            Term::StribeckGrid(w) => {
-                format!("-sgn(dbeta)exp(-(dbeta/{})^2)", f64::from(*w) / 100.0)
-            }
+            Term::StaticExcess => "-sgn(dbeta)exp(-(|dbeta|/w)^d)".into(),
+            Term::StribeckGrid(w, d) => format!(
+                "-sgn(dbeta)exp(-(|dbeta|/{})^{})",
+                f64::from(*w) / 100.0,
+                f64::from(*d) / 10.0
+            ),
             Term::LoadGrid(r, radial) => format!(
                 "-sgn(dbeta)|{}(F-{}z)|",
                 if *radial { "P" } else { "" },
@@ -361,8 +363,11 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
         Term::PowDrag(t) => (-drag(Some(f64::from(t) / 10.0), v).0, false),
         Term::Shape(_) => (0.0, false),
         Term::RadialLoadFric => (load_shape(geo, al, b, 0.0, true), true),
-        Term::StaticExcess => ((-(v / 0.5).powi(2)).exp(), true),
-        Term::StribeckGrid(w) => ((-(v / (f64::from(w) / 100.0)).powi(2)).exp(), true),
+        Term::StaticExcess => (stribeck(1.0, 0.5, None, v).0, true),
+        Term::StribeckGrid(w, d) => (
+            stribeck(1.0, f64::from(w) / 100.0, Some(f64::from(d) / 10.0), v).0,
+            true,
+        ),
         Term::LoadGrid(r, radial) => (load_shape(geo, al, b, f64::from(r) / 10.0, radial), true),
         Term::LoadFric => (force_shape(geo, al, b), true),
         Term::Cos(k, l) => ((k as f64 * al + l as f64 * b).cos(), false),

@@ -23,6 +23,64 @@ pub struct Report {
     /// Optional (added key): the fits behind the report.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fits: Option<serde_json::Value>,
+    /// Optional (added key): what the final model leaves of the held-out mismatch, and where.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub remaining: Option<Remainder>,
+}
+
+/// What the final model leaves of the held-out mismatch (report key `remaining`): the held-out
+/// χ² per degree of freedom above the camera-noise floor, the fraction of the base model's excess
+/// the findings removed, and where the remainder sits.
+///
+/// For a set W of judging windows with held-out χ²_w (camera-noise units) and d_w = frames − 2
+/// (the fitted initial state), the excess is E = Σχ²_w / Σd_w − 1 (0 for a model that predicts to
+/// the camera noise) with the ratio estimator's σ_E² = n/(n−1) Σ_w (χ²_w − (1 + E) d_w)² / (Σd_w)²
+/// over the n windows (each window a unit, so the residual autocorrelation within a window is
+/// carried). The fraction removed is 1 − R, R = Σ(χ²_fin − d)/Σ(χ²_base − d) on the windows both
+/// models predicted, with the same ratio σ.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Remainder {
+    /// Held-out χ²/dof − 1 of the final model on the judging windows it predicted.
+    pub excess_chi2_per_dof: f64,
+    /// 1σ of it.
+    pub excess_sigma: f64,
+    /// The same for the base model (the same windows).
+    pub base_excess_chi2_per_dof: f64,
+    /// 1σ of it.
+    pub base_excess_sigma: f64,
+    /// Fraction of the base model's excess the findings removed (`None` when the base model's
+    /// excess is itself within noise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fraction_removed: Option<f64>,
+    /// 1σ of it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fraction_removed_sigma: Option<f64>,
+    /// Whether the remainder is within noise: E < [`super::mismatch::REMAINDER_Z`] σ_E.
+    pub within_noise: bool,
+    /// Windows used.
+    pub windows: usize,
+    /// Every bin of every grouping, with its excess.
+    pub bins: Vec<RemainderBin>,
+    /// The bins whose excess is above noise (E_bin ≥ [`super::mismatch::REMAINDER_Z`] σ_bin), largest share of the
+    /// remaining excess χ² first: where the remainder sits.
+    pub located: Vec<RemainderBin>,
+}
+
+/// One bin of the remainder.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RemainderBin {
+    /// Grouping: `run_kind`, `drive_hz`, `beta_phase_deg`, `speed_rad_s`, `stick_slip`.
+    pub group: String,
+    /// The bin (e.g. `driven`, `1.50`, `[60, 120)`, `[0.8, 2.1)`, `stick`).
+    pub bin: String,
+    /// Windows in the bin.
+    pub windows: usize,
+    /// Held-out χ²/dof − 1 of the final model in the bin.
+    pub excess_chi2_per_dof: f64,
+    /// 1σ of it.
+    pub excess_sigma: f64,
+    /// Share of the whole remaining excess χ² (Σ(χ² − d)) that falls in this bin.
+    pub share: f64,
 }
 
 /// The refitted base model.
@@ -183,5 +241,54 @@ pub fn markdown(r: &Report, title: &str) -> String {
             serde_json::to_string(&fi.evidence).unwrap_or_default()
         ));
     }
+    if let Some(rem) = &r.remaining {
+        s.push_str(&remainder_markdown(rem));
+    }
+    s
+}
+
+/// The "what remains and where" section of report.md.
+fn remainder_markdown(rem: &Remainder) -> String {
+    let mut s = String::from("## What remains and where\n\n");
+    let removed = match (rem.fraction_removed, rem.fraction_removed_sigma) {
+        (Some(f), Some(e)) => format!(
+            "; the findings removed {:.0} ± {:.0} % of the base model's excess",
+            100.0 * f,
+            100.0 * e
+        ),
+        _ => String::new(),
+    };
+    let numbers = format!(
+        "held-out χ²/dof − 1 = {:.3} ± {:.3} on {} judging windows (base model: {:.3} ± {:.3}{removed})",
+        rem.excess_chi2_per_dof,
+        rem.excess_sigma,
+        rem.windows,
+        rem.base_excess_chi2_per_dof,
+        rem.base_excess_sigma
+    );
+    if rem.within_noise {
+        s.push_str(&format!("Nothing left above noise: {numbers}.\n\n"));
+        return s;
+    }
+    s.push_str(&format!(
+        "The final model leaves a mismatch above the camera-noise floor: {numbers}.\n\n"
+    ));
+    if rem.located.is_empty() {
+        s.push_str("No single bin (run kind, drive frequency, β phase, speed, stick/slip) stands out: the remainder is spread.\n\n");
+        return s;
+    }
+    s.push_str("| where | bin | windows | χ²/dof − 1 | share of the remaining excess |\n|---|---|---|---|---|\n");
+    for b in &rem.located {
+        s.push_str(&format!(
+            "| {} | {} | {} | {:.3} ± {:.3} | {:.0} % |\n",
+            b.group,
+            b.bin,
+            b.windows,
+            b.excess_chi2_per_dof,
+            b.excess_sigma,
+            100.0 * b.share
+        ));
+    }
+    s.push('\n');
     s
 }

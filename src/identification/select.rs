@@ -248,11 +248,15 @@ pub fn select(
                 .as_ref()
                 .map(|s| compare(&cur.held, &s.held, ctx.wins, ctx.runs));
             progress(&format!(
-                "  screening z = {} (gain {}), held-out z = {} (threshold {z_crit:.2}), gain = {}",
+                "  screening z = {} (gain {}), held-out z = {} (threshold {z_crit:.2}), gain = {}; \
+                 windows it could not simulate: {}",
                 scr.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
                 scr.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
                 cmp.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
                 cmp.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
+                cmp.or(scr)
+                    .map(|c| c.failed_after.to_string())
+                    .unwrap_or("–".into()),
             ));
             tried.push(Tried {
                 round,

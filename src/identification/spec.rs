@@ -21,9 +21,10 @@ pub fn column_term(t: Term, shapes: &[(Shape, f64)]) -> Term {
         Term::RadialLoadFric => {
             shape(Shape::LoadWeight).map(|r| Term::LoadGrid((10.0 * r).round() as u8, true))
         }
-        Term::StaticExcess => {
-            shape(Shape::StribeckWidth).map(|w| Term::StribeckGrid((100.0 * w).round() as u8))
-        }
+        Term::StaticExcess => shape(Shape::StribeckWidth).map(|w| {
+            let d = shape(Shape::StribeckPower).unwrap_or(super::model::STRIBECK_POWER);
+            Term::StribeckGrid((100.0 * w).round() as u8, (10.0 * d).round() as u8)
+        }),
         _ => None,
     }
     .unwrap_or(t)
@@ -64,7 +65,7 @@ pub fn free_shapes(terms: &[Term], theta: &[f64]) -> (Vec<Term>, Vec<f64>) {
                 },
                 Some((Shape::LoadWeight, f64::from(r) / 10.0)),
             ),
-            Term::StribeckGrid(w) => (
+            Term::StribeckGrid(w, _) => (
                 Term::StaticExcess,
                 Some((Shape::StribeckWidth, f64::from(w) / 100.0)),
             ),
@@ -75,6 +76,10 @@ pub fn free_shapes(terms: &[Term], theta: &[f64]) -> (Vec<Term>, Vec<f64>) {
         if let Some((s, value)) = shape {
             t.push(Term::Shape(s));
             v.push(value);
+        }
+        if let Term::StribeckGrid(_, d) = term {
+            t.push(Term::Shape(Shape::StribeckPower));
+            v.push(f64::from(d) / 10.0);
         }
     }
     v.extend_from_slice(&theta[terms.len().min(theta.len())..]);
@@ -149,11 +154,13 @@ pub fn coefficients(terms: &[Term], coef: &[f64]) -> Coefficients {
             }
             Term::Shape(Shape::LoadWeight) => c.load_weight = v,
             Term::StaticExcess => c.eta_static_excess = v,
-            Term::StribeckGrid(w) => {
+            Term::StribeckGrid(w, d) => {
                 c.eta_static_excess = v;
                 c.stribeck_width = f64::from(w) / 100.0;
+                c.stribeck_power = Some(f64::from(d) / 10.0);
             }
             Term::Shape(Shape::StribeckWidth) => c.stribeck_width = v,
+            Term::Shape(Shape::StribeckPower) => c.stribeck_power = Some(v),
             Term::Compliance => compliance = v,
             Term::DrivenOffset => offset = v,
             Term::DrivenOffsetRate => offset_rate = v,
@@ -277,17 +284,28 @@ mod tests {
             Term::Shape(Shape::DragExponent),
             Term::RadialLoadFric,
             Term::Shape(Shape::LoadWeight),
+            Term::StaticExcess,
+            Term::Shape(Shape::StribeckWidth),
+            Term::Shape(Shape::StribeckPower),
         ];
-        let coef = [20.0, 0.4, 1.5, 3.0, 2.2];
+        let coef = [20.0, 0.4, 1.5, 3.0, 2.2, 12.0, 1.5, 1.0];
         let (ft, fc) = fix_shapes(&terms, &coef);
-        assert_eq!(ft, [Term::Eta, Term::PowDrag(15), Term::LoadGrid(22, true)]);
-        assert_eq!(fc, [20.0, 0.4, 3.0]);
+        assert_eq!(
+            ft,
+            [
+                Term::Eta,
+                Term::PowDrag(15),
+                Term::LoadGrid(22, true),
+                Term::StribeckGrid(150, 10)
+            ]
+        );
+        assert_eq!(fc, [20.0, 0.4, 3.0, 12.0]);
         assert_eq!(coefficients(&ft, &fc), coefficients(&terms, &coef));
         let mut th = fc.clone();
         th.push(0.006);
         let (bt, bc) = free_shapes(&ft, &th);
         assert_eq!(bt, terms);
-        assert_eq!(bc[..5], coef);
-        assert_eq!(bc[5], 0.006);
+        assert_eq!(bc[..8], coef);
+        assert_eq!(bc[8], 0.006);
     }
 }

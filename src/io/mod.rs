@@ -17,9 +17,12 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     if !dir.exists() {
         std::fs::create_dir_all(dir).map_err(|e| Error::file("create", dir, e))?;
     }
-    let name = path
-        .file_name()
-        .ok_or_else(|| Error::Io(format!("not a file path: {}", path.display())))?;
+    let name = path.file_name().ok_or_else(|| {
+        Error::option(
+            format!("output path {}", path.display()),
+            "is not a file path (it ends in `..` or is a root)",
+        )
+    })?;
     let tmp = dir.join(format!(
         ".{}.tmp-{}",
         name.to_string_lossy(),

@@ -134,13 +134,13 @@ pub fn evaluate<S: DrivenOscillator + ?Sized>(
         crate::error::finite_state("segment state", x)?;
     }
     let s = spec.shift(sys)?;
-    let sym =
-        match spec.section {
-            Section::Stroboscopic => None,
-            Section::HalfPeriod => Some(sys.half_period_symmetry().ok_or_else(|| {
-                Error::Unsupported("this system has no half-period symmetry".into())
-            })?),
-        };
+    let sym = match spec.section {
+        Section::Stroboscopic => None,
+        Section::HalfPeriod => Some(
+            sys.half_period_symmetry()
+                .ok_or(Error::NoHalfPeriodSymmetry)?,
+        ),
+    };
     let times = segment_times(sys, spec, m);
     // dt_i/dp = (t_i / T) dT/dp for parameters that change the period
     let np = sys.n_params();
@@ -257,7 +257,7 @@ fn state_system(seg: &Segments) -> Result<CyclicBlockSystem> {
         .map(|img| {
             img.jac_x
                 .map(|b| DMatrix::from_column_slice(2, 2, b.as_slice()))
-                .ok_or_else(|| Error::Continuation("segment without Jacobian".into()))
+                .ok_or(Error::MissingJacobian { what: "state" })
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(CyclicBlockSystem {
@@ -292,7 +292,7 @@ pub fn shoot_multiple<S: DrivenOscillator + ?Sized>(
         if rn < opts.newton_tol && sn < opts.newton_tol.max(1e-12) * 10.0 {
             let floquet = seg
                 .floquet()
-                .ok_or_else(|| Error::Continuation("segment without Jacobian".into()))?;
+                .ok_or(Error::MissingJacobian { what: "state" })?;
             return Ok(MultipleShootingOrbit {
                 states: y,
                 spec: *spec,

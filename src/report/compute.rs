@@ -375,9 +375,13 @@ pub struct Bifurcations {
 /// The lock branch at Θ = 0 continued in f from f_c/8 until its fold is located.
 fn theta0_fold(gear: &GearParams) -> Result<Theta0Fold> {
     let p0 = gear.with_parallel_shafts_deg(0.0);
-    let fc = p0.lock_loss_frequency().ok_or_else(|| {
-        crate::Error::Unsupported("no lock-loss frequency (ζ = 0 or g ≤ η)".into())
-    })?;
+    let fc = p0
+        .lock_loss_frequency()
+        .ok_or(crate::Error::NoLockLossFrequency {
+            g: p0.g(),
+            zeta: p0.zeta,
+            eta: p0.eta,
+        })?;
     let f0 = fc / 8.0;
     let g = p0.driven(f0)?;
     let start = g.lock_branch()?.stable.state;
