@@ -14,8 +14,9 @@
 //!   parameters by natural continuation;
 //! - [`minaug`]: the map linearisation shared by every corrector, and the bordered test function of
 //!   the minimally augmented systems;
-//! - [`palc2`]: two-parameter curves by pseudo-arclength on the minimally augmented systems, with
-//!   [`codim2`]: codimension-two points located on them.
+//! - [`palc2`]: two-parameter curves by pseudo-arclength on the minimally augmented systems and of
+//!   nonsmooth points (grazing, end of sticking), with [`codim2`]: codimension-two points located
+//!   on them.
 //!
 //! Unknowns u = (β, ω, λ). Equations: F(x, λ) = Pᵏ(x; λ) − x − (s, 0) = 0 and the arclength
 //! condition t·(u − u_pred) = 0, with t the unit tangent. The λ column ∂F/∂λ is the map's `jac_p`

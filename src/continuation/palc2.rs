@@ -18,6 +18,11 @@
 //! each trial point corrected on the hyperplane t_a·(W u − W u_a) = σ; a bracket whose test function
 //! does not fall below 1e-3 of its end values is a jump (a nonsmooth point), not a zero, and is
 //! dropped.
+//!
+//! Curves of nonsmooth points use the same solver with another scalar equation g: the grazing
+//! margin of the one-sided flow ([`continue_grazing_curve`], the onset of sticking) and the edge
+//! margin a − σ r_s of a tracked arrival on Σ on the real map ([`continue_event_edge_curve`], the
+//! end of sticking).
 
 use super::codim2::{test_functions, Codim2Kind, Codim2Point, CurveLocal};
 use super::minaug::{
