@@ -4,8 +4,9 @@
 //! the right-hand side alone (as many `forces_jet` calls as the event-driven run makes).
 //!
 //! `per_period_1e-8`: DP5 and DOP853 at tol 1e-8 with friction, P_T from (0.5, 2) with and without
-//! the state Jacobian, and 1000 periods from rest with a strobe sample at every period (no
-//! Jacobian; the time divided by 1000 is the cost per period).
+//! the state Jacobian, and the workload of the per-period cost goals (docs/performance.md): 1000
+//! periods from rest with a strobe sample at every period, without (`1000_periods_strobe`) and with
+//! the state Jacobian (`1000_periods_strobe_jac`); the time divided by 1000 is the cost per period.
 //!
 //! Run briefly: `cargo bench --bench integrators -- --warm-up-time 1 --measurement-time 3`
 //! (only the 1e-8 group: append `per_period`)
@@ -94,20 +95,27 @@ fn bench_per_period(c: &mut Criterion) {
         // 1000 periods from rest (β = π, the paper's start), a strobe sample at every period
         let n = 1000;
         let strobe: Vec<f64> = (0..=n).map(|i| i as f64 * t1).collect();
-        let o = FlowOptions::with_tol(1e-8).samples(strobe);
         group.sample_size(10);
-        group.bench_function(format!("1000_periods_strobe/{name}"), |b| {
-            b.iter(|| {
-                m.flow(
-                    &gear,
-                    0.0,
-                    black_box([std::f64::consts::PI, 0.0]),
-                    n as f64 * t1,
-                    &o,
-                )
-                .unwrap()
-            })
-        });
+        for (label, sens) in [
+            ("1000_periods_strobe", Sensitivity::None),
+            ("1000_periods_strobe_jac", Sensitivity::State),
+        ] {
+            let o = FlowOptions::with_tol(1e-8)
+                .sensitivity(sens)
+                .samples(strobe.clone());
+            group.bench_function(format!("{label}/{name}"), |b| {
+                b.iter(|| {
+                    m.flow(
+                        &gear,
+                        0.0,
+                        black_box([std::f64::consts::PI, 0.0]),
+                        n as f64 * t1,
+                        &o,
+                    )
+                    .unwrap()
+                })
+            });
+        }
         group.sample_size(100);
     }
     group.finish();

@@ -52,6 +52,9 @@ pub struct WorkPrecisionSetup {
     pub x0: [f64; 2],
     /// Duration in drive periods (1 = one stroboscopic map).
     pub periods: f64,
+    /// Record a sample at every whole drive period (the strobe of a simulation), as a user
+    /// watching the stroboscopic map does; the samples do not change the steps.
+    pub strobe: bool,
     /// Jacobians to propagate (and compare).
     pub sensitivity: Sensitivity,
     /// Tolerance of the event-driven reference (DOP853).
@@ -67,6 +70,7 @@ impl WorkPrecisionSetup {
         Self {
             x0,
             periods: 1.0,
+            strobe: false,
             sensitivity: Sensitivity::State,
             reference_tol: 1e-13,
             min_time_s: 0.05,
@@ -126,10 +130,19 @@ pub fn work_precision<S: DrivenOscillator + ?Sized>(
 ) -> Result<Vec<WorkPrecisionPoint>> {
     let refflow = reference(sys, setup)?;
     let t1 = setup.periods * sys.period();
+    let strobe: Vec<f64> = if setup.strobe {
+        (0..=setup.periods.floor() as usize)
+            .map(|i| i as f64 * sys.period())
+            .collect()
+    } else {
+        Vec::new()
+    };
     let mut out = Vec::with_capacity(candidates.len());
     for c in candidates {
         let tol = if c.tol > 0.0 { c.tol } else { 1e-9 };
-        let opts = FlowOptions::with_tol(tol).sensitivity(setup.sensitivity);
+        let opts = FlowOptions::with_tol(tol)
+            .sensitivity(setup.sensitivity)
+            .samples(strobe.clone());
         let name = c.method.name();
         let wrap = |e: Error| Error::Integration {
             t: 0.0,

@@ -155,5 +155,8 @@ fn theta25_return_to_t2_on_the_down_sweep_located() {
         "return to T/2: coarse sweep not T/2 at {fo:.2}, T/2 at {fn_:.2}; spread {:.2e} Hz",
         spread(&vals)
     );
-    assert!(spread(&vals) < 1e-3, "{vals:?}");
+    // The chaotic transients near the crisis amplify last-bit changes of the arithmetic: a
+    // right-hand side and step-size controller differing in the last bit moved the N = 200 value
+    // by 9e-4 Hz (docs/continuation.md), so the stated error is ±1e-3 Hz and the bound 2e-3.
+    assert!(spread(&vals) < 2e-3, "{vals:?}");
 }

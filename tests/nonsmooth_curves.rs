@@ -154,11 +154,11 @@ fn theta0_relock_is_the_homoclinic_of_the_slip_cycle() {
     assert!(r.lock_offset < 1e-4 && r.slips > 10);
 }
 
-#[test]
-fn end_of_sticking_curve_point_agrees_with_a_continuation_in_f() {
-    // the asymmetric T orbit at Θ = 25°: its stick phase shrinks to nothing near 2.343 Hz
+/// From the nonsmooth point between the event signatures `sigs` that a continuation in f locates
+/// on the asymmetric T orbit at Θ = 25°, 4 steps of the event-edge curve; at the last point's Θ a
+/// continuation in f locates the same point.
+fn event_edge_curve_agrees(sigs: [(usize, usize); 2]) {
     let spec = OrbitSpec::stroboscopic(1, 1);
-    let sigs = [(1, 1), (2, 0)];
     let sp = nonsmooth_by_continuation(25.0, spec, [2.9748, 24.3248], 2.36, 0.025, &sigs, true);
     let g = Gear::paper(25.0, sp.param).unwrap();
     let opts = CurveOptions {
@@ -179,8 +179,21 @@ fn end_of_sticking_curve_point_agrees_with_a_continuation_in_f() {
     assert!(p.along > 25.5 && p.test_value.abs() < 1e-8, "{p:?}");
     let q = nonsmooth_by_continuation(p.along, spec, p.x, p.free, 0.004, &sigs, true);
     println!(
-        "Θ = {:.6}°: edge curve {:.10}, continuation {:.10} ± {:.1e} Hz",
-        p.along, p.free, q.param, q.precision
+        "{sigs:?}: Θ = 25°: {:.10} (continuation {:.10}); Θ = {:.6}°: edge curve {:.10}, \
+         continuation {:.10} ± {:.1e} Hz",
+        c.points[0].free, sp.param, p.along, p.free, q.param, q.precision
     );
     assert!((q.param - p.free).abs() < 1e-7);
+}
+
+#[test]
+fn end_of_sticking_curve_point_agrees_with_a_continuation_in_f() {
+    // the asymmetric T orbit's stick phase shrinks to nothing near 2.343 Hz
+    event_edge_curve_agrees([(1, 1), (2, 0)]);
+}
+
+#[test]
+fn crossing_onset_curve_point_agrees_with_a_continuation_in_f() {
+    // near 2.364 Hz the arrival before the stick phase starts to cross first
+    event_edge_curve_agrees([(0, 1), (1, 1)]);
 }

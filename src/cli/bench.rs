@@ -32,6 +32,10 @@ pub struct Args {
     /// Do not propagate the state Jacobian (default: P_T with its Jacobian).
     #[arg(long)]
     no_jacobian: bool,
+    /// Record a sample at every whole drive period (the strobe of a simulation; with
+    /// `--periods 1000 --x0-deg 180,0`: the per-period cost goals of docs/performance.md).
+    #[arg(long)]
+    strobe: bool,
     /// Tolerances of the event-driven DP5 [dimensionless], each in (0, 1), comma-separated.
     #[arg(
         long,
@@ -86,6 +90,7 @@ struct Report {
     delta: f64,
     x0: [f64; 2],
     periods: f64,
+    strobe: bool,
     jacobian: bool,
     reference_tol: f64,
     points: Vec<crate::bench::WorkPrecisionPoint>,
@@ -178,6 +183,7 @@ pub fn run(a: Args) -> Result<()> {
     let setup = WorkPrecisionSetup {
         x0,
         periods: a.periods,
+        strobe: a.strobe,
         sensitivity: if a.no_jacobian {
             Sensitivity::None
         } else {
@@ -196,6 +202,7 @@ pub fn run(a: Args) -> Result<()> {
         delta: gear.delta,
         x0,
         periods: a.periods,
+        strobe: a.strobe,
         jacobian: !a.no_jacobian,
         reference_tol: a.reference_tol,
         points,
@@ -223,31 +230,34 @@ pub fn run(a: Args) -> Result<()> {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "Θ = {:.2}°, f = {} Hz, x0 = ({}, {}), {} period(s), Jacobian: {}, reference tol {:e}",
+            "Θ = {:.2}°, f = {} Hz, x0 = ({}, {}), {} period(s), strobe: {}, Jacobian: {}, \
+             reference tol {:e}",
             report.theta_deg,
             report.f_hz,
             x0[0],
             x0[1],
             report.periods,
+            report.strobe,
             report.jacobian,
             report.reference_tol
         );
         let _ = writeln!(
             s,
-            "{:<44} {:>9} {:>10} {:>10} {:>9} {:>8} {:>12}",
-            "method", "tol", "error", "jac_err", "rhs", "steps", "time [µs]"
+            "{:<44} {:>9} {:>10} {:>10} {:>9} {:>8} {:>12} {:>12}",
+            "method", "tol", "error", "jac_err", "rhs", "steps", "time [µs]", "µs/period"
         );
         for p in &report.points {
             let _ = writeln!(
                 s,
-                "{:<44} {:>9.0e} {:>10.2e} {:>10} {:>9} {:>8} {:>12.1}",
+                "{:<44} {:>9.0e} {:>10.2e} {:>10} {:>9} {:>8} {:>12.1} {:>12.2}",
                 p.method.chars().take(44).collect::<String>(),
                 p.tol,
                 p.error,
                 p.jac_error.map(|e| format!("{e:.2e}")).unwrap_or_default(),
                 p.rhs_evals,
                 p.steps,
-                p.time_s * 1e6
+                p.time_s * 1e6,
+                p.time_s * 1e6 / report.periods
             );
         }
         let _ = writeln!(

@@ -199,43 +199,54 @@ pub struct ArrivalEdge {
     pub t: f64,
 }
 
-/// The arrivals on Σ (stick entries and crossings) of the orbit from `x` over the map's duration.
+/// The arrivals on Σ (stick entries and crossings) of the orbit from `x` over the map's duration,
+/// each with the side it arrives from.
 fn arrivals<S: Parametrised, M: FlowMethod<S>>(
     method: &M,
     sys: &S,
     spec: &OrbitSpec,
     x: [f64; 2],
     tol: f64,
-) -> Result<Vec<crate::integrator::Event>> {
+) -> Result<Vec<(crate::integrator::Event, f64)>> {
     use crate::integrator::EventKind;
     let t1 = spec.periods() * sys.period();
-    let fl = method.flow(
-        sys,
-        0.0,
-        x,
-        t1,
-        &FlowOptions::with_tol(tol).record_events(true),
-    )?;
-    Ok(fl
-        .events
-        .into_iter()
-        .filter(|e| matches!(e.kind, EventKind::StickStart | EventKind::Crossing { .. }))
-        .collect())
+    let opts = FlowOptions::with_tol(tol).record_events(true);
+    let fl = method.flow(sys, 0.0, x, t1, &opts)?;
+    let mut side = crate::integrator::initial_mode(sys, 0.0, x).side();
+    let mut out = Vec::new();
+    for e in fl.events {
+        match e.kind {
+            EventKind::Crossing { to, .. } => {
+                out.push((e, side));
+                side = f64::from(to);
+            }
+            EventKind::StickStart => {
+                out.push((e, side));
+                side = 0.0;
+            }
+            EventKind::Release { to } => side = f64::from(to),
+            EventKind::Graze { .. } => {}
+        }
+    }
+    Ok(out)
 }
 
-/// The edge margin a − σ r_s of the orbit's arrival on Σ nearest in time to `t_ref`.
+/// The edge margin a − σ r_s of the orbit's arrival on Σ from side `edge.1` nearest in time to
+/// `edge.2`, with `edge` = (σ, side, t_ref).
 pub fn arrival_edge<S: Parametrised, M: FlowMethod<S>>(
     method: &M,
     sys: &S,
     spec: &OrbitSpec,
     x: [f64; 2],
-    sigma: f64,
-    t_ref: f64,
+    edge: (f64, f64, f64),
     tol: f64,
 ) -> Result<ArrivalEdge> {
+    let (sigma, side, t_ref) = edge;
     let ev = arrivals(method, sys, spec, x, tol)?;
     let e = ev
         .iter()
+        .filter(|(_, s)| *s == side)
+        .map(|(e, _)| e)
         .min_by(|a, b| (a.t - t_ref).abs().total_cmp(&(b.t - t_ref).abs()))
         .ok_or_else(|| Error::Continuation("the orbit has no arrival on Σ to track".into()))?;
     Ok(ArrivalEdge {
@@ -244,23 +255,24 @@ pub fn arrival_edge<S: Parametrised, M: FlowMethod<S>>(
     })
 }
 
-/// The arrival on Σ whose |a| is nearest to the static bound r_s: (σ = sgn a, its time).
+/// The arrival on Σ whose |a| is nearest to the static bound r_s: (σ = sgn a, the side it comes
+/// from, its time).
 pub fn nearest_edge_arrival<S: Parametrised, M: FlowMethod<S>>(
     method: &M,
     sys: &S,
     spec: &OrbitSpec,
     x: [f64; 2],
     tol: f64,
-) -> Result<(f64, f64)> {
+) -> Result<(f64, f64, f64)> {
     let ev = arrivals(method, sys, spec, x, tol)?;
     let gap = |e: &crate::integrator::Event| {
         (sys.forces(e.t, e.beta, 0.0).a.abs() - sys.static_friction(e.t, e.beta)).abs()
     };
-    let e = ev
+    let (e, side) = ev
         .iter()
-        .min_by(|a, b| gap(a).total_cmp(&gap(b)))
+        .min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
         .ok_or_else(|| Error::Continuation("the orbit has no arrival on Σ".into()))?;
-    Ok((sys.forces(e.t, e.beta, 0.0).a.signum(), e.t))
+    Ok((sys.forces(e.t, e.beta, 0.0).a.signum(), *side, e.t))
 }
 
 /// Unit vector along `v` (unchanged if it is zero or not finite).

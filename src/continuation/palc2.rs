@@ -138,7 +138,12 @@ enum Test {
     Grazing(f64),
     /// a − σ r_s at the tracked arrival on Σ: zero where the arrival lies on the edge σ of the stick
     /// region (a stick phase starts or ends, a crossing appears).
-    ArrivalEdge(f64),
+    ArrivalEdge {
+        /// The edge: a = σ r_s.
+        sigma: f64,
+        /// The side the tracked arrival comes from.
+        side: f64,
+    },
 }
 
 /// The augmented system of one curve.
@@ -188,10 +193,11 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
                 let g = grazing_margin(self.method, &sys, &self.spec, x, side, tol)?;
                 (g, [0.0; 2], [0.0; 2])
             }
-            Test::ArrivalEdge(sigma) => {
+            Test::ArrivalEdge { sigma, side } => {
                 let x = [u[0], u[1]];
                 let tol = self.opts.shooting.tol;
-                let e = arrival_edge(self.method, &sys, &self.spec, x, sigma, self.t_ref, tol)?;
+                let edge = (sigma, side, self.t_ref);
+                let e = arrival_edge(self.method, &sys, &self.spec, x, edge, tol)?;
                 return Ok((lin, e.margin, [0.0; 2], [0.0; 2], e.t));
             }
         };
@@ -317,7 +323,7 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
 
     /// Resets the bordering vectors to the null vectors at `node` (a no-op for NS curves).
     fn rebord(&mut self, node: &Node) {
-        if matches!(self.test, Test::ArrivalEdge(_)) {
+        if matches!(self.test, Test::ArrivalEdge { .. }) {
             self.t_ref = node.event_time;
         }
         if matches!(self.test, Test::Bordered(_)) {
@@ -504,7 +510,8 @@ pub fn locate_grazing<S: Parametrised, M: FlowMethod<OneSided<S>>>(
 ///   Pᵏ(x; λ₁, λ₂) − x − (s, 0) = 0,   a(t_e, β_e, 0) − σ r_s(t_e, β_e) = 0,
 /// ```
 ///
-/// with t_e the arrival tracked from point to point (the one nearest to the previous point's).
+/// with t_e the arrival from the same side tracked from point to point (the one nearest to the
+/// previous point's).
 /// The arrival and σ are chosen at the start as the arrival whose |a| is nearest to r_s (the
 /// nonsmooth point a one-parameter continuation located). Turning points and fold/flip points of
 /// the orbit on the curve are located as on the grazing curves.
@@ -522,14 +529,14 @@ pub fn continue_event_edge_curve<S: Parametrised, M: FlowMethod<S>>(
     opts.validate()?;
     check_curve_args(free, along, x0, free0)?;
     let start = sys.with_param(free, free0)?;
-    let (sigma, t_ref) = nearest_edge_arrival(method, &start, spec, x0, opts.shooting.tol)?;
+    let (sigma, side, t_ref) = nearest_edge_arrival(method, &start, spec, x0, opts.shooting.tol)?;
     let mut s = System {
         method,
         sys,
         spec: *spec,
         kind: SpecialKind::Nonsmooth,
         params: [free, along],
-        test: Test::ArrivalEdge(sigma),
+        test: Test::ArrivalEdge { sigma, side },
         b: [1.0, 0.0],
         c: [1.0, 0.0],
         opts: *opts,

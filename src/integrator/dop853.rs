@@ -6,7 +6,7 @@
 // the coefficients are kept digit for digit as published (30 digits; rounded to f64 on parsing)
 #![allow(clippy::excessive_precision)]
 
-use super::tableau::{row, ErrorEstimate, Tableau, SMAX};
+use super::tableau::{row, ErrorEstimate, Pair, Tableau, SMAX};
 use super::{Flow, FlowMethod, FlowOptions};
 use crate::error::Result;
 use crate::model::DrivenOscillator;
@@ -303,9 +303,14 @@ pub(super) const DOP853: Tableau = Tableau {
     fac_max: 1.0 / 0.333,
 };
 
-/// Interior points per step at which the continuous extension is checked for a sign change of ω
-/// (more than DP5's 8: the steps are longer).
-const EVENT_PROBES: usize = 16;
+/// DOP853 with 16 interior probes per step for a sign change of ω (more than DP5's 8: the steps
+/// are longer).
+pub(super) struct Dop853;
+
+impl Pair for Dop853 {
+    const TAB: Tableau = DOP853;
+    const PROBES: usize = 16;
+}
 
 /// The exact event-driven Filippov integrator with adaptive Dormand–Prince 8(5,3): the same events,
 /// stick phases and saltation Jacobians as [`EventDriven`](super::EventDriven), fewer and longer
@@ -327,6 +332,6 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for EventDriven853 {
         DOP853.name.into()
     }
     fn flow(&self, sys: &S, t0: f64, x0: [f64; 2], t1: f64, opts: &FlowOptions) -> Result<Flow> {
-        super::event_driven::integrate(&DOP853, EVENT_PROBES, sys, t0, x0, t1, opts)
+        super::event_driven::integrate::<Dop853, S>(sys, t0, x0, t1, opts)
     }
 }

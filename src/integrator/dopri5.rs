@@ -2,7 +2,7 @@
 //! continuous extension of order 4 (as in Hairer's DOPRI5); the event location, stick phases and
 //! saltation matrices are those of `event_driven.rs`.
 
-use super::tableau::{row, ErrorEstimate, Tableau, SMAX};
+use super::tableau::{row, ErrorEstimate, Pair, Tableau, SMAX};
 use super::{FlowMethod, FlowOptions};
 use crate::error::Result;
 use crate::integrator::Flow;
@@ -87,8 +87,13 @@ pub(super) const DOPRI5: Tableau = Tableau {
     fac_max: 5.0,
 };
 
-/// Interior points per step at which the continuous extension is checked for a sign change of ω.
-const EVENT_PROBES: usize = 8;
+/// DP5 with 8 interior probes per step for a sign change of ω.
+pub(super) struct Dp5;
+
+impl Pair for Dp5 {
+    const TAB: Tableau = DOPRI5;
+    const PROBES: usize = 8;
+}
 
 /// The exact event-driven Filippov integrator with adaptive Dormand–Prince 5(4).
 ///
@@ -109,6 +114,6 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for EventDriven {
         DOPRI5.name.into()
     }
     fn flow(&self, sys: &S, t0: f64, x0: [f64; 2], t1: f64, opts: &FlowOptions) -> Result<Flow> {
-        super::event_driven::integrate(&DOPRI5, EVENT_PROBES, sys, t0, x0, t1, opts)
+        super::event_driven::integrate::<Dp5, S>(sys, t0, x0, t1, opts)
     }
 }

@@ -9,9 +9,11 @@
 //! crossing, diag(1, 0) at stick entry, I at a release with r_s = r (numerics.md). Stick phases are
 //! solved directly (the release time is a root of |a(t, β)| − r_s, no integration while stuck).
 
-use super::augmented::{augmented_rhs, param_col, z_beta, z_omega, Layout, NMAX, V};
-use super::tableau::{nested, ErrorEstimate, Tableau, DMAX, SMAX};
-use super::{check_interval, Event, EventKind, Flow, FlowOptions, Mode, Sample, Stats};
+use super::augmented::{augmented_rhs_law, param_col, z_beta, z_omega, Layout, NMAX};
+use super::tableau::{nested, ErrorEstimate, Pair, Tableau, DMAX, SMAX};
+use super::{
+    check_interval, Event, EventKind, Flow, FlowOptions, Mode, Sample, Sensitivity, Stats,
+};
 use crate::error::{Error, Result};
 use crate::model::{release_function, DrivenOscillator};
 use crate::numerics::Illinois;
@@ -19,12 +21,14 @@ use crate::numerics::Illinois;
 /// Largest number of coefficients r of the continuous extension.
 const RMAX: usize = 4 + DMAX;
 
-/// Integrates `sys` from (t₀, x₀) to t₁ with the pair `tab`, checking `probes` interior points of
-/// the continuous extension per step for a sign change of ω (catches short slips that start and
-/// end inside one step).
-pub(super) fn integrate<S: DrivenOscillator + ?Sized>(
-    tab: &'static Tableau,
-    probes: usize,
+/// Integrates `sys` from (t₀, x₀) to t₁ with the pair `P`, checking [`Pair::PROBES`] interior
+/// points of the continuous extension per step for a sign change of ω (catches short slips that
+/// start and end inside one step).
+///
+/// The solver is compiled for each augmented dimension separately (2: the state alone, 6: with
+/// the 2×2 state Jacobian, [`NMAX`]: with parameter columns), so the stage combinations of the
+/// common cases run over fixed-size arrays with the tableau's coefficients known at compile time.
+pub(super) fn integrate<P: Pair, S: DrivenOscillator + ?Sized>(
     sys: &S,
     t0: f64,
     x0: [f64; 2],
@@ -33,13 +37,24 @@ pub(super) fn integrate<S: DrivenOscillator + ?Sized>(
 ) -> Result<Flow> {
     check_interval(t0, x0, t1)?;
     opts.validate()?;
-    Solver::new(sys, opts, tab, probes).run(t0, x0, t1)
+    match opts.sensitivity {
+        Sensitivity::None => Solver::<S, P, 2>::new(sys, opts).run(t0, x0, t1),
+        Sensitivity::State => Solver::<S, P, 6>::new(sys, opts).run(t0, x0, t1),
+        Sensitivity::StateAndParams => Solver::<S, P, NMAX>::new(sys, opts).run(t0, x0, t1),
+    }
 }
 
 /// Coefficients r₀ … r_{m−1} of the continuous extension of component `i` (module doc of
 /// `tableau.rs`); `m` = 4 + rows of d.
 #[inline(always)]
-fn dense_coeffs(tab: &Tableau, i: usize, y: &V, yn: &V, k: &[V; SMAX], hs: f64) -> [f64; RMAX] {
+fn dense_coeffs<const N: usize>(
+    tab: &Tableau,
+    i: usize,
+    y: &[f64; N],
+    yn: &[f64; N],
+    k: &[[f64; N]; SMAX],
+    hs: f64,
+) -> [f64; RMAX] {
     let ydiff = yn[i] - y[i];
     let bspl = hs * k[0][i] - ydiff;
     let mut r = [0.0; RMAX];
@@ -59,60 +74,116 @@ fn dense_coeffs(tab: &Tableau, i: usize, y: &V, yn: &V, k: &[V; SMAX], hs: f64) 
     r
 }
 
-/// The argument y₀ + h Σⱼ aᵢⱼ kⱼ of stage `i` over the first `n` components.
+/// y₀ + h Σⱼ wⱼ kⱼ over the first `M` components (the rest zero) and the stages j with a
+/// non-zero weight among the first `stages`: a stage argument (w = row i of a) or the solution
+/// (w = b). Each component sums over j in ascending order.
 #[inline(always)]
-fn stage_argument(tab: &Tableau, i: usize, y: &V, k: &[V; SMAX], hs: f64, n: usize, out: &mut V) {
-    let a = &tab.a[i];
-    for c in 0..n {
-        let mut acc = 0.0;
-        for j in 0..i {
-            if a[j] != 0.0 {
-                acc += a[j] * k[j][c];
+fn combine<const N: usize, const M: usize>(
+    w: &[f64; SMAX],
+    stages: usize,
+    y: &[f64; N],
+    k: &[[f64; N]; SMAX],
+    hs: f64,
+) -> [f64; N] {
+    let mut acc = [0.0; M];
+    for (kj, &wj) in k.iter().zip(w).take(stages) {
+        if wj != 0.0 {
+            for c in 0..M {
+                acc[c] += wj * kj[c];
             }
         }
-        out[c] = y[c] + hs * acc;
     }
+    let mut out = [0.0; N];
+    for c in 0..M {
+        out[c] = y[c] + hs * acc[c];
+    }
+    out
 }
 
-struct Solver<'a, S: ?Sized> {
+/// Σⱼ wⱼ kⱼ over the stages j with a non-zero weight up to the first-same-as-last one (error
+/// estimates).
+#[inline(always)]
+fn weighted_sum<const N: usize>(w: &[f64; SMAX], stages: usize, k: &[[f64; N]; SMAX]) -> [f64; N] {
+    let mut acc = [0.0; N];
+    for (kj, &wj) in k.iter().zip(w).take(stages) {
+        if wj != 0.0 {
+            for c in 0..N {
+                acc[c] += wj * kj[c];
+            }
+        }
+    }
+    acc
+}
+
+struct Solver<'a, S: ?Sized, P, const N: usize> {
     sys: &'a S,
     opts: &'a FlowOptions,
-    tab: &'static Tableau,
-    probes: usize,
-    /// Which Jacobian columns are propagated.
+    /// Which Jacobian columns are propagated (constant for N = 2 and 6: see [`Self::layout`]).
     layout: Layout,
     stats: Stats,
     events: Vec<Event>,
     samples: Vec<Sample>,
     next_sample: usize,
+    pair: std::marker::PhantomData<P>,
 }
 
 /// Step-size controller state (PI control as in Hairer's DOPRI5/DOP853).
 struct Controller {
-    facold: f64,
+    /// ln of the previous accepted step's error norm (at least 1e-4).
+    ln_facold: f64,
     last_rejected: bool,
 }
 
-impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
-    fn new(sys: &'a S, opts: &'a FlowOptions, tab: &'static Tableau, probes: usize) -> Self {
+impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P, N> {
+    /// The pair's tableau.
+    const TAB: &'static Tableau = &P::TAB;
+
+    fn new(sys: &'a S, opts: &'a FlowOptions) -> Self {
         let layout = Layout::new(sys, opts.sensitivity);
+        debug_assert!(layout.dim() <= N);
         Self {
             sys,
             opts,
-            tab,
-            probes,
             layout,
             stats: Stats::default(),
             events: Vec::new(),
             samples: Vec::with_capacity(opts.sample_times.len()),
             next_sample: 0,
+            pair: std::marker::PhantomData,
+        }
+    }
+
+    /// The layout; a compile-time constant for the state alone (N = 2) and the state Jacobian
+    /// (N = 6), so the right-hand side of those is specialised.
+    #[inline(always)]
+    fn layout(&self) -> Layout {
+        match N {
+            2 => Layout {
+                ncols: 0,
+                with_params: false,
+            },
+            6 => Layout {
+                ncols: 2,
+                with_params: false,
+            },
+            _ => self.layout,
+        }
+    }
+
+    /// Number of components carried (N, or the layout's dimension for the parameter columns).
+    #[inline(always)]
+    fn dim(&self) -> usize {
+        if N <= 6 {
+            N
+        } else {
+            self.layout.dim()
         }
     }
 
     #[inline(always)]
-    fn rhs(&mut self, layout: Layout, t: f64, y: &V, s: f64, out: &mut V) {
+    fn rhs(&mut self, layout: Layout, t: f64, y: &[f64; N], s: f64, out: &mut [f64; N]) {
         self.stats.rhs_evals += 1;
-        augmented_rhs(self.sys, layout, t, y, s, out);
+        augmented_rhs_law(self.sys, layout, t, y, s, 0.0, out);
     }
 
     fn record_event(&mut self, t: f64, beta: f64, kind: EventKind) {
@@ -138,13 +209,19 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
     }
 
     /// The stages after the first-same-as-last one that only the continuous extension uses,
-    /// over the components of `layout` (the state alone, or everything).
-    fn dense_stages(&mut self, layout: Layout, t: f64, hs: f64, y: &V, s: f64, k: &mut [V; SMAX]) {
-        let tab = self.tab;
-        let n = layout.dim();
+    /// over the first M components: the state alone (M = 2) or everything (M = N).
+    fn dense_stages<const M: usize>(
+        &mut self,
+        layout: Layout,
+        t: f64,
+        hs: f64,
+        y: &[f64; N],
+        s: f64,
+        k: &mut [[f64; N]; SMAX],
+    ) {
+        let tab = Self::TAB;
         for i in tab.fsal() + 1..tab.total() {
-            let mut ys = [0.0; NMAX];
-            stage_argument(tab, i, y, k, hs, n, &mut ys);
+            let ys = combine::<N, M>(&tab.a[i], i, y, k, hs);
             self.rhs(layout, t + tab.c[i] * hs, &ys, s, &mut k[i]);
         }
     }
@@ -152,15 +229,22 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
     /// One Runge–Kutta step of size `hs` from (t, y) on side `s`: the main stages, the solution
     /// y₁ (written to `yn`) and the scaled error norm. Also returns min s·ω over the stage
     /// arguments and max |ω̇| over the stages, for the test whether the step can reach Σ.
-    fn step(&mut self, t: f64, hs: f64, y: &V, s: f64, k: &mut [V; SMAX], yn: &mut V) -> StepInfo {
-        let tab = self.tab;
-        let layout = self.layout;
-        let n = layout.dim();
+    fn step(
+        &mut self,
+        t: f64,
+        hs: f64,
+        y: &[f64; N],
+        s: f64,
+        k: &mut [[f64; N]; SMAX],
+        yn: &mut [f64; N],
+    ) -> StepInfo {
+        let tab = Self::TAB;
+        let layout = self.layout();
         let mut wmin = s * y[1];
         let mut dmax = k[0][1].abs();
-        let mut ys = [0.0; NMAX];
+        let mut ys = [0.0; N];
         for i in 1..tab.stages {
-            stage_argument(tab, i, y, k, hs, n, &mut ys);
+            ys = combine::<N, N>(&tab.a[i], i, y, k, hs);
             wmin = wmin.min(s * ys[1]);
             self.rhs(layout, t + tab.c[i] * hs, &ys, s, &mut k[i]);
             dmax = dmax.max(k[i][1].abs());
@@ -168,15 +252,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         if tab.last_stage_is_solution {
             *yn = ys;
         } else {
-            for c in 0..n {
-                let mut acc = 0.0;
-                for (kj, &b) in k.iter().zip(&tab.b).take(tab.stages) {
-                    if b != 0.0 {
-                        acc += b * kj[c];
-                    }
-                }
-                yn[c] = y[c] + hs * acc;
-            }
+            *yn = combine::<N, N>(&tab.b, tab.stages, y, k, hs);
         }
         wmin = wmin.min(s * yn[1]);
         let err = self.error_norm(hs, y, yn, k);
@@ -187,17 +263,13 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
     /// the larger counts. Controlling the variational part too matters: on an exactly
     /// representable orbit (the locked state) the state error vanishes while the variational
     /// equation oscillates at √g and would be left unresolved.
-    fn error_norm(&self, hs: f64, y: &V, yn: &V, k: &[V; SMAX]) -> f64 {
-        let tab = self.tab;
-        let n = self.layout.dim();
-        let combo = |w: &[f64; SMAX], i: usize| -> f64 {
-            let mut acc = 0.0;
-            for (j, &wj) in w.iter().enumerate().take(tab.fsal() + 1) {
-                if wj != 0.0 {
-                    acc += wj * k[j][i];
-                }
-            }
-            acc
+    fn error_norm(&self, hs: f64, y: &[f64; N], yn: &[f64; N], k: &[[f64; N]; SMAX]) -> f64 {
+        let tab = Self::TAB;
+        let n = self.dim();
+        let main = weighted_sum(&tab.e, tab.fsal() + 1, k);
+        let low = match &tab.estimate {
+            ErrorEstimate::Dop853 { e3 } => weighted_sum(e3, tab.fsal() + 1, k),
+            ErrorEstimate::Single => [0.0; N],
         };
         // [state, Jacobian] sums of the main and (DOP853) the 3rd-order estimate
         let mut e_main = [0.0; 2];
@@ -210,9 +282,9 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                 self.opts.atol + self.opts.rtol * y[i].abs().max(yn[i].abs())
             };
             let part = usize::from(i >= 2);
-            e_main[part] += (combo(&tab.e, i) / scale).powi(2);
-            if let ErrorEstimate::Dop853 { e3 } = &tab.estimate {
-                e_low[part] += (combo(e3, i) / scale).powi(2);
+            e_main[part] += (main[i] / scale).powi(2);
+            if let ErrorEstimate::Dop853 { .. } = &tab.estimate {
+                e_low[part] += (low[i] / scale).powi(2);
             }
         }
         let norm = |part: usize, count: f64| -> f64 {
@@ -236,10 +308,10 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
 
     fn run(mut self, t0: f64, x0: [f64; 2], t1: f64) -> Result<Flow> {
         let sys = self.sys;
-        let tab = self.tab;
+        let tab = Self::TAB;
         let period = sys.period();
         let hmax = self.opts.max_step_fraction * period;
-        let mut y: V = [0.0; NMAX];
+        let mut y = [0.0; N];
         self.layout.init(x0, &mut y);
         // skip samples before t0
         self.next_sample += self.opts.sample_times[self.next_sample..]
@@ -255,10 +327,10 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
         let mut h = (period / 100.0)
             .min(hmax)
             .min((t1 - t0).max(f64::MIN_POSITIVE));
-        let mut k: [V; SMAX] = [[0.0; NMAX]; SMAX];
+        let mut k = [[0.0; N]; SMAX];
         let mut fsal = false;
         let mut ctl = Controller {
-            facold: 1e-4,
+            ln_facold: 1e-4_f64.ln(),
             last_rejected: false,
         };
         let mut guard = ZenoGuard::new(period);
@@ -295,7 +367,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
 
             let s = mode.side();
             if !fsal {
-                self.rhs(self.layout, t, &y, s, &mut k[0]);
+                self.rhs(self.layout(), t, &y, s, &mut k[0]);
                 fsal = true;
             }
             let hh = h.min(hmax).min(t1 - t);
@@ -308,7 +380,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                     reason: format!("step size underflow (h = {hs:e})"),
                 });
             }
-            let mut yn = [0.0; NMAX];
+            let mut yn = [0.0; N];
             let info = self.step(t, hs, &y, s, &mut k, &mut yn);
             let err = info.err;
             if !err.is_finite() || !yn[0].is_finite() || !yn[1].is_finite() {
@@ -336,22 +408,22 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
             };
             self.stats.steps += 1;
             if !tab.last_stage_is_solution {
-                self.rhs(self.layout, tn, &yn, s, &mut k[tab.fsal()]);
+                self.rhs(self.layout(), tn, &yn, s, &mut k[tab.fsal()]);
             }
 
-            // Can ω reach 0 inside the step? With the extra dense stages of a high-order pair,
-            // the continuous extension is formed only when s·ω over the stage arguments and the
-            // end points is not larger than g·h·max|ω̇| over the stages, g the largest gap between
-            // the sorted nodes (between two points where s·ω ≥ w, a function with |ω̇| ≤ M stays
-            // above w − M g h/2: the bound with a factor 2 of margin on M), or when a sample
-            // falls inside the step.
+            // Can ω reach 0 inside the step? The continuous extension (with the extra dense
+            // stages of a high-order pair) is formed and probed only when s·ω over the stage
+            // arguments and the end points is not larger than g·h·max|ω̇| over the stages, g the
+            // largest gap between the sorted nodes (between two points where s·ω ≥ w, a function
+            // with |ω̇| ≤ M stays above w − M g h/2: the bound with a factor 2 of margin on M), or
+            // when a sample falls inside the step.
             let sample_inside = self
                 .opts
                 .sample_times
                 .get(self.next_sample)
                 .is_some_and(|&ts| ts <= tn);
             let near_sigma = info.wmin <= tab.node_gap * hs * info.dmax;
-            if tab.dense_extra > 0 && !near_sigma && !sample_inside {
+            if !near_sigma && !sample_inside {
                 y = yn;
                 k[0] = k[tab.fsal()];
                 t = tn;
@@ -359,7 +431,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                 continue;
             }
             if tab.dense_extra > 0 {
-                self.dense_stages(state_only, t, hs, &y, s, &mut k);
+                self.dense_stages::<2>(state_only, t, hs, &y, s, &mut k);
             }
             let state_coeffs = [
                 dense_coeffs(tab, 0, &y, &yn, &k, hs),
@@ -368,7 +440,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
             let m = 4 + tab.dense_rows;
             let dense_state = |i: usize, th: f64| -> f64 { nested(&state_coeffs[i][..m], th) };
 
-            let root = if near_sigma || tab.dense_extra == 0 {
+            let root = if near_sigma {
                 self.find_crossing(s, &y, &yn, &dense_state)
             } else {
                 None
@@ -377,12 +449,12 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
                 let tc = t + thc * hs;
                 // samples strictly before the event from the continuous extension
                 self.samples_dense(t, hs, tc, &dense_state, false);
-                if tab.dense_extra > 0 && self.layout.ncols > 0 {
-                    self.dense_stages(self.layout, t, hs, &y, s, &mut k);
+                if tab.dense_extra > 0 && self.layout().ncols > 0 {
+                    self.dense_stages::<N>(self.layout(), t, hs, &y, s, &mut k);
                 }
-                let mut yc = [0.0; NMAX];
+                let mut yc = [0.0; N];
                 yc[0] = dense_state(0, thc);
-                for (i, v) in yc.iter_mut().enumerate().take(self.layout.dim()).skip(2) {
+                for (i, v) in yc.iter_mut().enumerate().take(self.dim()).skip(2) {
                     *v = nested(&dense_coeffs(tab, i, &y, &yn, &k, hs)[..m], thc);
                 }
                 yc[1] = 0.0;
@@ -425,20 +497,17 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
     /// Step-size proposal after an error norm `err` for step `hs` (PI control as in Hairer's
     /// codes): `None` if the step is rejected, else the next step size.
     fn propose(&self, ctl: &mut Controller, err: f64, hs: f64) -> Option<f64> {
-        let tab = self.tab;
+        let tab = Self::TAB;
         if err > 1.0 {
             ctl.last_rejected = true;
             return None;
         }
-        let fac11 = tab.pow_expo(err);
-        let mut fac = if tab.beta == 0.0 {
-            fac11
-        } else {
-            fac11 / ctl.facold.powf(tab.beta)
-        };
+        // fac = err^expo / facold^β as one exponential (two powers cost twice as much)
+        let ln_err = err.ln();
+        let mut fac = (tab.expo * ln_err - tab.beta * ctl.ln_facold).exp();
         fac = (fac / 0.9).clamp(tab.fac_min, tab.fac_max);
         let mut hnew = hs / fac;
-        ctl.facold = err.max(1e-4);
+        ctl.ln_facold = ln_err.max(1e-4_f64.ln());
         if ctl.last_rejected {
             hnew = hnew.min(hs);
         }
@@ -448,7 +517,13 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
 
     /// A stick phase from t: records its samples and the release event, applies the release
     /// saltation, and returns (release time, side) or `None` if stuck until t₁.
-    fn stick_phase(&mut self, t: f64, y: &mut V, t1: f64, nudge: bool) -> Option<(f64, f64)> {
+    fn stick_phase(
+        &mut self,
+        t: f64,
+        y: &mut [f64; N],
+        t1: f64,
+        nudge: bool,
+    ) -> Option<(f64, f64)> {
         let sys = self.sys;
         let beta = y[0];
         let from = if nudge { t + 1e-9 * sys.period() } else { t };
@@ -478,12 +553,12 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
     fn find_crossing<F: Fn(usize, f64) -> f64>(
         &self,
         s: f64,
-        y: &V,
-        yn: &V,
+        y: &[f64; N],
+        yn: &[f64; N],
         dense: &F,
     ) -> Option<f64> {
         let e = |th: f64| -> f64 { s * dense(1, th) };
-        let probes = self.probes;
+        let probes = P::PROBES;
         let mut root: Option<(f64, f64)> = None;
         let mut th_prev = 0.0;
         for j in 1..=probes {
@@ -542,7 +617,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
 
     /// Decides what happens when ω reaches 0 from side `s` at time `tc`, applies the saltation
     /// matrix to the Jacobian columns, records the event, and returns the new mode.
-    fn handle_arrival(&mut self, tc: f64, y: &mut V, s: f64, force_stick: bool) -> Mode {
+    fn handle_arrival(&mut self, tc: f64, y: &mut [f64; N], s: f64, force_stick: bool) -> Mode {
         let sys = self.sys;
         let beta = y[0];
         let f = sys.forces(tc, beta, 0.0);
@@ -576,7 +651,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
     }
 
     /// Stick entry: S = diag(1, 0) (the sliding field vanishes).
-    fn stick_saltation(&self, y: &mut V) {
+    fn stick_saltation(&self, y: &mut [f64; N]) {
         for c in 0..self.layout.ncols {
             y[z_omega(c)] = 0.0;
         }
@@ -584,7 +659,7 @@ impl<'a, S: DrivenOscillator + ?Sized> Solver<'a, S> {
 
     /// Release with a jump of the acceleration (static friction above sliding friction):
     /// Z₊ = Z₋ − F₊ dt_r/dz, with dt_r/dz = −(G_β Z_β + G_p)/G_t from G(t, β) = |a| − r_s = 0.
-    fn release_saltation(&self, y: &mut V, tr: f64, jump: f64, s: f64) {
+    fn release_saltation(&self, y: &mut [f64; N], tr: f64, jump: f64, s: f64) {
         let sys = self.sys;
         let beta = y[0];
         let period = sys.period();

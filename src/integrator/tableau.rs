@@ -72,6 +72,15 @@ pub(super) struct Tableau {
     pub fac_max: f64,
 }
 
+/// A pair as a type, so the event-driven solver is compiled with its coefficients as constants.
+pub(super) trait Pair: 'static {
+    /// The coefficients.
+    const TAB: Tableau;
+    /// Interior points per step at which the continuous extension is checked for a sign change
+    /// of ω.
+    const PROBES: usize;
+}
+
 impl Tableau {
     /// Index of the first-same-as-last stage f(t + h, y₁).
     pub fn fsal(&self) -> usize {

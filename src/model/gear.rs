@@ -16,6 +16,7 @@
 use super::params::{Column, Parameter, Parametrised};
 use super::{DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry};
 use crate::error::{finite, non_negative, positive, Error, Result};
+use crate::numerics::trig::sin_cos;
 use nalgebra::Complex;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};
@@ -186,9 +187,13 @@ pub fn energy_bracket(delta: f64, alpha: f64, beta: f64) -> f64 {
     alpha.sin() * beta.sin() + delta * alpha.cos() * beta.cos()
 }
 
-/// The bracket τ(α, β) = −sin α cos β + Δ cos α sin β of eq. `tauax` (torque over c).
+/// The bracket τ(α, β) = −sin α cos β + Δ cos α sin β of eq. `tauax` (torque over c); the same
+/// arithmetic as the right-hand side ([`Gear`]'s `forces`), so the stick and release tests agree
+/// with it to the last bit.
 pub fn coupling_bracket(delta: f64, alpha: f64, beta: f64) -> f64 {
-    -alpha.sin() * beta.cos() + delta * alpha.cos() * beta.sin()
+    let (sa, ca) = sin_cos(alpha);
+    let (sb, cb) = sin_cos(beta);
+    -sa * cb + delta * ca * sb
 }
 
 /// Stable equilibrium of the output for a locked input (see [`GearParams::equilibrium`]).
@@ -487,10 +492,10 @@ impl DrivenOscillator for Gear {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn forces(&self, t: f64, beta: f64, omega: f64) -> Forces {
-        let (sa, ca) = self.alpha(t).sin_cos();
-        let (sb, cb) = beta.sin_cos();
+        let (sa, ca) = sin_cos(self.alpha(t));
+        let (sb, cb) = sin_cos(beta);
         let tau = -sa * cb + self.delta * ca * sb;
         Forces {
             a: -self.zeta * omega + self.convention.sign() * self.g * tau,
@@ -498,11 +503,11 @@ impl DrivenOscillator for Gear {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn forces_jet(&self, t: f64, beta: f64, omega: f64, params: bool) -> ForcesJet {
         let sg = self.convention.sign();
-        let (sa, ca) = self.alpha(t).sin_cos();
-        let (sb, cb) = beta.sin_cos();
+        let (sa, ca) = sin_cos(self.alpha(t));
+        let (sb, cb) = sin_cos(beta);
         let tau = -sa * cb + self.delta * ca * sb;
         let tau_b = sa * sb + self.delta * ca * cb;
         let mut jet = ForcesJet::new(-self.zeta * omega + sg * self.g * tau, self.eta);
@@ -527,7 +532,7 @@ impl DrivenOscillator for Gear {
     /// R = √(cos²β* + Δ² sin²β*), so release happens at the next α with |sin(α + φ)| = η/(gR)
     /// on a rising flank of |sin|.
     fn next_release(&self, t: f64, beta: f64, t_max: f64) -> Option<f64> {
-        let (sb, cb) = beta.sin_cos();
+        let (sb, cb) = sin_cos(beta);
         let amp = self.g * (cb * cb + self.delta * self.delta * sb * sb).sqrt();
         if self.g * coupling_bracket(self.delta, self.alpha(t), beta).abs() >= self.eta {
             return Some(t);
