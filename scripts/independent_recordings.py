@@ -12,6 +12,13 @@ outlier frames of 5–15°. Effects, in forms the diagnosis catalog does not spe
   cubic_drag      −0.08 β̇³
   stribeck_exp    friction η + 0.6 η exp(−|β̇|/1.5)  (exponential, not Gaussian, decay)
   alpha_mod_fric  friction η (1 + 0.35 cos 2α)      (modulated by the input angle)
+  sqrt_drag       −0.5 sgn(β̇) |β̇|^½               (sub-linear drag)
+  torque_3h       3 sin(3β + 0.4) s⁻²               (only a third harmonic)
+  torque_sqrt     5 sin(β + 1) s⁻² and the sub-linear drag above
+  eta_drift       friction η (1 + 0.3 k/19) in run k of 20 (file order: a drift)
+  freq_zeta       ζ (1 + 0.6 (f − 1.5 Hz)) in the driven runs; ring-downs ζ
+  vib             2 sin(2π · 7.3 Hz · t) s⁻² (a vibration; 0.05° of motion, below the noise)
+  latency9        β taken 9 ms before its time stamp
 
 Usage: python3 scripts/independent_recordings.py EFFECT SEED OUT_FOLDER
 (writes experiment.toml, the CSVs and truth_blind.json with g, Δ, ζ, η).
@@ -29,21 +36,28 @@ class Truth:
         if effect=="shaft_offset": s.g,s.delta=base(37,31)
         s.g*=rng.uniform(0.97,1.03)
         s.zeta=1.1*rng.uniform(0.9,1.1); s.eta=23.1*rng.uniform(0.9,1.1)
+        s.run=0; s.fhz=1.5; s.t=0.0
     def smooth(s,a,b,v):
         f=s.g*(-math.sin(a)*math.cos(b)+s.delta*math.cos(a)*math.sin(b))-s.zeta*v
         e=s.effect
         if e=="tilt_torque": f+=7.0*math.sin(b-0.7)+2.5*math.cos(2*b+0.3)
         if e=="cubic_drag": f-=0.08*v**3
+        if e in("sqrt_drag","torque_sqrt"): f-=0.5*math.copysign(math.sqrt(abs(v)),v)
+        if e=="torque_3h": f+=3.0*math.sin(3*b+0.4)
+        if e=="torque_sqrt": f+=5.0*math.sin(b+1.0)
+        if e=="vib": f+=2.0*math.sin(2*math.pi*7.3*s.t)
+        if e=="freq_zeta": f-=s.zeta*0.6*(s.fhz-1.5)*v
         return f
     def fric(s,a,b,v):
         e=s.effect; R=s.eta
         if e=="stribeck_exp": R+=0.6*s.eta*math.exp(-abs(v)/1.5)
         if e=="alpha_mod_fric": R*=1+0.35*math.cos(2*a)
+        if e=="eta_drift": R*=1+0.3*s.run/19
         return R
 def simulate(tr, alpha_fn, b0, v0, tend, dt, tsamp):
     out=[]; t=0.0; b=b0; v=v0; stuck=False; k=0
     def acc(t,b,v,sg):
-        a=alpha_fn(t)
+        a=alpha_fn(t); tr.t=t
         return tr.smooth(a,b,v)-sg*tr.fric(a,b,v)
     while k<len(tsamp):
         # emit samples inside [t, t+dt)
@@ -83,7 +97,9 @@ def main(effect, seed, out):
         # release from rest 60-100 deg away from equilibrium
         b0=rng.uniform(-math.pi,math.pi)
         ts=[j/100 for j in range(300)]
-        bs=simulate(tr,lambda t:a0,b0,0.0,3.0,2e-4,ts)
+        tr.run=i; tr.fhz=1.5
+        lat=0.009 if tr.effect=="latency9" else 0.0
+        bs=simulate(tr,lambda t:a0,b0,0.0,3.0,2e-4,[max(0.0,x-lat) for x in ts])
         fn=f"rd_{i:02d}.csv"
         with open(os.path.join(out,fn),"w") as f:
             f.write("t,alpha,beta\n")
@@ -93,7 +109,9 @@ def main(effect, seed, out):
         fhz=0.5+2.0*i/7
         n=80*50; ts=[j/(50*fhz) for j in range(n)]
         al=lambda t,fhz=fhz: 2*math.pi*fhz*t
-        bs=simulate(tr,al,rng.uniform(-math.pi,math.pi),0.0,ts[-1]+0.01,min(2e-4,0.02/fhz/50*5),ts)
+        tr.run=12+i; tr.fhz=fhz
+        lat=0.009 if tr.effect=="latency9" else 0.0
+        bs=simulate(tr,al,rng.uniform(-math.pi,math.pi),0.0,ts[-1]+0.01,min(2e-4,0.02/fhz/50*5),[max(0.0,x-lat) for x in ts])
         fn=f"dr_{i:02d}.csv"
         with open(os.path.join(out,fn),"w") as f:
             f.write("t,alpha,beta\n")
