@@ -170,6 +170,14 @@ pub fn catalog() -> Vec<Effect> {
                 from small amplitudes)",
         },
     ]);
+    v.extend(drift_members());
+    v
+}
+
+/// The per-run parameter effects: `condition_dependence` (a base parameter linear in a run
+/// condition) and `parameter_drift` (linear in the session clock), for each of ζ, η and g.
+fn drift_members() -> Vec<Effect> {
+    let mut v = Vec::new();
     for p in DriftParam::ALL {
         for clock in [Clock::DriveFrequency, Clock::VelocityRange] {
             v.push(Effect {
@@ -177,21 +185,21 @@ pub fn catalog() -> Vec<Effect> {
                 class: "state-dependent parameter",
                 explanation: match p {
                     DriftParam::Eta => {
-                        "the dry friction η differs from run to run with the run's conditions                          (drive frequency or velocity range): a friction law that depends on the                          state, which one linear model cannot hold"
+                        "the dry friction η differs from run to run with the run's conditions (drive frequency or velocity range): a friction law that depends on the state, which one linear model cannot hold"
                     }
                     DriftParam::Zeta => {
-                        "the viscous damping ζ differs from run to run with the run's conditions                          (drive frequency or velocity range): a damping law that is not linear in                          the velocity"
+                        "the viscous damping ζ differs from run to run with the run's conditions (drive frequency or velocity range): a damping law that is not linear in the velocity"
                     }
                     DriftParam::Coupling => {
-                        "the coupling strength g differs from run to run with the run's                          conditions (drive frequency or velocity range)"
+                        "the coupling strength g differs from run to run with the run's conditions (drive frequency or velocity range)"
                     }
                 },
                 terms: vec![Term::Drift(p, clock)],
                 candidates: vec![
                     "a friction or damping law depending on the velocity or the angles",
-                    "a drift over the session (when the runs were recorded in the order of the                      condition)",
+                    "a drift over the session (when the runs were recorded in the order of the condition)",
                 ],
-                discriminating_experiment: "repeat runs of one condition at the start and the end                     of a session, and record the conditions in shuffled order: a condition                     dependence stays with the condition, a drift with the time",
+                discriminating_experiment: "repeat runs of one condition at the start and the end of a session, and record the conditions in shuffled order: a condition dependence stays with the condition, a drift with the time",
             });
         }
         for clock in [Clock::RunIndex, Clock::SessionTime] {

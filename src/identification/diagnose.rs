@@ -416,7 +416,7 @@ fn remaining(
     if !bad.is_empty() {
         mismatch.push(Mismatch {
             where_: format!(
-                "after the findings, {} of {} runs are still predicted worse than 1.25× the                  camera noise on held-out windows: the findings explain only part of the mismatch                  there",
+                "after the findings, {} of {} runs are still predicted worse than 1.25× the camera noise on held-out windows: the findings explain only part of the mismatch there",
                 bad.len(),
                 runs.len()
             ),

@@ -237,19 +237,19 @@ pub fn judgement_evidence(
 pub fn dictionary_experiment(t: Term) -> &'static str {
     match t {
         Term::STrig(0, _, _) | Term::SCosB | Term::SSinB => {
-            "dry friction that depends on the output angle: record small-amplitude ring-downs              around equilibria spread over a turn of β (step α0 over a full turn); the linear              decrement per swing follows the modulation in β (a bent shaft or an eccentric              bearing load)"
+            "dry friction that depends on the output angle: record small-amplitude ring-downs around equilibria spread over a turn of β (step α0 over a full turn); the linear decrement per swing follows the modulation in β (a bent shaft or an eccentric bearing load)"
         }
         Term::STrig(..) => {
-            "dry friction that depends on the input angle: ring-downs at many α0 over a turn;              the dry-friction decrement changes with α0 (bearing load from the input side, e.g.              a force on the output shaft that turns with the input)"
+            "dry friction that depends on the input angle: ring-downs at many α0 over a turn; the dry-friction decrement changes with α0 (bearing load from the input side, e.g. a force on the output shaft that turns with the input)"
         }
         Term::Cos(0, _) | Term::Sin(0, _) => {
-            "a torque that depends on the output angle only: ring-downs of the output with the              input magnet removed; the remaining torque and its harmonics are lab-fixed"
+            "a torque that depends on the output angle only: ring-downs of the output with the input magnet removed; the remaining torque and its harmonics are lab-fixed"
         }
         Term::Cos(..) | Term::Sin(..) => {
-            "a coupling harmonic: ring-downs at finely stepped α0 over a full turn; κ(α0) and the              equilibrium β0(α0) show the harmonic (dipole shape or position of the magnets)"
+            "a coupling harmonic: ring-downs at finely stepped α0 over a full turn; κ(α0) and the equilibrium β0(α0) show the harmonic (dipole shape or position of the magnets)"
         }
         Term::VCosB | Term::VSinB => {
-            "damping that depends on the output angle: ring-downs from large amplitudes at              several α0; the viscous decay rate varies with the angle range swept"
+            "damping that depends on the output angle: ring-downs from large amplitudes at several α0; the viscous decay rate varies with the angle range swept"
         }
         _ => "",
     }
