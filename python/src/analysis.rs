@@ -33,15 +33,18 @@ struct ClassifyArgs {
 }
 
 impl Default for ClassifyArgs {
+    /// The library's defaults ([`ClassifyOptions::default`]), so the two cannot drift apart.
     fn default() -> Self {
+        let o = ClassifyOptions::default();
+        let int = |n: usize| i64::try_from(n).unwrap_or(i64::MAX);
         Self {
-            settle_turns: 90,
-            record_turns: 10,
-            samples_per_turn: 50,
-            rigorous: true,
-            analysis_turns: 60,
-            tol: 1e-9,
-            keep_samples: false,
+            settle_turns: int(o.settle_turns),
+            record_turns: int(o.record_turns),
+            samples_per_turn: int(o.samples_per_turn),
+            rigorous: o.rigorous,
+            analysis_turns: int(o.analysis_turns),
+            tol: o.tol,
+            keep_samples: o.keep_samples,
         }
     }
 }
