@@ -44,7 +44,26 @@ pub struct RingdownFit {
     pub converged: bool,
 }
 
-/// Simulates eq. `model` at the given times.
+/// Most integration steps (accepted and rejected) of one ring-down simulation lasting `span`
+/// seconds: [`RINGDOWN_BASE_STEPS`] plus [`RINGDOWN_STEPS_PER_S`] per second. A ring-down the
+/// model follows takes at most 533 steps at tolerance 1e-9 (over the 12 822 simulations of the
+/// ring-down fits of a set of `scripts/independent_recordings.py`, 1.5–3 s each; median 13, 99th
+/// percentile 416), so a 3 s ring-down's budget of 5000 is about ten times that. Some trial
+/// parameters of the Levenberg–Marquardt fit make the simulation chatter (8–17 million steps,
+/// 65 s of CPU for one fit): with the budget their simulation fails and the optimiser rejects the
+/// trial, as it rejected the worse fit the simulation gave after those steps.
+pub fn ringdown_max_steps(span: f64) -> usize {
+    RINGDOWN_BASE_STEPS + (RINGDOWN_STEPS_PER_S * span.max(0.0)) as usize
+}
+
+/// Fixed part of [`ringdown_max_steps`].
+pub const RINGDOWN_BASE_STEPS: usize = 2_000;
+
+/// Steps per second of a ring-down simulation in [`ringdown_max_steps`].
+pub const RINGDOWN_STEPS_PER_S: f64 = 1_000.0;
+
+/// Simulates eq. `model` at the given times (at most [`ringdown_max_steps`] integration steps;
+/// `None` beyond).
 pub fn simulate_model(p: &[f64], t0: f64, times: &[f64]) -> Option<Vec<f64>> {
     let (kappa, beta0, zeta, eta) = (p[0], p[1], p[2] * p[2], p[3] * p[3]);
     if kappa.is_nan() || kappa <= 0.0 || !p.iter().all(|v| v.is_finite()) {
@@ -66,7 +85,8 @@ pub fn simulate_model(p: &[f64], t0: f64, times: &[f64]) -> Option<Vec<f64>> {
         alpha_rate: 0.0,
     };
     let t1 = *times.last()?;
-    let opts = FlowOptions::with_tol(1e-9).samples(times.to_vec());
+    let mut opts = FlowOptions::with_tol(1e-9).samples(times.to_vec());
+    opts.max_steps = ringdown_max_steps(t1 - t0);
     let flow = EventDriven.flow(&sys, t0, [p[4], p[5]], t1, &opts).ok()?;
     if flow.samples.len() != times.len() {
         return None;
