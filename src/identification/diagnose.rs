@@ -146,25 +146,22 @@ pub fn prepare(
     let mut ringdowns = Vec::new();
     if opts.ringdown_fits {
         let rd: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].ringdown).collect();
-        for (k, &i) in rd.iter().enumerate() {
-            progress(&format!(
-                "ring-down fit {}/{}: {}",
-                k + 1,
-                rd.len(),
-                files[i]
-            ));
-            if let RunKind::Ringdown { alpha0 } = set.runs[i].kind {
-                if let Some(f) = fit_ringdown(
+        progress(&format!("ring-down fits of {} runs (in parallel)", rd.len()));
+        // independent fits, collected in file order
+        let fits = par_map(rd.len(), |k| {
+            let i = rd[k];
+            match set.runs[i].kind {
+                RunKind::Ringdown { alpha0 } => fit_ringdown(
                     &runs[i],
                     &files[i],
                     alpha0,
                     setup.zeta.unwrap_or(1.1),
                     setup.eta.unwrap_or(23.1),
-                ) {
-                    ringdowns.push(f);
-                }
+                ),
+                _ => None,
             }
-        }
+        });
+        ringdowns.extend(fits.into_iter().flatten());
     }
     let kappa = fit_kappa(&ringdowns, setup);
     Ok(Prepared {
