@@ -7,7 +7,7 @@
 use super::lm::{least_squares, LsqFit};
 use super::model::{AugmentedGear, Coefficients, Geometry};
 use super::preprocess::CleanRun;
-use crate::integrator::{EventDriven, FlowMethod, FlowOptions};
+use crate::integrator::{EventDriven853, FlowMethod, FlowOptions};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Samples per prediction window (at most).
@@ -103,8 +103,10 @@ pub fn simulation_steps() -> (u64, u64) {
 
 /// Most integration steps (accepted and rejected) of one window simulation. A window lasts at
 /// most [`HORIZON`] (or [`WINDOW`] samples); a model that follows the data is simulated over it
-/// at tolerance 1e-8 in about 40 steps (mean over the base model's windows of a campaign set,
-/// `gearbif diagnose --timing`), so the budget is 50 times that. A trial model whose motion runs
+/// at tolerance 1e-8 in about 40 steps of DP5 (mean over the base model's windows of a campaign
+/// set, `gearbif diagnose --timing`), so the budget was set at 50 times that; with DOP853 (see
+/// [`simulate`]) the mean over all window simulations of a diagnosis is 16 steps (the
+/// `latency9` set of `scripts/independent_recordings.py`, seed 5), and the budget is kept. A trial model whose motion runs
 /// away inside a window (an extrapolated drift with a negative damping, a torque harmonic driven
 /// far off by a leave-fold-out step) would otherwise shrink its steps without bound and hold the
 /// diagnosis for minutes; with the budget its simulation fails, and the judge counts the window
@@ -112,13 +114,16 @@ pub fn simulation_steps() -> (u64, u64) {
 pub const WINDOW_MAX_STEPS: usize = 2_000;
 
 /// β of `sys` from the state `x0` at `t0`, at `times` (exact Filippov flow, tolerance 1e-8);
-/// `None` when the flow fails or needs more than [`WINDOW_MAX_STEPS`] steps.
+/// `None` when the flow fails or needs more than [`WINDOW_MAX_STEPS`] steps. The integrator is
+/// the event-driven Dormand–Prince 8(5,3) ([`EventDriven853`]: the same events and stick phases
+/// as DP5, 16 instead of 52 steps per window simulation on average; docs/performance.md,
+/// "Identification and diagnosis").
 pub fn simulate(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<f64>> {
     SIMULATIONS.fetch_add(1, Ordering::Relaxed);
     let t1 = *times.last()?;
     let mut opts = FlowOptions::with_tol(1e-8).samples(times.to_vec());
     opts.max_steps = WINDOW_MAX_STEPS;
-    let f = match EventDriven.flow(sys, t0, x0, t1, &opts) {
+    let f = match EventDriven853.flow(sys, t0, x0, t1, &opts) {
         Ok(f) => f,
         Err(e) => {
             if matches!(&e, crate::error::Error::Integration { reason, .. } if reason.starts_with("more than"))
