@@ -9,7 +9,7 @@ use super::model::Geometry;
 use super::preprocess::CleanRun;
 use super::propose::{propose, Candidate, ProposeCtx};
 use super::regression::Term;
-use super::shooting::{refit, ShootingOptions, SimFit, SimModel, Win};
+use super::shooting::{par_map, refit, ShootingOptions, SimFit, SimModel, Win};
 use super::spec::{fix_shapes, free_shapes};
 
 /// A model with its refit by simulation and its held-out errors.
@@ -231,9 +231,21 @@ pub fn select(
         }
         let z_crit = z_threshold(cands.len());
         let first = tried.len();
-        for c in cands {
+        // the candidates of a round are independent given `cur`: judged in parallel (each
+        // refit's windows in parallel too), their lines printed afterwards in the proposer's
+        // order, so the output does not depend on the number of threads
+        let judged = par_map(cands.len(), |k| {
+            let c = &cands[k];
+            let scr = screen(ctx, &cur, c);
+            let st = match scr {
+                Some(sc) if sc.z >= SCREEN_Z => evaluate(ctx, &cur, c),
+                _ => None,
+            };
+            (scr, st)
+        });
+        for (c, (scr, st)) in cands.into_iter().zip(judged) {
             progress(&format!(
-                "round {round}: judging {} ({}) by simulation on held-out runs",
+                "round {round}: judged {} ({}) by simulation on held-out runs",
                 c.effect.id,
                 c.terms
                     .iter()
@@ -241,11 +253,6 @@ pub fn select(
                     .collect::<Vec<_>>()
                     .join(", ")
             ));
-            let scr = screen(ctx, &cur, &c);
-            let st = match scr {
-                Some(sc) if sc.z >= SCREEN_Z => evaluate(ctx, &cur, &c),
-                _ => None,
-            };
             let cmp = st
                 .as_ref()
                 .map(|s| compare(&cur.held, &s.held, ctx.wins, ctx.runs));
