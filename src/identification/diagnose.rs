@@ -146,7 +146,10 @@ pub fn prepare(
     let mut ringdowns = Vec::new();
     if opts.ringdown_fits {
         let rd: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].ringdown).collect();
-        progress(&format!("ring-down fits of {} runs (in parallel)", rd.len()));
+        progress(&format!(
+            "ring-down fits of {} runs (in parallel)",
+            rd.len()
+        ));
         // independent fits, collected in file order
         let fits = par_map(rd.len(), |k| {
             let i = rd[k];
