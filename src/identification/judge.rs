@@ -228,8 +228,8 @@ pub fn compare(before: &HeldOut, after: &HeldOut, wins: &[Win], runs: &[CleanRun
 
 /// The Wald statistic W = bᵀ C⁻¹ b of the parameters `idx` of `fit` (b their values, C their
 /// block of the refit's covariance) as the normal equivalent z = Φ⁻¹(1 − P(χ²_k > W)) of its
-/// χ²_k upper tail, k = `idx.len()`: exact for k = 1 (P = 2(1 − Φ(√W))), by the Wilson–Hilferty
-/// cube-root transformation for k > 1. 0 when C is singular or not finite.
+/// χ²_k upper tail, k = `idx.len()` ([`chi2_upper_tail`], exact). 0 when C is singular or not
+/// finite.
 pub fn added_parameters_z(fit: &SimFit, idx: &[usize]) -> f64 {
     let k = idx.len();
     if k == 0 {
@@ -243,13 +243,29 @@ pub fn added_parameters_z(fit: &SimFit, idx: &[usize]) -> f64 {
     let Some(chol) = c.cholesky() else {
         return 0.0;
     };
-    let w = b.dot(&chol.solve(&b));
-    if k == 1 {
-        normal_upper_quantile(2.0 * upper_tail(w.max(0.0).sqrt()))
+    normal_upper_quantile(chi2_upper_tail(b.dot(&chol.solve(&b)), k))
+}
+
+/// P(χ²_k > w), the regularised upper incomplete gamma Q(k/2, w/2) in closed form (x = w/2):
+/// e^(−x) Σ_{j<k/2} x^j/j! for even k; 2(1 − Φ(√w)) + e^(−x) Σ_{j=1}^{(k−1)/2} x^(j−½)/Γ(j+½)
+/// for odd k.
+pub fn chi2_upper_tail(w: f64, k: usize) -> f64 {
+    let x = 0.5 * w.max(0.0);
+    let (mut sum, mut term, start) = if k % 2 == 0 {
+        (0.0, 1.0, 0.0)
     } else {
-        let kf = k as f64;
-        let v = 2.0 / (9.0 * kf);
-        ((w / kf).max(0.0).cbrt() - (1.0 - v)) / v.sqrt()
+        // x^(1/2)/Γ(3/2)
+        (0.0, 2.0 * (x / std::f64::consts::PI).sqrt(), 0.5)
+    };
+    for j in 0..k / 2 {
+        sum += term;
+        term *= x / (j as f64 + 1.0 + start);
+    }
+    let tail = (-x).exp() * sum;
+    if k % 2 == 0 {
+        tail
+    } else {
+        2.0 * upper_tail(w.max(0.0).sqrt()) + tail
     }
 }
 
@@ -336,7 +352,10 @@ mod tests {
         let f = fit_with(vec![3.0, 4.0], nalgebra::DMatrix::identity(2, 2));
         let z2 = added_parameters_z(&f, &[0, 1]);
         let exact2 = normal_upper_quantile((-12.5f64).exp());
-        assert!((z2 - exact2).abs() < 0.05, "{z2} vs {exact2}");
+        assert!((z2 - exact2).abs() < 1e-6, "{z2} vs {exact2}");
+        // χ²₃ and χ²₄ tails at w = 7.8147 and 9.4877 are 0.05 (tables)
+        assert!((chi2_upper_tail(7.814_73, 3) - 0.05).abs() < 1e-6);
+        assert!((chi2_upper_tail(9.487_73, 4) - 0.05).abs() < 1e-6);
         let c = nalgebra::DMatrix::from_row_slice(2, 2, &[1.0, -0.99, -0.99, 1.0]);
         let f = fit_with(vec![1.0, 1.0], c);
         assert!(added_parameters_z(&f, &[0, 1]) > 5.0);
