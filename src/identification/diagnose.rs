@@ -26,6 +26,7 @@ use super::ringdown::{fit_kappa, fit_ringdown, KappaFit, RingdownFit};
 use super::select::{select, ModelState, SelectCtx, Tried};
 use super::shooting::{
     choose_windows, mask_windows, par_map, refit, ShootingOptions, SimModel, Win,
+    CONVERGED_PATIENCE,
 };
 use crate::error::{Error, Result};
 use crate::io::recordings::{RecordingSet, RunKind};
@@ -242,7 +243,12 @@ pub fn fit_base(
         };
         let chosen = choose_windows(&prep.runs, opts.shooting.max_windows);
         wins = mask_windows(&model, &weak.coef, &chosen);
-        if let Some(f) = refit(&model, &weak.coef, &wins, &opts.shooting) {
+        // converged: every candidate is judged against this fit
+        let converged = ShootingOptions {
+            patience: CONVERGED_PATIENCE,
+            ..opts.shooting
+        };
+        if let Some(f) = refit(&model, &weak.coef, &wins, &converged) {
             progress("base model: held-out predictions of the folds");
             let held = super::judge::heldout(&model, &f, &wins, folds);
             state = Some(ModelState {

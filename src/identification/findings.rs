@@ -214,6 +214,7 @@ pub fn judgement_evidence(
     ev.insert("heldout_z".into(), json!(cmp.z));
     ev.insert("heldout_z_cluster_by_run".into(), json!(cmp.z_cluster));
     ev.insert("z_threshold".into(), json!(t.z_crit));
+    ev.insert("added_parameters_z".into(), json!(t.added_z));
     ev.insert("heldout_chi2_gain".into(), json!(cmp.gain));
     ev.insert("windows".into(), json!(cmp.windows));
     ev.insert("runs".into(), json!(cmp.runs));
@@ -365,6 +366,7 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                 "heldout_rms_after_rad": t.cmp.map(|m| m.rms_after),
                 "windows_failed": t.cmp.map(|m| m.failed_after),
                 "member_z_against_smaller": t.member_z,
+                "added_parameters_z": t.added_z,
                 "reason": match t.cmp {
                     None => match t.screen {
                         Some(s) => format!(
@@ -376,6 +378,9 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                     },
                     Some(m) if m.z < t.z_crit => format!(
                         "held-out improvement not significant (z = {:.2} < {:.2})", m.z, t.z_crit),
+                    Some(m) if t.added_z.is_some_and(|z| z < t.z_crit) => format!(
+                        "held-out gain (z = {:.2}) with added parameters consistent with zero \
+                         (Wald z = {:.2} < {:.2})", m.z, t.added_z.unwrap_or(0.0), t.z_crit),
                     Some(_) if t.member_z.is_some_and(|z| z < t.z_crit) => format!(
                         "a smaller member of the family predicts as well (held-out z of this \
                          member against it {:.2} < {:.2})", t.member_z.unwrap_or(0.0), t.z_crit),

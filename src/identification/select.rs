@@ -4,12 +4,12 @@
 //! significant one is accepted. Every candidate tried is kept with its numbers.
 
 use super::catalog::{judged_members, Effect};
-use super::judge::{compare, heldout, z_threshold, Comparison, Folds, HeldOut};
+use super::judge::{added_parameters_z, compare, heldout, z_threshold, Comparison, Folds, HeldOut};
 use super::model::Geometry;
 use super::preprocess::CleanRun;
 use super::propose::{propose, Candidate, ProposeCtx};
 use super::regression::Term;
-use super::shooting::{par_map, refit, ShootingOptions, SimFit, SimModel, Win};
+use super::shooting::{par_map, refit, ShootingOptions, SimFit, SimModel, Win, CONVERGED_PATIENCE};
 use super::spec::{fix_shapes, free_shapes};
 
 /// A model with its refit by simulation and its held-out errors.
@@ -67,6 +67,9 @@ pub struct Tried {
     pub accepted: bool,
     /// The refitted model with it (kept for the accepted one).
     pub state: Option<ModelState>,
+    /// [`added_parameters_z`] of the parameters the candidate adds, in its refit on all judging
+    /// windows (`None` when it was not refitted on them).
+    pub added_z: Option<f64>,
     /// For a significant member of a family whose members the judge picks (not the smallest):
     /// the held-out z of this member against the smaller member chosen before it (the larger
     /// member replaces it when z reaches the threshold).
@@ -175,7 +178,7 @@ pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
         ..st.model(ctx.runs, ctx.geo)
     };
     let opts = ShootingOptions {
-        patience: 4,
+        patience: CONVERGED_PATIENCE,
         reselect: true,
         ..*ctx.shooting
     };
@@ -188,6 +191,40 @@ pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
             };
             ModelState {
                 terms,
+                fit,
+                held,
+                ..st.clone()
+            }
+        }
+        None => st.clone(),
+    }
+}
+
+/// Indices into θ of `st` of the parameters it adds to `cur`: the coefficients of its new terms
+/// (not the shape parameters, held in the judge's refit) and the latency when newly fitted.
+fn added(cur: &ModelState, st: &ModelState) -> Vec<usize> {
+    let mut idx: Vec<usize> = (cur.terms.len()..st.terms.len())
+        .filter(|&k| !matches!(st.terms[k], Term::Shape(_)))
+        .collect();
+    if st.fit_latency && !cur.fit_latency {
+        idx.push(st.terms.len());
+    }
+    idx
+}
+
+/// The accepted model of a round refitted to convergence ([`CONVERGED_PATIENCE`]; shapes held,
+/// windows not re-selected) with its held-out errors, so that the next round's candidates are
+/// judged against a model at its optimum. The judged fit when the refit fails.
+fn converge(ctx: &SelectCtx, st: &ModelState) -> ModelState {
+    let model = st.model(ctx.runs, ctx.geo);
+    let opts = ShootingOptions {
+        patience: CONVERGED_PATIENCE,
+        ..*ctx.shooting
+    };
+    match refit(&model, &st.fit.theta, ctx.wins, &opts) {
+        Some(fit) => {
+            let held = heldout(&model, &fit, ctx.wins, ctx.folds);
+            ModelState {
                 fit,
                 held,
                 ..st.clone()
@@ -256,13 +293,17 @@ pub fn select(
             let cmp = st
                 .as_ref()
                 .map(|s| compare(&cur.held, &s.held, ctx.wins, ctx.runs));
+            let added_z = st
+                .as_ref()
+                .map(|s| added_parameters_z(&s.fit, &added(&cur, s)));
             progress(&format!(
-                "  screening z = {} (gain {}), held-out z = {} (threshold {z_crit:.2}), gain = {}; \
-                 windows it could not simulate: {}",
+                "  screening z = {} (gain {}), held-out z = {} (threshold {z_crit:.2}), gain = {}, \
+                 added parameters' Wald z = {}; windows it could not simulate: {}",
                 scr.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
                 scr.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
                 cmp.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
                 cmp.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
+                added_z.map(|z| format!("{z:.2}")).unwrap_or("–".into()),
                 cmp.or(scr)
                     .map(|c| c.failed_after.to_string())
                     .unwrap_or("–".into()),
@@ -270,6 +311,7 @@ pub fn select(
             tried.push(Tried {
                 round,
                 candidate: c,
+                added_z,
                 cmp,
                 screen: scr,
                 z_crit,
@@ -291,7 +333,7 @@ pub fn select(
             break;
         };
         tried[bi].accepted = true;
-        cur = tried[bi].state.clone().expect("evaluated");
+        cur = converge(ctx, tried[bi].state.as_ref().expect("evaluated"));
         for (k, t) in tried.iter_mut().enumerate().skip(first) {
             if k != bi {
                 t.state = None;
@@ -307,8 +349,11 @@ pub fn select(
 /// when it predicts the held-out windows significantly better than it (the same rule, z ≥
 /// `z_crit`, on the paired windows of the two). Indices into `round`.
 fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<usize> {
-    let significant =
-        |t: &Tried| t.cmp.map(|c| c.z >= z_crit).unwrap_or(false) && t.state.is_some();
+    let significant = |t: &Tried| {
+        t.cmp.is_some_and(|c| c.z >= z_crit)
+            && t.added_z.is_some_and(|z| z >= z_crit)
+            && t.state.is_some()
+    };
     let mut out: Vec<usize> = (0..round.len())
         .filter(|&k| significant(&round[k]) && !judged_members(round[k].candidate.effect.id))
         .collect();
