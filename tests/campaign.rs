@@ -431,3 +431,50 @@ fn remainder_is_located_out_of_family_and_absent_on_a_control() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A viscous damping that depends on the drive frequency, from the campaign generator (not the
+/// catalog's form: ζ(1 + k(f − 1 Hz)) in the driven runs, the ring-downs at ζ, k = 0.6/Hz; CI
+/// sets of 6 ring-downs of 3 s and 3 driven runs of 12 turns at 0.5, 1.5, 2.5 Hz), over 4 seeds:
+/// named a `condition_dependence` *of ζ* (headline `zeta_change`) in ≥ 90 % of the sets (more
+/// misses than `max_consistent_failures(4, 0.10, 0.01)` refute it), and never a per-run
+/// parameter other than ζ. The condition law of an earlier version put the ring-downs at f = 0
+/// and named g instead (the Python generator's `freq_zeta`).
+#[test]
+fn frequency_dependent_damping_is_a_condition_dependence_of_zeta() {
+    let out = std::env::temp_dir().join(format!("gearbif-campaign-fd-{}", std::process::id()));
+    let spec = CampaignSpec {
+        effects: vec!["frequency_damping".into()],
+        levels: vec![2.0],
+        seeds: (1..=4).collect(),
+        null_seeds: Vec::new(),
+        set: SetSize::ci(),
+        rk4_step_s: 2.5e-4,
+        keep_sets: false,
+    };
+    let doc = run_campaign(&spec, &out, &|_| {}).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    assert_eq!(doc.cases.len(), 4);
+    let per_run = |f: &&gearbif::campaign::metrics::FoundEffect| {
+        f.effect == "condition_dependence" || f.effect == "parameter_drift"
+    };
+    let of_zeta = |f: &gearbif::campaign::metrics::FoundEffect| {
+        f.size.as_ref().is_some_and(|s| s.name == "zeta_change")
+    };
+    let right = doc
+        .cases
+        .iter()
+        .filter(|c| c.named_right && c.findings.first().is_some_and(of_zeta))
+        .count();
+    let bound = max_consistent_failures(4, 0.10, 0.01);
+    let seen: Vec<_> = doc
+        .cases
+        .iter()
+        .map(|c| (&c.verdict, &c.findings))
+        .collect();
+    assert!(4 - right <= bound, "{right} of 4 right: {seen:#?}");
+    for c in &doc.cases {
+        for f in c.findings.iter().filter(per_run) {
+            assert!(of_zeta(f), "seed {}: {:?}", c.seed, c.findings);
+        }
+    }
+}

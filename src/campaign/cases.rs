@@ -39,7 +39,8 @@ impl EffectSpec {
     }
 }
 
-/// All effects, controls first.
+/// All effects, controls first. The position in this list seeds an effect's random stream
+/// ([`build_case`]): new effects go at the end, so the sets of the others stay the same.
 pub const EFFECTS: &[EffectSpec] = &[
     EffectSpec {
         id: "none",
@@ -169,6 +170,15 @@ pub const EFFECTS: &[EffectSpec] = &[
         unit: "× (6 s^-2, 6 ms)",
         form: "static_torque_2h with A₁ = 6·size s⁻² and latency 0.006·size s together; both \
                must be named",
+    },
+    EffectSpec {
+        id: "frequency_damping",
+        expected: &["condition_dependence"],
+        reference: 0.3,
+        unit: "1/Hz",
+        form: "viscous damping that depends on the drive frequency: ζ(1 + k(f − 1 Hz)) in a driven \
+               run at f, the ring-downs at ζ, k = size; headline: the change of ζ over the driven \
+               runs' frequencies, ζ k (f_max − f_min)",
     },
 ];
 
@@ -377,6 +387,19 @@ pub fn build_case(
             });
         }
         "angle_modulated_friction" => truth.angle_modulation = s,
+        "frequency_damping" => {
+            truth.zeta_per_hz = s;
+            let span = if set_size.driven > 1 {
+                set_size.f_max - set_size.f_min
+            } else {
+                0.0
+            };
+            truths.push(TruthSize {
+                effect: "condition_dependence".into(),
+                value: truth.zeta * s * span,
+                unit: "s^-1".into(),
+            });
+        }
         other => {
             return Err(Error::Unsupported(format!(
                 "effect `{other}` has no generator"

@@ -196,7 +196,8 @@ pub fn generate(
             rate: TAU * f,
         };
         let beta0 = TAU * rng.uniform();
-        let beta = observe(truth, drive, beta0, &t, meas, integrator, rng)?;
+        let run_truth = truth.for_drive_frequency(f);
+        let beta = observe(&run_truth, drive, beta0, &t, meas, integrator, rng)?;
         runs.push(Run {
             kind: RunKind::Driven { f_hz: f },
             file: format!("driven_{k:02}_{f:.3}.csv"),

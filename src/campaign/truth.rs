@@ -98,6 +98,10 @@ pub struct TruthModel {
     pub angle_modulation: f64,
     /// Input compliance: lag L at the peak coupling torque, rad (0 = rigid input).
     pub compliance: f64,
+    /// Damping that depends on the drive frequency: a driven run at f Hz has the viscous damping
+    /// ζ(1 + k(f − 1 Hz)), k in 1/Hz; the ring-downs keep ζ (applied per run by the generator,
+    /// [`TruthModel::for_drive_frequency`]).
+    pub zeta_per_hz: f64,
 }
 
 /// The input: held at α₀ (rate 0) or turned at a constant rate.
@@ -132,6 +136,15 @@ impl TruthModel {
             stribeck: None,
             angle_modulation: 0.0,
             compliance: 0.0,
+            zeta_per_hz: 0.0,
+        }
+    }
+
+    /// The truth of a driven run at `f_hz`: ζ(1 + k(f − 1 Hz)) with k = [`TruthModel::zeta_per_hz`].
+    pub fn for_drive_frequency(&self, f_hz: f64) -> Self {
+        Self {
+            zeta: self.zeta * (1.0 + self.zeta_per_hz * (f_hz - 1.0)),
+            ..self.clone()
         }
     }
 

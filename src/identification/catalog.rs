@@ -174,6 +174,16 @@ pub fn catalog() -> Vec<Effect> {
     v
 }
 
+/// The terms of a `condition_dependence` of `p` on `clock`: the drive frequency exists on the
+/// driven runs only, so its member also carries the ring-downs' own level ([`Clock::RunKind`]);
+/// the velocity range is a condition of every run.
+fn condition_terms(p: DriftParam, clock: Clock) -> Vec<Term> {
+    match clock {
+        Clock::DriveFrequency => vec![Term::Drift(p, clock), Term::Drift(p, Clock::RunKind)],
+        _ => vec![Term::Drift(p, clock)],
+    }
+}
+
 /// The per-run parameter effects: `condition_dependence` (a base parameter linear in a run
 /// condition) and `parameter_drift` (linear in the session clock), for each of ζ, η and g.
 fn drift_members() -> Vec<Effect> {
@@ -194,7 +204,7 @@ fn drift_members() -> Vec<Effect> {
                         "the coupling strength g differs from run to run with the run's conditions (drive frequency or velocity range)"
                     }
                 },
-                terms: vec![Term::Drift(p, clock)],
+                terms: condition_terms(p, clock),
                 candidates: vec![
                     "a friction or damping law depending on the velocity or the angles",
                     "a drift over the session (when the runs were recorded in the order of the condition)",
@@ -372,6 +382,13 @@ pub fn effect_params(
                         DriftParam::Eta => base_eta,
                         DriftParam::Coupling => g,
                     };
+                    if *clock == Clock::RunKind {
+                        // s = +½ driven, −½ ring-downs: v is the driven runs' level minus the
+                        // ring-downs'
+                        p.insert(format!("{name}_driven_minus_ringdown"), v);
+                        p.insert(format!("{name}_driven_minus_ringdown_err"), s);
+                        continue;
+                    }
                     // the column is s·(base term), s from −½ to ½: v is the change over the session
                     p.insert(format!("{name}_change"), v);
                     p.insert(format!("{name}_change_err"), s);

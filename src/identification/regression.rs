@@ -136,11 +136,15 @@ pub enum Clock {
     RunIndex,
     /// Recording time accumulated over the runs in file order (runs back to back).
     SessionTime,
-    /// A run condition, not a clock: the drive frequency (0 for ring-downs), scaled to [−½, ½]
-    /// over the runs.
+    /// A run condition, not a clock: the drive frequency of a driven run, scaled to [−½, ½] over
+    /// the driven runs; 0 for the ring-downs (they have no drive frequency: their level is set
+    /// free by [`Clock::RunKind`] in the same effect, never extrapolated to f = 0).
     DriveFrequency,
     /// A run condition: the run's rms output velocity, scaled to [−½, ½] over the runs.
     VelocityRange,
+    /// A run condition: the kind of run, +½ for driven runs and −½ for ring-downs (the offset
+    /// between the two that frees the ring-downs' level next to [`Clock::DriveFrequency`]).
+    RunKind,
 }
 
 impl Clock {
@@ -151,6 +155,7 @@ impl Clock {
             Clock::SessionTime => "session_time",
             Clock::DriveFrequency => "drive_frequency",
             Clock::VelocityRange => "velocity_range",
+            Clock::RunKind => "run_kind",
         }
     }
     /// Whether it orders the session (a clock) rather than describing a run's conditions.
@@ -311,6 +316,13 @@ impl SampleCtx {
             Clock::SessionTime => self.s_time,
             Clock::DriveFrequency => self.s_cond.0,
             Clock::VelocityRange => self.s_cond.1,
+            Clock::RunKind => {
+                if self.driven {
+                    0.5
+                } else {
+                    -0.5
+                }
+            }
         }
     }
 }
@@ -412,14 +424,20 @@ fn session_clocks(runs: &[CleanRun]) -> Vec<(f64, f64, f64)> {
         .collect()
 }
 
-/// Per run: (drive frequency, rms output velocity), each scaled to [−½, ½] over the runs.
+/// Per run: (drive frequency, rms output velocity), each scaled to [−½, ½]: the velocity over
+/// all runs, the drive frequency over the driven runs only, with the ring-downs at 0. A ring-down
+/// has no drive frequency; placing it at f = 0 would make a law linear in f over the driven runs
+/// extrapolate to the ring-downs (a damping that grows with f would force the ring-downs' damping
+/// near zero), so the ring-downs' level is left to [`Clock::RunKind`].
 pub fn run_conditions(runs: &[CleanRun]) -> Vec<(f64, f64)> {
-    let scale = |x: Vec<f64>| -> Vec<f64> {
-        let lo = x.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let scale = |x: Vec<f64>, member: &dyn Fn(usize) -> bool| -> Vec<f64> {
+        let of = x.iter().enumerate().filter(|(i, _)| member(*i));
+        let lo = of.clone().map(|p| *p.1).fold(f64::INFINITY, f64::min);
+        let hi = of.map(|p| *p.1).fold(f64::NEG_INFINITY, f64::max);
         x.iter()
-            .map(|v| {
-                if hi > lo {
+            .enumerate()
+            .map(|(i, v)| {
+                if hi > lo && member(i) {
                     (v - lo) / (hi - lo) - 0.5
                 } else {
                     0.0
@@ -427,24 +445,34 @@ pub fn run_conditions(runs: &[CleanRun]) -> Vec<(f64, f64)> {
             })
             .collect()
     };
-    let f = scale(runs.iter().map(|r| r.alpha_rate.abs()).collect());
+    let f = scale(runs.iter().map(|r| r.alpha_rate.abs()).collect(), &|i| {
+        !runs[i].ringdown
+    });
     let v = scale(
         runs.iter()
             .map(|r| (r.v.iter().map(|x| x * x).sum::<f64>() / r.v.len().max(1) as f64).sqrt())
             .collect(),
+        &|_| true,
     );
     f.into_iter().zip(v).collect()
 }
 
 /// The value in [−½, ½] of every [`Clock`] for each run (session time at the run's middle).
-pub fn session_positions(runs: &[CleanRun]) -> Vec<[f64; 4]> {
+pub fn session_positions(runs: &[CleanRun]) -> Vec<[f64; 5]> {
     let cond = run_conditions(runs);
     session_clocks(runs)
         .iter()
         .zip(runs)
         .zip(cond)
         .map(|((&(si, start, total), r), c)| {
-            [si, (start + 0.5 * duration(r)) / total - 0.5, c.0, c.1]
+            let kind = if r.ringdown { -0.5 } else { 0.5 };
+            [
+                si,
+                (start + 0.5 * duration(r)) / total - 0.5,
+                c.0,
+                c.1,
+                kind,
+            ]
         })
         .collect()
 }
@@ -457,6 +485,7 @@ impl Clock {
             Clock::SessionTime => 1,
             Clock::DriveFrequency => 2,
             Clock::VelocityRange => 3,
+            Clock::RunKind => 4,
         }
     }
 }
