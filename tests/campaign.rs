@@ -478,3 +478,103 @@ fn frequency_dependent_damping_is_a_condition_dependence_of_zeta() {
         }
     }
 }
+
+/// The Stribeck family's size from recordings of the campaign generator (its own equation,
+/// integrator and noise; truth inside the family: a Gaussian decay, w = 0.5 rad/s, excess
+/// Δη_s = η), refitted by simulation from a start off the truth (the exponential grid member at
+/// w = 1.2 rad/s with half the excess) to convergence, as the final refit of the diagnosis does
+/// (`select::refit_to_convergence`): the truth within ±2σ of the relative excess Δη_s/η and of
+/// w in at least 2 of 3 seeds (a rate of ≥ 90 % fails at most once in 3 at the 3 % level), and no
+/// seed off by more than 4σ. A fit stopped on its evaluation budget part-way along the
+/// width–excess valley gave the excess 13 % low with σ 0.2 % on a Python-generated set.
+///
+/// Ignored: it fails today (measured 2026-11-25, 93 s CPU for the 3 refits, release build).
+/// Seed 1: the refit stops at its start (Δη_s/η 0.495 ± 0.006, w 1.200 ± 0.024, δ 1.000,
+/// `converged` true, 128 of 157 windows); seeds 2 and 3: w 0.466 ± 0.014 and 0.504 ± 0.006 and
+/// Δη_s/η 1.084 ± 0.006 and 0.985 ± 0.002 with δ left near its start (1.08 and 1.02 for the
+/// Gaussian's 2) and σ(δ) ≤ 0.015. See docs/diagnosis.md, Known weaknesses.
+#[test]
+#[ignore = "fails today: the Stribeck refit stops short of the minimum (docs/diagnosis.md)"]
+fn stribeck_size_covers_the_truth_on_generated_sets() {
+    use gearbif::campaign::cases::draw_lab;
+    use gearbif::campaign::generator::{generate, Measurement};
+    use gearbif::campaign::rng::Rng;
+    use gearbif::identification::diagnose::{fit_base, prepare, DiagnoseOptions};
+    use gearbif::identification::judge::Folds;
+    use gearbif::identification::model::Shape;
+    use gearbif::identification::regression::{Term, BASE_TERMS};
+    use gearbif::identification::select::refit_to_convergence;
+    use gearbif::identification::shooting::{ShootingOptions, SimModel};
+    let (mut covered, mut worst) = (0, 0.0_f64);
+    let mut lines = Vec::new();
+    for seed in 1..=3u64 {
+        let mut rng = Rng::new(seed, 91);
+        let (mut truth, stated, _) = draw_lab(&mut rng);
+        let (excess, width) = (truth.eta, 0.5);
+        truth.stribeck = Some(Stribeck {
+            excess,
+            width,
+            shape: StribeckShape::Gaussian,
+        });
+        let set = generate(
+            &truth,
+            &Measurement::default(),
+            &SetSize::ci(),
+            stated,
+            &Rk4Filippov::default(),
+            &mut rng,
+        )
+        .unwrap();
+        let opts = DiagnoseOptions::default();
+        let prep = prepare(&set, &opts, &|_| {}).unwrap();
+        let base = fit_base(&prep, &set, &opts, &Folds::new(&prep.runs, 4), &|_| {}).unwrap();
+        let st = base.state.as_ref().unwrap();
+        let mut terms = BASE_TERMS.to_vec();
+        terms.extend([
+            Term::StaticExcess,
+            Term::Shape(Shape::StribeckWidth),
+            Term::Shape(Shape::StribeckPower),
+        ]);
+        let mut theta0 = st.fit.theta[..4].to_vec();
+        theta0.extend([0.5 * excess, 1.2, 1.0]);
+        let model = SimModel {
+            runs: &prep.runs,
+            geo: base.geo,
+            terms,
+            latency: 0.0,
+            fit_latency: false,
+            eta_static_excess: 0.0,
+        };
+        let sopts = ShootingOptions {
+            patience: 4,
+            reselect: true,
+            ..ShootingOptions::default()
+        };
+        let f = refit_to_convergence(&model, &theta0, &base.wins, &sopts).unwrap();
+        // the report's headline: Δη_s/η with σ(Δη_s)/η
+        let (eta, s, s_err) = (f.theta[1], f.theta[4] / f.theta[1], f.err[4] / f.theta[1]);
+        let pulls = [
+            (s - excess / truth.eta) / s_err,
+            (f.theta[5] - width) / f.err[5],
+        ];
+        if pulls.iter().all(|p| p.abs() <= 2.0) {
+            covered += 1;
+        }
+        worst = pulls.iter().fold(worst, |m, p| m.max(p.abs()));
+        lines.push(format!(
+            "seed {seed}: excess {s:.4} ± {s_err:.4} (truth {:.4}), w {:.4} ± {:.4} (0.5), δ {:.3} \
+             ± {:.3} (2), η {eta:.3} ({:.3}), converged {}, windows {} of {}",
+            excess / truth.eta,
+            f.theta[5],
+            f.err[5],
+            f.theta[6],
+            f.err[6],
+            truth.eta,
+            f.converged,
+            f.used.len(),
+            base.wins.len()
+        ));
+    }
+    assert!(covered >= 2 && worst <= 4.0, "{}", lines.join("\n"));
+    eprintln!("{}", lines.join("\n"));
+}

@@ -278,6 +278,13 @@ pub fn judged_finding(
                "rms_start_rad": st.fit.rms_start_rad, "rms_rad": st.fit.rms_rad,
                "converged": st.fit.converged, "inflation": st.fit.inflation}),
     );
+    // the refit the reported parameters and their σ come from: a σ of an unconverged fit is not
+    // the σ of a minimum
+    ev.insert(
+        "final_refit".into(),
+        json!({"windows": fin.fit.used.len(), "rms_rad": fin.fit.rms_rad,
+               "converged": fin.fit.converged}),
+    );
     let size = headline_size(e, &params);
     let (candidates, experiment) = if e.id == "unexplained" {
         (
