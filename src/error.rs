@@ -368,6 +368,20 @@ pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64> {
     }
 }
 
+/// Checks a relative tolerance: finite and in the open interval (0, 1).
+pub(crate) fn relative_tolerance(name: &'static str, value: f64) -> Result<f64> {
+    positive(name, value)?;
+    if value < 1.0 {
+        Ok(value)
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            value,
+            reason: "must be in (0, 1)",
+        })
+    }
+}
+
 /// Checks that `value` is finite and non-negative.
 pub(crate) fn non_negative(name: &'static str, value: f64) -> Result<f64> {
     finite(name, value)?;

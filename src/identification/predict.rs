@@ -103,7 +103,7 @@ pub fn simulation_steps() -> (u64, u64) {
 
 /// Most integration steps (accepted and rejected) of one window simulation. A window lasts at
 /// most [`HORIZON`] (or [`WINDOW`] samples); a model that follows the data is simulated over it
-/// at tolerance 1e-8 in about 40 steps (mean over the base model's windows of a campaign set,
+/// at the default tolerance ([`super::diagnose::DiagnoseOptions::tol`], 1e-8) in about 40 steps (mean over the base model's windows of a campaign set,
 /// `gearbif diagnose --timing`), so the budget is 50 times that. A trial model whose motion runs
 /// away inside a window (an extrapolated drift with a negative damping, a torque harmonic driven
 /// far off by a leave-fold-out step) would otherwise shrink its steps without bound and hold the
@@ -111,12 +111,19 @@ pub fn simulation_steps() -> (u64, u64) {
 /// as that model's loss ([`super::judge::compare`]).
 pub const WINDOW_MAX_STEPS: usize = 2_000;
 
-/// β of `sys` from the state `x0` at `t0`, at `times` (exact Filippov flow, tolerance 1e-8);
-/// `None` when the flow fails or needs more than [`WINDOW_MAX_STEPS`] steps.
-pub fn simulate(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<f64>> {
+/// β of `sys` from the state `x0` at `t0`, at `times` (exact Filippov flow of eq. `model`,
+/// relative tolerance `tol`: [`super::diagnose::DiagnoseOptions::tol`]); `None` when the flow
+/// fails or needs more than [`WINDOW_MAX_STEPS`] steps.
+pub fn simulate(
+    sys: &AugmentedGear,
+    t0: f64,
+    x0: [f64; 2],
+    times: &[f64],
+    tol: f64,
+) -> Option<Vec<f64>> {
     SIMULATIONS.fetch_add(1, Ordering::Relaxed);
     let t1 = *times.last()?;
-    let mut opts = FlowOptions::with_tol(1e-8).samples(times.to_vec());
+    let mut opts = FlowOptions::with_tol(tol).samples(times.to_vec());
     opts.max_steps = WINDOW_MAX_STEPS;
     let f = match EventDriven.flow(sys, t0, x0, t1, &opts) {
         Ok(f) => f,
@@ -136,8 +143,8 @@ pub fn simulate(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Op
     Some(f.samples.iter().map(|s| s.beta).collect())
 }
 
-/// (β_sim − β)/σ of a window simulated from the state `x0` at its first sample; 0 on masked
-/// samples.
+/// (β_sim − β)/σ of a window simulated from the state `x0` at its first sample (tolerance `tol`);
+/// 0 on masked samples.
 pub fn window_residuals(
     sys: &AugmentedGear,
     t: &[f64],
@@ -145,8 +152,9 @@ pub fn window_residuals(
     keep: &[bool],
     sigma: f64,
     x0: [f64; 2],
+    tol: f64,
 ) -> Option<Vec<f64>> {
-    let s = simulate(sys, t[0], x0, t)?;
+    let s = simulate(sys, t[0], x0, t, tol)?;
     Some(
         s.iter()
             .zip(b)
@@ -157,7 +165,9 @@ pub fn window_residuals(
 }
 
 /// Fits a window's initial state with the model fixed, from `guess` and, when that fit is poor,
-/// from finite-difference and at-rest velocities. Residuals are (β_sim − β)/σ on kept samples.
+/// from finite-difference and at-rest velocities. Residuals are (β_sim − β)/σ on kept samples;
+/// the window is simulated at the relative tolerance `tol`.
+#[allow(clippy::too_many_arguments)]
 pub fn fit_window_state(
     sys: &AugmentedGear,
     t: &[f64],
@@ -166,8 +176,9 @@ pub fn fit_window_state(
     sigma: f64,
     guess: [f64; 2],
     multi_start: bool,
+    tol: f64,
 ) -> Option<LsqFit> {
-    let f = |p: &[f64]| window_residuals(sys, t, b, keep, sigma, [p[0], p[1]]);
+    let f = |p: &[f64]| window_residuals(sys, t, b, keep, sigma, [p[0], p[1]], tol);
     let mut fit = least_squares(&f, &guess, &[1e-7, 1e-6], 20);
     let kept = keep.iter().filter(|&&k| k).count().max(1) as f64;
     let poor = |x: &Option<LsqFit>| x.as_ref().map(|f| f.rss / kept > 4.0).unwrap_or(true);
@@ -187,8 +198,15 @@ pub fn fit_window_state(
     fit
 }
 
-/// Predicts a cleaned run with the model `c` (and a sensor latency `latency`, s).
-pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> Prediction {
+/// Predicts a cleaned run with the model `c` (and a sensor latency `latency`, s); the windows are
+/// simulated at the relative tolerance `tol` ([`super::diagnose::DiagnoseOptions::tol`]).
+pub fn predict(
+    r: &CleanRun,
+    c: &Coefficients,
+    geo: &Geometry,
+    latency: f64,
+    tol: f64,
+) -> Prediction {
     let mut out = Prediction::default();
     let mut ss = 0.0;
     let mut dof = 0usize;
@@ -198,7 +216,8 @@ pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> 
         let sys = window_system(r, c, geo, latency, i, j);
         let sigma = r.sigma_camera.max(1e-12);
         let all = vec![true; t.len()];
-        if let Some(mut fit) = fit_window_state(&sys, t, b, &all, sigma, [b[0], r.v[i]], true) {
+        if let Some(mut fit) = fit_window_state(&sys, t, b, &all, sigma, [b[0], r.v[i]], true, tol)
+        {
             // outlier frames the cleaning missed (coarse sampling): beyond 5σ of the camera noise,
             // dropped and the window refitted once without them
             let bad: Vec<bool> = fit.resid.iter().map(|x| x.abs() > 5.0).collect();
@@ -206,7 +225,7 @@ pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> 
             if nbad > 0 && nbad <= t.len() / 5 {
                 let keep: Vec<bool> = bad.iter().map(|&o| !o).collect();
                 if let Some(f2) =
-                    fit_window_state(&sys, t, b, &keep, sigma, [fit.p[0], fit.p[1]], false)
+                    fit_window_state(&sys, t, b, &keep, sigma, [fit.p[0], fit.p[1]], false, tol)
                 {
                     fit = f2;
                 }
