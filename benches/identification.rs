@@ -55,7 +55,17 @@ fn bench(c: &mut Criterion) {
     let mut grp = c.benchmark_group("identification");
     grp.sample_size(10);
     grp.bench_function(format!("ring-down fit ({} samples)", cr.t.len()), |b| {
-        b.iter(|| fit_ringdown(&cr, &rd.file, alpha0, 1.1, 23.1).unwrap())
+        b.iter(|| {
+            fit_ringdown(
+                &cr,
+                &rd.file,
+                alpha0,
+                1.1,
+                23.1,
+                DiagnoseOptions::default().ringdown_tol(),
+            )
+            .unwrap()
+        })
     });
     // refit by simulation of the base model over the windows of all runs of the set
     let mut all: Vec<_> = set.runs.iter().map(|r| clean(r, None)).collect();
@@ -71,6 +81,7 @@ fn bench(c: &mut Criterion) {
         latency: 0.0,
         fit_latency: false,
         eta_static_excess: 0.0,
+        tol: DiagnoseOptions::default().tol,
     };
     let wins = mask_windows(&model, &f.coef, &choose_windows(&all, so.max_windows));
     let w = refit(&model, &f.coef, &wins, &so).unwrap().used.len();

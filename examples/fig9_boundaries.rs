@@ -106,8 +106,8 @@ fn onset_by_continuation(
     w: f64,
 ) -> gearbif::Result<SpecialPoint> {
     let b = branch_across(theta, spec, x, f0, w)?;
-    stick_onset(&b).ok_or_else(|| {
-        gearbif::Error::Continuation(format!("no stick onset near {f0} Hz at Θ = {theta}°"))
+    stick_onset(&b).ok_or_else(|| gearbif::Error::NotFound {
+        what: format!("stick onset near {f0} Hz at Θ = {theta}°"),
     })
 }
 
@@ -155,8 +155,9 @@ fn branch_across(
 fn stick_end_curves(opts: &CurveOptions) -> gearbif::Result<Labelled> {
     let spec = OrbitSpec::stroboscopic(1, 1);
     let b = branch_across(25.0, spec, [2.9748, 24.3248], 2.36, 0.025)?;
-    let sp = stick_end(&b)
-        .ok_or_else(|| gearbif::Error::Continuation("no end of sticking at 25°".into()))?;
+    let sp = stick_end(&b).ok_or_else(|| gearbif::Error::NotFound {
+        what: "end of sticking at 25°".into(),
+    })?;
     println!(
         "end of sticking, T orbit, Θ = 25° (continuation in f): {:.10} Hz",
         sp.param
@@ -178,8 +179,8 @@ fn stick_end_curves(opts: &CurveOptions) -> gearbif::Result<Labelled> {
     }
     for p in out[0].1.points.iter().skip(8).step_by(8).take(3) {
         let b = branch_across(p.along, spec, p.x, p.free, 0.004)?;
-        let q = stick_end(&b).ok_or_else(|| {
-            gearbif::Error::Continuation(format!("no end of sticking at Θ = {}°", p.along))
+        let q = stick_end(&b).ok_or_else(|| gearbif::Error::NotFound {
+            what: format!("end of sticking at Θ = {}°", p.along),
         })?;
         println!(
             "Θ = {:.6}°: end-of-sticking curve {:.10} Hz, continuation in f {:.10} ± {:.1e} Hz, \

@@ -74,7 +74,9 @@ fn main() -> gearbif::Result<()> {
         .specials_of(SpecialKind::SymmetryBreaking)
         .last()
         .cloned()
-        .ok_or_else(|| gearbif::Error::Continuation("no symmetry-breaking point".into()))?;
+        .ok_or_else(|| gearbif::Error::NotFound {
+            what: "symmetry-breaking point".into(),
+        })?;
     let sw = switch_branch(&sym, &sb_hi, -1e-3, &sh)?;
     let asym = Continuation::from_orbit(
         sw.system,
@@ -96,7 +98,9 @@ fn main() -> gearbif::Result<()> {
         .specials_of(SpecialKind::SymmetryBreaking)
         .next()
         .cloned()
-        .ok_or_else(|| gearbif::Error::Continuation("no symmetry-breaking point".into()))?;
+        .ok_or_else(|| gearbif::Error::NotFound {
+            what: "symmetry-breaking point".into(),
+        })?;
     let sw2 = switch_branch(&sym, &sb_lo, -1e-3, &sh)?;
     let asym2 = Continuation::from_orbit(
         sw2.system,

@@ -167,9 +167,97 @@ pub enum Error {
         /// Context.
         reason: String,
     },
-    /// A continuation could not proceed.
-    #[error("continuation stopped: {0}")]
-    Continuation(String),
+    /// A linear system of a continuation (a bordered matrix for a tangent or a test function)
+    /// is singular.
+    #[error("continuation stopped: singular {what}")]
+    SingularMatrix {
+        /// Which matrix, and what it was needed for.
+        what: &'static str,
+    },
+    /// A continuation has no direction to go on in: a zero or non-finite tangent, two equal
+    /// points, an eigenvector along the branch.
+    #[error("continuation stopped: no direction to continue in ({what})")]
+    DegenerateDirection {
+        /// Which direction is degenerate.
+        what: &'static str,
+    },
+    /// The orbit has no arrival on the stick surface Σ (ω = 0) whose edge could be tracked.
+    #[error("continuation stopped: the orbit has no arrival on the stick surface Σ to track")]
+    NoArrival,
+    /// A special point without the critical eigenvector a branch switch needs.
+    #[error("the {kind} point at {} carries no eigenvector to switch along", show(*param))]
+    MissingEigenvector {
+        /// The point's kind ("flip", "symmetry-breaking", …).
+        kind: &'static str,
+        /// The continuation parameter's value at the point.
+        param: f64,
+    },
+    /// A branch switch found no orbit of the new branch near the special point.
+    #[error("branch switching at {param} = {} found no new orbit ({reason})", show(*value))]
+    NoNewBranch {
+        /// The continuation parameter's name.
+        param: &'static str,
+        /// Its value at the special point.
+        value: f64,
+        /// What was found instead, or the last error.
+        reason: String,
+    },
+    /// The start orbit of a continuation is too unstable for single shooting.
+    #[error(
+        "continuation stopped: the start orbit has |μ| = {multiplier:e} above the          single-shooting limit {limit:e}"
+    )]
+    MultiplierTooLarge {
+        /// Spectral radius of the start orbit's monodromy matrix.
+        multiplier: f64,
+        /// The limit (`ContinuationOptions::max_multiplier`).
+        limit: f64,
+    },
+    /// A test function of a codimension-two point is not finite inside its bracket.
+    #[error("continuation stopped: non-finite {kind} test function")]
+    NonFiniteTestFunction {
+        /// The point's kind.
+        kind: &'static str,
+    },
+    /// A test function changes sign across a discontinuity instead of vanishing.
+    #[error(
+        "the {kind} test function jumps instead of vanishing ({before:.2e} → {after:.2e},          {at_bracket:.2e} at the bracket)"
+    )]
+    TestFunctionJump {
+        /// The point's kind.
+        kind: &'static str,
+        /// Value at the start of the bracket.
+        before: f64,
+        /// Value at its end.
+        after: f64,
+        /// Value at the last point of the location.
+        at_bracket: f64,
+    },
+    /// A computation that looks for a point (a special point, a boundary, a start orbit) did not
+    /// find it.
+    #[error("not found: {what}")]
+    NotFound {
+        /// What was looked for, and where.
+        what: String,
+    },
+    /// No periodic orbit to start a continuation from.
+    #[error("no start orbit at {param} = {}: {reason}", show(*value))]
+    NoStartOrbit {
+        /// The continuation parameter's name.
+        param: &'static str,
+        /// Its value.
+        value: f64,
+        /// Why neither shooting nor a simulation gave one.
+        reason: String,
+    },
+    /// The fate of the unstable manifold of the lock (re-lock or slip) was not decided within the
+    /// time simulated.
+    #[error("unstable manifold undecided after {t} s at f = {f} Hz")]
+    ManifoldUndecided {
+        /// Time simulated, s.
+        t: f64,
+        /// Drive frequency, Hz.
+        f: f64,
+    },
     /// A plotting backend failed; its message is kept as text.
     #[error("{0}")]
     Io(String),
@@ -216,10 +304,50 @@ pub enum Error {
         /// Dry friction η, s⁻².
         eta: f64,
     },
-    /// The requested operation is not available for this system (e.g. the gear's lock branch of
-    /// an oscillator, a closed form outside its range).
-    #[error("unsupported: {0}")]
-    Unsupported(String),
+    /// A closed-form solution asked for outside the range where it exists (the gear's analytic
+    /// lock branch away from Δ = ±1 or above f_c, Den Hartog's solution of an overdamped
+    /// oscillator or with stops, the slip-through cycle away from Δ = 1).
+    #[error("unsupported: {closed_form} needs {needs}")]
+    OutsideClosedForm {
+        /// The solution asked for.
+        closed_form: &'static str,
+        /// The condition it needs, with the value that violates it.
+        needs: String,
+    },
+    /// A function whose root is sought has the same sign at both ends of the interval given.
+    #[error(
+        "{what} does not change sign on [{}, {}] ({f_lo:e}, {f_hi:e})",
+        show(*lo),
+        show(*hi)
+    )]
+    NotBracketed {
+        /// The function.
+        what: &'static str,
+        /// Low end of the interval.
+        lo: f64,
+        /// High end.
+        hi: f64,
+        /// The function's value at `lo`.
+        f_lo: f64,
+        /// Its value at `hi`.
+        f_hi: f64,
+    },
+    /// An operation on a special point of a kind it does not exist for.
+    #[error("unsupported: {operation} is not available at a {kind} point")]
+    UnsupportedPoint {
+        /// The operation, with the kinds it exists for.
+        operation: &'static str,
+        /// The point's kind.
+        kind: &'static str,
+    },
+    /// An operation that needs a cargo feature this build was made without.
+    #[error("unsupported: {what} needs the `{feature}` feature")]
+    FeatureDisabled {
+        /// The operation.
+        what: &'static str,
+        /// The cargo feature.
+        feature: &'static str,
+    },
     /// An input file is malformed: a recording set's experiment.toml or CSV file, a `--config`
     /// TOML file or a sweep checkpoint.
     #[error("{file}{}: {what}", line.map(|l| format!(":{l}")).unwrap_or_default())]
@@ -364,6 +492,20 @@ pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64> {
             name,
             value,
             reason: "must be > 0",
+        })
+    }
+}
+
+/// Checks a relative tolerance: finite and in the open interval (0, 1).
+pub(crate) fn relative_tolerance(name: &'static str, value: f64) -> Result<f64> {
+    positive(name, value)?;
+    if value < 1.0 {
+        Ok(value)
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            value,
+            reason: "must be in (0, 1)",
         })
     }
 }

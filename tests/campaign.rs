@@ -155,6 +155,7 @@ fn ci_campaign() -> &'static CampaignDoc {
             set,
             rk4_step_s: 2.5e-4,
             keep_sets: false,
+            tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
         };
         let doc = run_campaign(&spec, &out, &|_| {}).unwrap();
         std::fs::remove_dir_all(&out).ok();
@@ -277,6 +278,7 @@ fn refit_sizes_are_unbiased_at_low_noise() {
         latency: 0.004,
         fit_latency: true,
         eta_static_excess: 0.0,
+        tol: opts.tol,
     };
     let sopts = ShootingOptions {
         patience: 4,

@@ -299,12 +299,15 @@ const CASES: &[(&str, &str)] = &[
     ("fit {set-nofile}", "a.csv"),
     ("fit {set-empty}", "empty file"),
     ("fit {file}", "experiment.toml"),
+    ("fit {set-nan} --tol 0", "`tol` = 0"),
+    ("fit {set-nan} --tol 1", "`tol` = 1"),
     // diagnose
     ("diagnose {missing} --out o", "experiment.toml"),
     ("diagnose {set-nan} --out o", "a.csv:3"),
     ("diagnose {set-kind} --out o", "experiment.toml:8"),
     ("diagnose {set-nan} --out {file}", "not a folder"),
     ("diagnose {set-nan}", "--out"),
+    ("diagnose {set-nan} --out o --tol nan", "`tol` = NaN"),
     // campaign
     ("campaign", "--out"),
     ("campaign --out o --seeds 0", "seeds"),
@@ -313,6 +316,7 @@ const CASES: &[(&str, &str)] = &[
     ("campaign --out o --effects nope", "nope"),
     ("campaign --out o --sizes=-1", "level"),
     ("campaign --out o --sizes nan", "level"),
+    ("campaign --out o --tol=-1e-8", "`tol` = -1e-8"),
     ("campaign --out o --set huge", "unknown set size"),
     ("campaign --out o --step 0", "step"),
     ("campaign --out o --step 1", "step"),

@@ -375,7 +375,7 @@ fn bad_options_are_errors_not_panics() {
     let f = b.specials_of(SpecialKind::Fold).next().unwrap();
     assert!(matches!(
         switch_branch(&b, f, 1e-3, &ShootingOptions::default()),
-        Err(Error::Unsupported(_))
+        Err(Error::UnsupportedPoint { kind: "fold", .. })
     ));
 }
 

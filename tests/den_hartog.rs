@@ -257,3 +257,26 @@ fn generic_sweep_classifies_den_hartog_orbits() {
         }
     }
 }
+
+#[test]
+fn outside_the_closed_form_the_errors_are_typed() {
+    // overdamped: Den Hartog's solution does not exist
+    let over = CoulombOscillator::new(TAU, 1.5, 0.3, 1.0, 1.0).unwrap();
+    let r = non_stop_orbit(&over);
+    assert!(
+        matches!(r, Err(gearbif::Error::OutsideClosedForm { ref needs, .. }) if needs.contains("ξ = 1.5")),
+        "{:?}",
+        r.err()
+    );
+    // an interval above the stop boundary: the reversal margin keeps its sign
+    let r = stop_boundary_frequency(&oscillator(1.0), 1.5, 2.0, 1e-13);
+    match r {
+        Err(gearbif::Error::NotBracketed {
+            lo, hi, f_lo, f_hi, ..
+        }) => {
+            assert_eq!((lo, hi), (1.5, 2.0));
+            assert!(f_lo * f_hi > 0.0, "{f_lo} {f_hi}");
+        }
+        other => panic!("{other:?}"),
+    }
+}

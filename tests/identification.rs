@@ -377,7 +377,15 @@ fn ringdown_fits_recover_kappa_and_g() {
             unreachable!()
         };
         let cr = clean(r, None);
-        let f = fit_ringdown(&cr, &r.file, alpha0, 1.1, 23.1).expect("fit");
+        let f = fit_ringdown(
+            &cr,
+            &r.file,
+            alpha0,
+            1.1,
+            23.1,
+            DiagnoseOptions::default().ringdown_tol(),
+        )
+        .expect("fit");
         let kappa_true = gearbif::model::gear::kappa(c.g(), c.delta(), alpha0);
         if f.rms_rad < 2.0 * cr.sigma_beta {
             within(f.kappa, f.kappa_err, kappa_true, 4.0);
@@ -421,4 +429,77 @@ fn friction_modulated_by_cos_2beta_is_unexplained_and_named_by_its_term() {
     );
     assert!(!f.discriminating_experiment.is_empty());
     assert_eq!(f.size.as_ref().unwrap().name, name);
+}
+
+/// The tolerance set on the options reaches the integrator: the ring-down fits of the diagnosis
+/// (`prepare`) and the window predictions change measurably when it is loosened and converge as
+/// it is tightened (the default within a tenth of the loose one's distance from a 100 times
+/// tighter run); invalid tolerances are typed errors before any work.
+#[test]
+fn diagnosis_tolerance_reaches_the_integrator() {
+    use gearbif::identification::diagnose::prepare;
+    use gearbif::identification::predict::predict;
+    let mut o = small("none", 0.0, 31);
+    o.ringdowns = 2;
+    o.driven = 1;
+    o.turns = 6.0;
+    let (set, truth) = synthesize(&o).unwrap();
+    let at = |tol: f64| DiagnoseOptions {
+        tol,
+        ..DiagnoseOptions::default()
+    };
+    let default_tol = DiagnoseOptions::default().tol;
+    let (loose, tight) = (1e-4, 1e-2 * default_tol);
+    // ring-downs: κ of each fit at the three tolerances
+    let kappa = |tol: f64| -> Vec<f64> {
+        let p = prepare(&set, &at(tol), &|_| {}).unwrap();
+        assert_eq!(p.ringdowns.len(), 2, "a ring-down fit failed at tol {tol}");
+        p.ringdowns.iter().map(|f| f.kappa).collect()
+    };
+    let (kl, kd, kt) = (kappa(loose), kappa(default_tol), kappa(tight));
+    for k in 0..2 {
+        let (dl, dd) = ((kl[k] - kt[k]).abs(), (kd[k] - kt[k]).abs());
+        println!(
+            "ring-down {k}: kappa {}; |loose - tight| {dl:e}, |default - tight| {dd:e}",
+            kt[k]
+        );
+        assert!(
+            dl > 10.0 * dd && dl > 0.0,
+            "ring-down {k}: {dl:e} vs {dd:e}"
+        );
+    }
+    // window predictions of the driven run with the true model
+    let run = set
+        .runs
+        .iter()
+        .find(|r| !matches!(r.kind, RunKind::Ringdown { .. }))
+        .unwrap();
+    let cr = clean(run, None);
+    let rms = |tol: f64| predict(&cr, &truth.coefficients, &truth.geometry, 0.0, tol).rms;
+    let (rl, rd, rt) = (rms(loose), rms(default_tol), rms(tight));
+    let (dl, dd) = ((rl - rt).abs(), (rd - rt).abs());
+    println!("predictions: rms {rt} rad; |loose - tight| {dl:e}, |default - tight| {dd:e}");
+    assert!(dl > 10.0 * dd && dl > 0.0, "predictions: {dl:e} vs {dd:e}");
+    // invalid tolerances: the variant names the field
+    for (tol, ratio, name) in [
+        (0.0, 0.1, "tol"),
+        (1.0, 0.1, "tol"),
+        (f64::NAN, 0.1, "tol"),
+        (-1e-8, 0.1, "tol"),
+        (1e-8, 0.0, "ringdown_tol_ratio"),
+        (1e-8, 1.5, "ringdown_tol_ratio"),
+    ] {
+        let opts = DiagnoseOptions {
+            tol,
+            ringdown_tol_ratio: ratio,
+            ..DiagnoseOptions::default()
+        };
+        match diagnose(&set, &opts, &|_| {}) {
+            Err(gearbif::Error::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
+            other => panic!(
+                "tol {tol}, ratio {ratio}: {:?}",
+                other.map(|d| d.report.verdict)
+            ),
+        }
+    }
 }

@@ -127,4 +127,17 @@ fn bad_input_and_failures_are_typed_errors() {
         },
     );
     assert!(matches!(r, Err(Error::NewtonFailed { .. })), "{r:?}");
+    // the analytic lock branch: only at Δ = ±1 and below f_c, a typed refusal elsewhere
+    let lock = |theta_deg: f64, f: f64| {
+        gearbif::model::LockBranch::new(&Gear::paper(theta_deg, f).unwrap())
+    };
+    assert!(lock(0.0, 10.0).is_ok());
+    for (theta, f) in [(25.0, 1.0), (0.0, 45.0)] {
+        let r = lock(theta, f);
+        assert!(
+            matches!(r, Err(Error::OutsideClosedForm { closed_form, .. }) if closed_form.contains("lock")),
+            "Θ = {theta}°, f = {f} Hz: {:?}",
+            r.err()
+        );
+    }
 }

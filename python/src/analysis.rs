@@ -428,15 +428,21 @@ fn synth<'py>(
 /// Fits the base model to a recording set: ring-downs one by one (exact simulation +
 /// Levenberg–Marquardt), κ(α₀) → g, |Δ|, I, and the base model on all runs.
 ///
-/// fit(set_dir) — set_dir: folder with experiment.toml (docs/formats.md).
+/// fit(set_dir, *, tol=None) — set_dir: folder with experiment.toml (docs/formats.md); tol:
+/// relative tolerance of the simulations, in (0, 1) (None: the library's default, 1e-8; the
+/// ring-downs are integrated ten times tighter).
 /// Returns the dict of `gearbif fit --json` (schema gearbif.fit/1): baseline (params with errors),
-/// ringdowns, kappa_alpha0. Raises RecordingError for a malformed set.
+/// ringdowns, kappa_alpha0. Raises RecordingError for a malformed set, InvalidParameterError for a
+/// tolerance outside (0, 1).
 #[pyfunction]
-fn fit<'py>(py: Python<'py>, set_dir: PathBuf) -> PyResult<Bound<'py, PyAny>> {
+#[pyo3(signature = (set_dir, *, tol=None))]
+fn fit<'py>(py: Python<'py>, set_dir: PathBuf, tol: Option<f64>) -> PyResult<Bound<'py, PyAny>> {
+    let defaults = DiagnoseOptions::default();
     let opts = DiagnoseOptions {
         base_only: true,
         heldout_predictions: false,
-        ..DiagnoseOptions::default()
+        tol: tol.unwrap_or(defaults.tol),
+        ..defaults
     };
     let d = py
         .detach(|| {
@@ -456,22 +462,27 @@ fn fit<'py>(py: Python<'py>, set_dir: PathBuf) -> PyResult<Bound<'py, PyAny>> {
 /// Diagnoses a recording set: fits the base model, locates the mismatch and names the missing
 /// physics from the catalogue.
 ///
-/// diagnose(set_dir, *, heldout=True, out_dir=None)
+/// diagnose(set_dir, *, heldout=True, out_dir=None, tol=None)
 ///
 /// heldout: compute the leave-one-run-out short-horizon predictions (slower). out_dir: also write
-/// report.json there. Returns the report as a dict (schema gearbif.diagnosis/1, docs/formats.md):
-/// verdict, findings, baseline, …. Raises RecordingError for a malformed set.
+/// report.json there. tol: relative tolerance of the simulations, in (0, 1) (None: the library's
+/// default, 1e-8). Returns the report as a dict (schema gearbif.diagnosis/1, docs/formats.md):
+/// verdict, findings, baseline, …. Raises RecordingError for a malformed set,
+/// InvalidParameterError for a tolerance outside (0, 1).
 #[pyfunction]
-#[pyo3(signature = (set_dir, *, heldout=true, out_dir=None))]
+#[pyo3(signature = (set_dir, *, heldout=true, out_dir=None, tol=None))]
 fn diagnose<'py>(
     py: Python<'py>,
     set_dir: PathBuf,
     heldout: bool,
     out_dir: Option<PathBuf>,
+    tol: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let defaults = DiagnoseOptions::default();
     let opts = DiagnoseOptions {
         heldout_predictions: heldout,
-        ..DiagnoseOptions::default()
+        tol: tol.unwrap_or(defaults.tol),
+        ..defaults
     };
     let d = py
         .detach(|| {

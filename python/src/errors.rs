@@ -1,7 +1,7 @@
 //! The exception hierarchy: one Python class per concern of `gearbif::Error`, all subclasses of
 //! `GearbifError`. The input errors (an option, a name, a combination of options, a state, times,
-//! a shape, a checkpoint folder) share `InvalidInputError`, whose attribute `kind` names the
-//! variant.
+//! a shape, a checkpoint folder) share `InvalidInputError`; it, `ContinuationError` and
+//! `UnsupportedError` carry the attribute `kind`, the variant's name.
 
 use gearbif::Error;
 use pyo3::create_exception;
@@ -44,7 +44,8 @@ create_exception!(
     gearbif,
     ContinuationError,
     GearbifError,
-    "A continuation or a branch switch could not proceed."
+    "A continuation, a branch switch or a location could not proceed (attribute kind: the \
+     variant of gearbif::Error, e.g. \"SingularMatrix\", \"NoNewBranch\")."
 );
 create_exception!(
     gearbif,
@@ -56,7 +57,8 @@ create_exception!(
     gearbif,
     UnsupportedError,
     GearbifError,
-    "The operation is not available for this system (e.g. no half-period symmetry)."
+    "The operation is not available for this system (e.g. no half-period symmetry; attribute \
+     kind: the variant of gearbif::Error, e.g. \"OutsideClosedForm\")."
 );
 create_exception!(
     gearbif,
@@ -97,12 +99,29 @@ pub fn to_py(e: Error) -> PyErr {
         Error::NoPeriodDetected { .. } => NoPeriodError::new_err(msg),
         Error::Integration { .. } => IntegrationError::new_err(msg),
         Error::NewtonFailed { .. } => NewtonError::new_err(msg),
-        Error::Continuation(_) => ContinuationError::new_err(msg),
+        Error::SingularMatrix { .. }
+        | Error::DegenerateDirection { .. }
+        | Error::NoArrival
+        | Error::MissingEigenvector { .. }
+        | Error::NoNewBranch { .. }
+        | Error::MultiplierTooLarge { .. }
+        | Error::NonFiniteTestFunction { .. }
+        | Error::TestFunctionJump { .. }
+        | Error::NotFound { .. }
+        | Error::NoStartOrbit { .. }
+        | Error::ManifoldUndecided { .. } => {
+            with_kind(ContinuationError::new_err(msg), variant_name(&e))
+        }
         Error::Io(_) | Error::File { .. } | Error::Format { .. } => GearbifIOError::new_err(msg),
-        Error::Unsupported(_)
-        | Error::NoHalfPeriodSymmetry
+        Error::NoHalfPeriodSymmetry
         | Error::MissingJacobian { .. }
-        | Error::NoLockLossFrequency { .. } => UnsupportedError::new_err(msg),
+        | Error::NoLockLossFrequency { .. }
+        | Error::OutsideClosedForm { .. }
+        | Error::NotBracketed { .. }
+        | Error::UnsupportedPoint { .. }
+        | Error::FeatureDisabled { .. } => {
+            with_kind(UnsupportedError::new_err(msg), variant_name(&e))
+        }
         Error::Recording { file, line, .. } => {
             let err = RecordingError::new_err(msg);
             Python::attach(|py| {
@@ -113,6 +132,24 @@ pub fn to_py(e: Error) -> PyErr {
             err
         }
     }
+}
+
+/// The name of `e`'s variant (`"SingularMatrix"`), for the attribute `kind`.
+fn variant_name(e: &Error) -> String {
+    let debug = format!("{e:?}");
+    debug
+        .split(|c: char| !c.is_alphanumeric())
+        .next()
+        .unwrap_or_default()
+        .to_string()
+}
+
+/// `err` with its attribute `kind`, the variant of `gearbif::Error`.
+fn with_kind(err: PyErr, kind: String) -> PyErr {
+    Python::attach(|py| {
+        err.value(py).setattr("kind", kind).ok();
+    });
+    err
 }
 
 /// An `InvalidInputError` with its attribute `kind`, the variant of `gearbif::Error`.

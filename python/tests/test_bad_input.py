@@ -57,7 +57,9 @@ def test_gear_constructors_and_methods():
     raises(gearbif.InvalidInputError, gearbif.Gear, 100.0, 1.0, 1.1, 23.1, 1.0, convention="mirror")
     raises(gearbif.InvalidParameterError, gearbif.GearParams().driven, -2.0)
     raises(gearbif.InvalidParameterError, gearbif.GearParams().driven, 2.0, alpha0_deg=NAN)
-    raises(gearbif.UnsupportedError, gearbif.Gear.paper(0.0, 60.0).lock_branch)  # beyond f_c
+    with pytest.raises(gearbif.UnsupportedError) as e:  # beyond f_c
+        gearbif.Gear.paper(0.0, 60.0).lock_branch()
+    assert e.value.kind == "OutsideClosedForm", str(e.value)
     raises(gearbif.InvalidInputError, GEAR.forces, NAN, 0.0, 0.0)
 
 
@@ -109,7 +111,9 @@ def test_switch_branch_and_boundary():
     b = gearbif.continuation(gearbif.Gear.paper(0.0, 30.0), lock="stable", range=(25.0, 45.0), ds=0.5,
                              ds_max=5.0, max_multiplier=1e3)
     fold = [s for s in b.specials if s.kind == "fold"][0]
-    raises(gearbif.UnsupportedError, gearbif.switch_branch, b, fold)  # no switching at a fold
+    with pytest.raises(gearbif.UnsupportedError) as e:  # no switching at a fold
+        gearbif.switch_branch(b, fold)
+    assert e.value.kind == "UnsupportedPoint", str(e.value)
     raises(gearbif.InvalidInputError, gearbif.switch_branch, b, len(b.specials))
     raises(gearbif.InvalidInputError, gearbif.switch_branch, b, -1)
     raises(gearbif.InvalidInputError, gearbif.switch_branch, b, "fold")

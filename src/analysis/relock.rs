@@ -35,10 +35,13 @@ use std::f64::consts::TAU;
 /// Checks that `gear` is autonomous in δ (Δ = 1, physical convention) and returns Ω.
 fn co_rotating(gear: &Gear) -> Result<f64> {
     if (gear.delta - 1.0).abs() > 1e-12 || gear.convention != Convention::Physical {
-        return Err(Error::Unsupported(format!(
-            "the slip-through cycle is computed at Δ = 1 in the physical convention only (Δ = {})",
-            gear.delta
-        )));
+        return Err(Error::OutsideClosedForm {
+            closed_form: "the slip-through cycle",
+            needs: format!(
+                "Δ = 1 in the physical convention (Δ = {}, {:?})",
+                gear.delta, gear.convention
+            ),
+        });
     }
     Ok(TAU * gear.f)
 }
@@ -110,7 +113,12 @@ pub fn slip_cycle(gear: &Gear, delta0: f64, guess: (f64, f64), tol: f64) -> Resu
         &nopts,
         |u| {
             if u[1].is_nan() || u[1] <= 0.0 {
-                return Err(Error::Continuation("slip cycle: duration ≤ 0".into()));
+                return Err(Error::NotFound {
+                    what: format!(
+                        "slip-through cycle (the Newton iterate reached a duration {} ≤ 0)",
+                        u[1]
+                    ),
+                });
             }
             let fl = EventDriven.flow(gear, 0.0, [b0, u[0]], u[1], &o)?;
             let j = fl.jac_x.ok_or(Error::MissingJacobian { what: "state" })?;
@@ -158,10 +166,7 @@ pub fn unstable_manifold_passes(gear: &Gear, eps: f64, tol: f64) -> Result<bool>
             return Ok(false);
         }
     }
-    Err(Error::Continuation(format!(
-        "unstable manifold undecided after {t} s at f = {} Hz",
-        gear.f
-    )))
+    Err(Error::ManifoldUndecided { t, f: gear.f })
 }
 
 /// The located homoclinic bifurcation of the slip-through cycle.

@@ -401,9 +401,11 @@ pub fn build_case(
             });
         }
         other => {
-            return Err(Error::Unsupported(format!(
-                "effect `{other}` has no generator"
-            )))
+            return Err(Error::unknown_name(
+                "effect with a generator",
+                other,
+                EFFECTS.iter().map(|e| e.id),
+            ))
         }
     }
     let set = generate(&truth, &meas, &set_size, stated, rk4, &mut rng)?;

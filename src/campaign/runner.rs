@@ -1,7 +1,7 @@
 //! The campaign runner: every case (effect × level × seed) is generated, written in the documented
-//! recording format, read back, diagnosed with the default options, and scored; each result is
-//! written atomically to its own file as soon as it is known, so an interrupted campaign resumes
-//! where it stopped. Cases run in parallel with rayon (feature `parallel`).
+//! recording format, read back, diagnosed with the default options (but the spec's tolerance),
+//! and scored; each result is written atomically to its own file as soon as it is known, so an
+//! interrupted campaign resumes where it stopped. Cases run in parallel with rayon (feature `parallel`).
 
 use super::cases::{build_case, effect, EffectSpec};
 use super::generator::SetSize;
@@ -37,6 +37,15 @@ pub struct CampaignSpec {
     /// Keep the generated sets (under `sets/`).
     #[serde(default)]
     pub keep_sets: bool,
+    /// Relative tolerance of the diagnosis' simulations ([`DiagnoseOptions::tol`]); a spec.json
+    /// written before this field existed reads as the default.
+    #[serde(default = "default_tol")]
+    pub tol: f64,
+}
+
+/// [`DiagnoseOptions::tol`] of the default options.
+fn default_tol() -> f64 {
+    DiagnoseOptions::default().tol
 }
 
 impl CampaignSpec {
@@ -77,6 +86,7 @@ impl CampaignSpec {
                 reason: "the RK4 step must be in (0, 0.01] s",
             });
         }
+        crate::error::relative_tolerance("tol", self.tol)?;
         self.set.validate()
     }
 }
@@ -139,7 +149,11 @@ pub fn run_case(
     write_set(&g.set, &dir, true)?;
     let set = read_set(&dir)?;
     let t0 = Instant::now();
-    let diag = diagnose(&set, &DiagnoseOptions::default(), &|_| {});
+    let opts = DiagnoseOptions {
+        tol: spec.tol,
+        ..DiagnoseOptions::default()
+    };
+    let diag = diagnose(&set, &opts, &|_| {});
     let seconds = t0.elapsed().as_secs_f64();
     if !keep {
         let _ = std::fs::remove_dir_all(&dir);
@@ -215,10 +229,11 @@ pub fn run_campaign(
             line: (e.line() > 0).then_some(e.line()),
             what: format!("not a campaign spec ({e})"),
         })?;
-        if old.set != spec.set || old.rk4_step_s != spec.rk4_step_s {
+        if old.set != spec.set || old.rk4_step_s != spec.rk4_step_s || old.tol != spec.tol {
             return Err(Error::checkpoint(
                 out,
-                "the folder holds a campaign with another set size or step; choose another --out",
+                "the folder holds a campaign with another set size, step or tolerance; choose \
+                 another --out",
             ));
         }
     }

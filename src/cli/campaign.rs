@@ -6,6 +6,7 @@ use crate::campaign::generator::SetSize;
 use crate::campaign::render::markdown;
 use crate::campaign::runner::{run_campaign, CampaignSpec};
 use crate::error::Error;
+use crate::identification::diagnose::DiagnoseOptions;
 use crate::io::{write_atomic, write_json_atomic};
 use crate::Result;
 use std::path::PathBuf;
@@ -62,6 +63,10 @@ pub struct Args {
     /// Step of the generator's RK4 integrator, s.
     #[arg(long, default_value_t = 2.5e-4)]
     step: f64,
+    /// Relative tolerance of the diagnosis' simulations, in (0, 1) (the ring-downs are integrated
+    /// ten times tighter).
+    #[arg(long, default_value_t = DiagnoseOptions::default().tol)]
+    tol: f64,
     /// Keep the generated recording sets under OUT/sets/.
     #[arg(long)]
     keep_sets: bool,
@@ -97,6 +102,7 @@ fn spec_of(a: &Args) -> Result<CampaignSpec> {
         set,
         rk4_step_s: a.step,
         keep_sets: a.keep_sets,
+        tol: super::common::tolerance("tol", a.tol)?,
     };
     spec.validate()?;
     Ok(spec)

@@ -315,16 +315,7 @@ pub fn frequency(name: &'static str, value: f64) -> Result<f64> {
 
 /// Checks a relative tolerance: finite and in the open interval (0, 1).
 pub fn tolerance(name: &'static str, value: f64) -> Result<f64> {
-    crate::error::positive(name, value)?;
-    if value < 1.0 {
-        Ok(value)
-    } else {
-        Err(Error::InvalidParameter {
-            name,
-            value,
-            reason: "must be in (0, 1)",
-        })
-    }
+    crate::error::relative_tolerance(name, value)
 }
 
 /// Checks a count given by flag `--flag`: `lo ≤ value ≤ hi`.

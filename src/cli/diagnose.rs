@@ -25,6 +25,10 @@ pub struct Args {
     /// Add the process CPU time and the number of window simulations to every progress line.
     #[arg(long)]
     timing: bool,
+    /// Relative tolerance of the simulations, in (0, 1): the window simulations of the refits and
+    /// predictions and the stick windows; the ring-down fits are integrated ten times tighter.
+    #[arg(long, default_value_t = DiagnoseOptions::default().tol)]
+    tol: f64,
 }
 
 /// CPU time (user + system) of this process, s, from /proc/self/stat (Linux; `None` elsewhere).
@@ -41,11 +45,12 @@ fn cpu_seconds() -> Option<f64> {
 pub fn run(a: Args) -> Result<()> {
     let t0 = Instant::now();
     super::common::output_dir("--out", &a.out)?;
-    let set = read_set(&a.set)?;
     let opts = DiagnoseOptions {
         heldout_predictions: !a.no_heldout,
+        tol: super::common::tolerance("tol", a.tol)?,
         ..DiagnoseOptions::default()
     };
+    let set = read_set(&a.set)?;
     let d = diagnose(&set, &opts, &|s| {
         if a.timing {
             let sims = crate::identification::predict::simulations();

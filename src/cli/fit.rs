@@ -15,16 +15,21 @@ pub struct Args {
     /// Print JSON.
     #[arg(long)]
     json: bool,
+    /// Relative tolerance of the simulations, in (0, 1): the window simulations of the refits and
+    /// predictions and the stick windows; the ring-down fits are integrated ten times tighter.
+    #[arg(long, default_value_t = DiagnoseOptions::default().tol)]
+    tol: f64,
 }
 
 /// Runs `gearbif fit`.
 pub fn run(a: Args) -> Result<()> {
-    let set = read_set(&a.set)?;
     let opts = DiagnoseOptions {
         base_only: true,
         heldout_predictions: false,
+        tol: super::common::tolerance("tol", a.tol)?,
         ..DiagnoseOptions::default()
     };
+    let set = read_set(&a.set)?;
     let d = diagnose(&set, &opts, &|s| eprintln!("[fit] {s}"))?;
     let v = serde_json::json!({
         "schema": "gearbif.fit/1",

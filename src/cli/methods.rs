@@ -66,9 +66,10 @@ impl MethodArgs {
                 }
                 #[cfg(not(feature = "diffsol-check"))]
                 {
-                    Err(Error::Unsupported(
-                        "--method regularised needs the `diffsol-check` feature".into(),
-                    ))
+                    Err(Error::FeatureDisabled {
+                        what: "--method regularised",
+                        feature: "diffsol-check",
+                    })
                 }
             }
         }

@@ -80,10 +80,10 @@ pub fn critical_multiplier(kind: SpecialKind) -> Result<f64> {
     match kind {
         SpecialKind::Fold => Ok(1.0),
         SpecialKind::Flip | SpecialKind::SymmetryBreaking => Ok(-1.0),
-        k => Err(Error::Unsupported(format!(
-            "no minimally augmented system for a {} point (fold, flip or symmetry-breaking only)",
-            k.label()
-        ))),
+        k => Err(Error::UnsupportedPoint {
+            operation: "a minimally augmented system (fold, flip or symmetry-breaking only)",
+            kind: k.label(),
+        }),
     }
 }
 
@@ -124,10 +124,8 @@ pub fn bordered_test(
         mat.lu()
             .solve(&rhs)
             .filter(|s| s.iter().all(|z| z.is_finite()))
-            .ok_or_else(|| {
-                Error::Continuation(
-                    "singular bordered matrix (bordering vectors degenerate)".into(),
-                )
+            .ok_or(Error::SingularMatrix {
+                what: "bordered matrix (bordering vectors degenerate)",
             })
     };
     let r = solve(border(&a, b, c))?;
@@ -248,7 +246,7 @@ pub fn arrival_edge<S: Parametrised, M: FlowMethod<S>>(
         .filter(|(_, s)| *s == side)
         .map(|(e, _)| e)
         .min_by(|a, b| (a.t - t_ref).abs().total_cmp(&(b.t - t_ref).abs()))
-        .ok_or_else(|| Error::Continuation("the orbit has no arrival on Σ to track".into()))?;
+        .ok_or(Error::NoArrival)?;
     Ok(ArrivalEdge {
         margin: sys.forces(e.t, e.beta, 0.0).a - sigma * sys.static_friction(e.t, e.beta),
         t: e.t,
@@ -271,7 +269,7 @@ pub fn nearest_edge_arrival<S: Parametrised, M: FlowMethod<S>>(
     let (e, side) = ev
         .iter()
         .min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
-        .ok_or_else(|| Error::Continuation("the orbit has no arrival on Σ".into()))?;
+        .ok_or(Error::NoArrival)?;
     Ok((sys.forces(e.t, e.beta, 0.0).a.signum(), *side, e.t))
 }
 

@@ -120,9 +120,9 @@ impl<S: Parametrised> MsState<S> {
         );
         let nrm = t3.norm();
         if !(nrm > 0.0 && nrm.is_finite()) {
-            return Err(Error::Continuation(
-                "degenerate multiple-shooting tangent".into(),
-            ));
+            return Err(Error::DegenerateDirection {
+                what: "the multiple-shooting tangent is zero or not finite",
+            });
         }
         let sg = if t3.dot(prev) < 0.0 { -1.0 } else { 1.0 } / nrm;
         let dy = z.states.iter().map(|d| [sg * d[0], sg * d[1]]).collect();
@@ -289,15 +289,19 @@ pub fn extend_by_multiple_shooting<S: Parametrised>(
 ) -> Result<()> {
     let n = branch.points.len();
     if n < 2 {
-        return Err(Error::Continuation(
-            "multiple shooting needs the last two points of the branch".into(),
+        return Err(Error::shape(
+            "points of the branch (multiple shooting goes on from the last two)",
+            ">= 2",
+            n,
         ));
     }
     let (a, b) = (&branch.points[n - 2], &branch.points[n - 1]);
     let w = Vector3::new(1.0, opts.omega_weight, 1.0);
     let dir = Vector3::new(b.x[0] - a.x[0], b.x[1] - a.x[1], b.param - a.param).component_mul(&w);
     if dir.norm().is_nan() || dir.norm() <= 0.0 {
-        return Err(Error::Continuation("no direction to continue in".into()));
+        return Err(Error::DegenerateDirection {
+            what: "the last two points of the branch coincide",
+        });
     }
     let sys = branch.system.with_param(branch.param, b.param)?;
     let m = segments_for(b.floquet.spectral_radius(), ms.max_segment_growth);

@@ -146,10 +146,10 @@ impl<S: Parametrised, M: FlowMethod<S>> Continuation<S, M> {
         let p = c.make_point(&c.last, 0.0);
         let rho = p.floquet.spectral_radius();
         if rho > opts.max_multiplier {
-            return Err(Error::Continuation(format!(
-                "the start orbit has |μ| = {rho:e} above the single-shooting limit {:e}",
-                opts.max_multiplier
-            )));
+            return Err(Error::MultiplierTooLarge {
+                multiplier: rho,
+                limit: opts.max_multiplier,
+            });
         }
         c.branch.points.push(p);
         Ok(c)
@@ -241,8 +241,8 @@ impl<S: Parametrised, M: FlowMethod<S>> Continuation<S, M> {
             .lu()
             .solve(&Vector3::new(0.0, 0.0, 1.0))
             .filter(|t| t.iter().all(|v| v.is_finite()) && t.norm() > 0.0)
-            .ok_or_else(|| {
-                Error::Continuation("singular bordered matrix: cannot compute the tangent".into())
+            .ok_or(Error::SingularMatrix {
+                what: "bordered matrix: cannot compute the tangent",
             })?;
         let t = t.normalize();
         Ok(if t.dot(prev) < 0.0 { -t } else { t })

@@ -306,7 +306,9 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
             .lu()
             .solve(&Vector4::new(0.0, 0.0, 0.0, 1.0))
             .filter(|t| t.iter().all(|z| z.is_finite()) && t.norm() > 0.0)
-            .ok_or_else(|| Error::Continuation("singular bordered matrix: no tangent".into()))?
+            .ok_or(Error::SingularMatrix {
+                what: "bordered matrix: cannot compute the tangent",
+            })?
             .normalize();
         Ok(if t.dot(prev) < 0.0 { -t } else { t })
     }
@@ -723,21 +725,25 @@ fn locate_one<S: Parametrised, M: FlowMethod<S>>(
         let n = s.correct(up, a.tangent, va, sig, a.tangent)?;
         let f = value(&n);
         if !f.is_finite() {
-            return Err(Error::Continuation(
-                "non-finite codim-2 test function".into(),
-            ));
+            return Err(Error::NonFiniteTestFunction { kind: kind.label() });
         }
         r.update(sig, sgn * f);
         best = Some((n, f));
     }
-    let (n, f) = best.ok_or_else(|| Error::Continuation("empty codim-2 bracket".into()))?;
+    let (n, f) = best.ok_or_else(|| Error::NotFound {
+        what: format!(
+            "{} point: its bracket is already narrower than the location tolerance",
+            kind.label()
+        ),
+    })?;
     // a sign change across a discontinuity (e.g. where the orbit starts to touch ω = 0) is no zero
     if f.abs() > 1e-3 * fa.abs().max(fb.abs()) {
-        return Err(Error::Continuation(format!(
-            "the {} test function jumps instead of vanishing ({fa:.2e} → {fb:.2e}, {f:.2e} at the \
-             bracket)",
-            kind.label()
-        )));
+        return Err(Error::TestFunctionJump {
+            kind: kind.label(),
+            before: fa,
+            after: fb,
+            at_bracket: f,
+        });
     }
     Ok(Codim2Point {
         kind,

@@ -19,10 +19,10 @@ pub fn new_spec(old: &OrbitSpec, kind: SpecialKind) -> Result<OrbitSpec> {
             let s = old.on_stroboscopic();
             Ok(OrbitSpec::stroboscopic(s.iterations, s.winding))
         }
-        k => Err(Error::Unsupported(format!(
-            "branch switching is implemented at flips and symmetry-breaking points, not at a {}",
-            k.label()
-        ))),
+        k => Err(Error::UnsupportedPoint {
+            operation: "branch switching (implemented at flips and symmetry-breaking points)",
+            kind: k.label(),
+        }),
     }
 }
 
@@ -47,12 +47,13 @@ pub fn switch_pinned<S: Parametrised>(
     offset: f64,
     sh: &ShootingOptions,
 ) -> Result<(S, PeriodicOrbit)> {
-    let v = sp
-        .eigenvector
-        .ok_or_else(|| Error::Continuation("the special point carries no eigenvector".into()))?;
+    let v = sp.eigenvector.ok_or(Error::MissingEigenvector {
+        kind: sp.kind.label(),
+        param: sp.param,
+    })?;
     let n = b.points.len();
     if n < 2 {
-        return Err(Error::Continuation("parent branch too short".into()));
+        return Err(Error::shape("points of the parent branch", ">= 2", n));
     }
     let i = sp.after_point.min(n - 2);
     let (pa, pb) = (&b.points[i], &b.points[i + 1]);
@@ -65,9 +66,9 @@ pub fn switch_pinned<S: Parametrised>(
     let e = Vector3::new(v[0], v[1], 0.0);
     let q = e - e.dot(&t) * t;
     if q.norm() < 1e-3 {
-        return Err(Error::Continuation(
-            "the critical eigenvector is tangent to the parent branch".into(),
-        ));
+        return Err(Error::DegenerateDirection {
+            what: "the critical eigenvector is tangent to the parent branch",
+        });
     }
     let q = q.normalize();
     let mut last_err = None;
@@ -97,17 +98,25 @@ pub fn switch_pinned<S: Parametrised>(
                     if near && distinct && prim == 2 * parent_primitive {
                         return Ok((gear, orbit));
                     }
-                    last_err = Some(Error::Continuation(format!(
-                        "no new orbit near the point (found one at {} = {lam} with primitive \
-                         length {prim}, parent {parent_primitive})",
-                        b.param.name()
-                    )));
+                    last_err = Some(Error::NoNewBranch {
+                        param: b.param.name(),
+                        value: sp.param,
+                        reason: format!(
+                            "found one at {} = {lam} with primitive length {prim}, parent \
+                             {parent_primitive}",
+                            b.param.name()
+                        ),
+                    });
                 }
                 Err(e) => last_err = Some(e),
             }
         }
     }
-    Err(last_err.unwrap_or_else(|| Error::Continuation("branch switching failed".into())))
+    Err(last_err.unwrap_or_else(|| Error::NoNewBranch {
+        param: b.param.name(),
+        value: sp.param,
+        reason: "no pinned Newton step was tried".into(),
+    }))
 }
 
 /// Newton on {F_new(x, λ) = 0, q·(u − u*) = ε} from u0 = (x0, λ0).

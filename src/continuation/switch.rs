@@ -50,8 +50,9 @@ pub fn switch_branch_with<S: Parametrised, M: FlowMethod<S>>(
     opts: &ShootingOptions,
 ) -> Result<SwitchStart<S>> {
     let spec = new_spec(&branch.spec, special.kind)?;
-    let v = special.eigenvector.ok_or_else(|| {
-        Error::Continuation("the special point carries no eigenvector to switch along".into())
+    let v = special.eigenvector.ok_or(Error::MissingEigenvector {
+        kind: special.kind.label(),
+        param: special.param,
     })?;
     let mut last_err = None;
     for &dl in &[dparam, -dparam, 10.0 * dparam, -10.0 * dparam] {
@@ -110,12 +111,11 @@ pub fn switch_branch_with<S: Parametrised, M: FlowMethod<S>>(
             }
         }
     }
-    Err(Error::Continuation(format!(
-        "branch switching at {} = {} found no new orbit ({})",
-        branch.param.name(),
-        special.param,
-        last_err
+    Err(Error::NoNewBranch {
+        param: branch.param.name(),
+        value: special.param,
+        reason: last_err
             .map(|e| e.to_string())
-            .unwrap_or_else(|| "only the old orbit was found".into())
-    )))
+            .unwrap_or_else(|| "only the old orbit was found".into()),
+    })
 }

@@ -25,9 +25,10 @@ fn profile_on(
     theta: &[f64],
     geo: &Geometry,
     take: &dyn Fn(usize) -> bool,
+    tol: f64,
 ) -> Option<StaticFrictionFit> {
     let nt = st.terms.len();
-    let model = st.model(runs, geo);
+    let model = st.model(runs, geo, tol);
     let idx: Vec<usize> = (0..runs.len()).filter(|&r| take(r)).collect();
     let sub: Vec<CleanRun> = idx.iter().map(|&r| runs[r].clone()).collect();
     let per: Vec<Coefficients> = idx.iter().map(|&r| model.coefficients(theta, r)).collect();
@@ -38,7 +39,10 @@ fn profile_on(
         Some(&per),
         geo,
         model.latency_of(theta),
-        &ReleaseOptions::default(),
+        &ReleaseOptions {
+            tol,
+            ..ReleaseOptions::default()
+        },
     )
 }
 
@@ -51,8 +55,9 @@ pub fn judge(
     geo: &Geometry,
     wins: &[Win],
     folds: &Folds,
+    tol: f64,
 ) -> Option<(Finding, Comparison, bool, f64, HeldOut)> {
-    let all = profile_on(runs, st, &st.fit.theta, geo, &|_| true)?;
+    let all = profile_on(runs, st, &st.fit.theta, geo, &|_| true, tol)?;
     if !(all.s_err.is_finite() && all.s_err > 0.0 && all.s / all.s_err >= PROPOSE_Z) {
         return None;
     }
@@ -65,7 +70,7 @@ pub fn judge(
         .collect();
     let excess: Vec<f64> = (0..folds.k)
         .map(|f| {
-            profile_on(runs, st, &thetas[f], geo, &|r| folds.of_run[r] != f)
+            profile_on(runs, st, &thetas[f], geo, &|r| folds.of_run[r] != f, tol)
                 .map(|x| x.s * x.eta)
                 .unwrap_or(0.0)
         })
@@ -74,7 +79,7 @@ pub fn judge(
     let chi2: Vec<Option<f64>> = par_map(wins.len(), |k| {
         let w = &wins[k];
         let f = folds.of_run[w.run];
-        let mut m = st.model(runs, geo);
+        let mut m = st.model(runs, geo, tol);
         m.eta_static_excess = excess[f];
         m.window_chi2_from(&thetas[f], w, warm[k])
     });

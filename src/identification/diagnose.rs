@@ -60,6 +60,16 @@ pub struct DiagnoseOptions {
     pub folds: usize,
     /// Most dictionary proposals per round.
     pub max_dictionary: usize,
+    /// Relative tolerance of every simulation of the diagnosis (eq. `model`, exact Filippov flow):
+    /// the window simulations of the refits, the judge and the predictions, and the stick windows
+    /// of the static-friction profile. Default 1e-8, the tolerance the documented results were
+    /// computed with. Must lie in (0, 1) ([`DiagnoseOptions::check`]).
+    pub tol: f64,
+    /// The ring-down fits are simulated at `tol × ringdown_tol_ratio`
+    /// ([`DiagnoseOptions::ringdown_tol`]): a ring-down is one simulation over the whole run (up
+    /// to minutes of decay), not a short window, so it is integrated tighter. Default 0.1 (1e-9 at
+    /// the default `tol`, as the documented results). Must lie in (0, 1].
+    pub ringdown_tol_ratio: f64,
 }
 
 impl Default for DiagnoseOptions {
@@ -77,7 +87,31 @@ impl Default for DiagnoseOptions {
             base_only: false,
             folds: 4,
             max_dictionary: 3,
+            tol: 1e-8,
+            ringdown_tol_ratio: 0.1,
         }
+    }
+}
+
+impl DiagnoseOptions {
+    /// The relative tolerance of the ring-down simulations: `tol × ringdown_tol_ratio`.
+    pub fn ringdown_tol(&self) -> f64 {
+        self.tol * self.ringdown_tol_ratio
+    }
+
+    /// Checks the tolerances: [`Error::InvalidParameter`] unless `tol` lies in (0, 1) and
+    /// `ringdown_tol_ratio` in (0, 1].
+    pub fn check(&self) -> Result<()> {
+        crate::error::relative_tolerance("tol", self.tol)?;
+        crate::error::positive("ringdown_tol_ratio", self.ringdown_tol_ratio)?;
+        if self.ringdown_tol_ratio > 1.0 {
+            return Err(Error::InvalidParameter {
+                name: "ringdown_tol_ratio",
+                value: self.ringdown_tol_ratio,
+                reason: "must be in (0, 1] (ring-downs are not integrated looser than `tol`)",
+            });
+        }
+        Ok(())
     }
 }
 
@@ -128,6 +162,7 @@ pub fn prepare(
     opts: &DiagnoseOptions,
     progress: &dyn Fn(&str),
 ) -> Result<Prepared> {
+    opts.check()?;
     if set.runs.is_empty() {
         return Err(Error::shape("runs of the recording set", ">= 1", 0));
     }
@@ -161,6 +196,7 @@ pub fn prepare(
                     alpha0,
                     setup.zeta.unwrap_or(1.1),
                     setup.eta.unwrap_or(23.1),
+                    opts.ringdown_tol(),
                 ),
                 _ => None,
             }
@@ -240,6 +276,7 @@ pub fn fit_base(
             latency: 0.0,
             fit_latency: false,
             eta_static_excess: 0.0,
+            tol: opts.tol,
         };
         let chosen = choose_windows(&prep.runs, opts.shooting.max_windows);
         wins = mask_windows(&model, &weak.coef, &chosen);
@@ -311,6 +348,7 @@ pub fn diagnose(
             wins: &base.wins,
             folds: &folds,
             shooting: &opts.shooting,
+            tol: opts.tol,
             propose: &pctx,
             max_rounds: opts.max_effects,
         };
@@ -331,7 +369,7 @@ pub fn diagnose(
         let judged = if stribeck_found {
             None
         } else {
-            breakaway::judge(runs, &fin, &base.geo, &base.wins, &folds)
+            breakaway::judge(runs, &fin, &base.geo, &base.wins, &folds, opts.tol)
         };
         let mut final_held = fin.held.clone();
         if let Some((f, cmp, stands, ex, held)) = judged {
@@ -509,6 +547,7 @@ fn report(
         latency: 0.0,
         fit_latency: false,
         eta_static_excess: 0.0,
+        tol: opts.tol,
     };
     let base_pred: Vec<Prediction> = par_map(nr, |r| {
         predict(
@@ -516,16 +555,18 @@ fn report(
             &base_model.coefficients(&base_theta, r),
             &base.geo,
             0.0,
+            opts.tol,
         )
     });
     let base_coef = base_model.coefficients(&base_theta, 0);
     let (aug_pred, augmented, latency) = match &final_state {
         Some(st) if !st.effects.is_empty() || excess > 0.0 => {
-            let mut m = st.model(runs, &base.geo);
+            let mut m = st.model(runs, &base.geo, opts.tol);
             m.eta_static_excess = excess;
             let lat = st.latency();
             let p = par_map(nr, |r| {
-                predict(&runs[r], &m.coefficients(&st.fit.theta, r), &base.geo, lat)
+                let c = m.coefficients(&st.fit.theta, r);
+                predict(&runs[r], &c, &base.geo, lat, opts.tol)
             });
             let c = super::spec::coefficients(&st.terms, &st.fit.theta[..st.terms.len()]);
             (

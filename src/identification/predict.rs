@@ -103,25 +103,33 @@ pub fn simulation_steps() -> (u64, u64) {
 
 /// Most integration steps (accepted and rejected) of one window simulation. A window lasts at
 /// most [`HORIZON`] (or [`WINDOW`] samples); a model that follows the data is simulated over it
-/// at tolerance 1e-8 in about 40 steps of DP5 (mean over the base model's windows of a campaign
-/// set, `gearbif diagnose --timing`), so the budget was set at 50 times that; with DOP853 (see
-/// [`simulate`]) the mean over all window simulations of a diagnosis is 16 steps (the
-/// `latency9` set of `scripts/independent_recordings.py`, seed 5), and the budget is kept. A trial model whose motion runs
+/// at the default tolerance ([`super::diagnose::DiagnoseOptions::tol`], 1e-8) in about 40 steps of
+/// DP5 (mean over the base model's windows of a campaign set, `gearbif diagnose --timing`), so the
+/// budget was set at 50 times that; with DOP853 (see [`simulate`]) the mean over all window
+/// simulations of a diagnosis is 16 steps (the `latency9` set of
+/// `scripts/independent_recordings.py`, seed 5), and the budget is kept. A trial model whose motion runs
 /// away inside a window (an extrapolated drift with a negative damping, a torque harmonic driven
 /// far off by a leave-fold-out step) would otherwise shrink its steps without bound and hold the
 /// diagnosis for minutes; with the budget its simulation fails, and the judge counts the window
 /// as that model's loss ([`super::judge::compare`]).
 pub const WINDOW_MAX_STEPS: usize = 2_000;
 
-/// β of `sys` from the state `x0` at `t0`, at `times` (exact Filippov flow, tolerance 1e-8);
-/// `None` when the flow fails or needs more than [`WINDOW_MAX_STEPS`] steps. The integrator is
-/// the event-driven Dormand–Prince 8(5,3) ([`EventDriven853`]: the same events and stick phases
-/// as DP5, 16 instead of 52 steps per window simulation on average; docs/performance.md,
-/// "Identification and diagnosis").
-pub fn simulate(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Option<Vec<f64>> {
+/// β of `sys` from the state `x0` at `t0`, at `times` (exact Filippov flow of eq. `model`,
+/// relative tolerance `tol`: [`super::diagnose::DiagnoseOptions::tol`]); `None` when the flow
+/// fails or needs more than [`WINDOW_MAX_STEPS`] steps. The integrator is the event-driven
+/// Dormand–Prince 8(5,3) ([`EventDriven853`]: the same events and stick phases as DP5, 16 instead
+/// of 52 steps per window simulation on average; docs/performance.md, "Identification and
+/// diagnosis").
+pub fn simulate(
+    sys: &AugmentedGear,
+    t0: f64,
+    x0: [f64; 2],
+    times: &[f64],
+    tol: f64,
+) -> Option<Vec<f64>> {
     SIMULATIONS.fetch_add(1, Ordering::Relaxed);
     let t1 = *times.last()?;
-    let mut opts = FlowOptions::with_tol(1e-8).samples(times.to_vec());
+    let mut opts = FlowOptions::with_tol(tol).samples(times.to_vec());
     opts.max_steps = WINDOW_MAX_STEPS;
     let f = match EventDriven853.flow(sys, t0, x0, t1, &opts) {
         Ok(f) => f,
@@ -141,8 +149,8 @@ pub fn simulate(sys: &AugmentedGear, t0: f64, x0: [f64; 2], times: &[f64]) -> Op
     Some(f.samples.iter().map(|s| s.beta).collect())
 }
 
-/// (β_sim − β)/σ of a window simulated from the state `x0` at its first sample; 0 on masked
-/// samples.
+/// (β_sim − β)/σ of a window simulated from the state `x0` at its first sample (tolerance `tol`);
+/// 0 on masked samples.
 pub fn window_residuals(
     sys: &AugmentedGear,
     t: &[f64],
@@ -150,8 +158,9 @@ pub fn window_residuals(
     keep: &[bool],
     sigma: f64,
     x0: [f64; 2],
+    tol: f64,
 ) -> Option<Vec<f64>> {
-    let s = simulate(sys, t[0], x0, t)?;
+    let s = simulate(sys, t[0], x0, t, tol)?;
     Some(
         s.iter()
             .zip(b)
@@ -162,7 +171,9 @@ pub fn window_residuals(
 }
 
 /// Fits a window's initial state with the model fixed, from `guess` and, when that fit is poor,
-/// from finite-difference and at-rest velocities. Residuals are (β_sim − β)/σ on kept samples.
+/// from finite-difference and at-rest velocities. Residuals are (β_sim − β)/σ on kept samples;
+/// the window is simulated at the relative tolerance `tol`.
+#[allow(clippy::too_many_arguments)]
 pub fn fit_window_state(
     sys: &AugmentedGear,
     t: &[f64],
@@ -171,8 +182,9 @@ pub fn fit_window_state(
     sigma: f64,
     guess: [f64; 2],
     multi_start: bool,
+    tol: f64,
 ) -> Option<LsqFit> {
-    let f = |p: &[f64]| window_residuals(sys, t, b, keep, sigma, [p[0], p[1]]);
+    let f = |p: &[f64]| window_residuals(sys, t, b, keep, sigma, [p[0], p[1]], tol);
     let mut fit = least_squares(&f, &guess, &[1e-7, 1e-6], 20);
     let kept = keep.iter().filter(|&&k| k).count().max(1) as f64;
     let poor = |x: &Option<LsqFit>| x.as_ref().map(|f| f.rss / kept > 4.0).unwrap_or(true);
@@ -192,8 +204,15 @@ pub fn fit_window_state(
     fit
 }
 
-/// Predicts a cleaned run with the model `c` (and a sensor latency `latency`, s).
-pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> Prediction {
+/// Predicts a cleaned run with the model `c` (and a sensor latency `latency`, s); the windows are
+/// simulated at the relative tolerance `tol` ([`super::diagnose::DiagnoseOptions::tol`]).
+pub fn predict(
+    r: &CleanRun,
+    c: &Coefficients,
+    geo: &Geometry,
+    latency: f64,
+    tol: f64,
+) -> Prediction {
     let mut out = Prediction::default();
     let mut ss = 0.0;
     let mut dof = 0usize;
@@ -203,7 +222,8 @@ pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> 
         let sys = window_system(r, c, geo, latency, i, j);
         let sigma = r.sigma_camera.max(1e-12);
         let all = vec![true; t.len()];
-        if let Some(mut fit) = fit_window_state(&sys, t, b, &all, sigma, [b[0], r.v[i]], true) {
+        if let Some(mut fit) = fit_window_state(&sys, t, b, &all, sigma, [b[0], r.v[i]], true, tol)
+        {
             // outlier frames the cleaning missed (coarse sampling): beyond 5σ of the camera noise,
             // dropped and the window refitted once without them
             let bad: Vec<bool> = fit.resid.iter().map(|x| x.abs() > 5.0).collect();
@@ -211,7 +231,7 @@ pub fn predict(r: &CleanRun, c: &Coefficients, geo: &Geometry, latency: f64) -> 
             if nbad > 0 && nbad <= t.len() / 5 {
                 let keep: Vec<bool> = bad.iter().map(|&o| !o).collect();
                 if let Some(f2) =
-                    fit_window_state(&sys, t, b, &keep, sigma, [fit.p[0], fit.p[1]], false)
+                    fit_window_state(&sys, t, b, &keep, sigma, [fit.p[0], fit.p[1]], false, tol)
                 {
                     fit = f2;
                 }

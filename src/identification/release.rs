@@ -43,6 +43,9 @@ pub struct ReleaseOptions {
     pub coef_rel_sys: f64,
     /// Most stick windows profiled (an even subset beyond).
     pub max_windows: usize,
+    /// Relative tolerance of the window simulations (the diagnosis passes its
+    /// [`super::diagnose::DiagnoseOptions::tol`]; default 1e-8, as the documented results).
+    pub tol: f64,
 }
 
 impl Default for ReleaseOptions {
@@ -54,6 +57,7 @@ impl Default for ReleaseOptions {
             refine_steps: 6,
             coef_rel_sys: 0.005,
             max_windows: 80,
+            tol: 1e-8,
         }
     }
 }
@@ -104,6 +108,8 @@ struct Window<'a> {
     d_eta: f64,
     g_scale: f64,
     alpha_offset: f64,
+    /// Relative tolerance of its simulations ([`ReleaseOptions::tol`]).
+    tol: f64,
 }
 
 impl Window<'_> {
@@ -127,7 +133,7 @@ impl Window<'_> {
 
     fn simulate(&self, sys: &AugmentedGear, p: &[f64], events: bool) -> Option<(Vec<f64>, bool)> {
         let t = self.t;
-        let opts = FlowOptions::with_tol(1e-8)
+        let opts = FlowOptions::with_tol(self.tol)
             .samples(t.to_vec())
             .record_events(events);
         let f = EventDriven
@@ -280,6 +286,7 @@ fn windows<'a>(
                     d_eta: rc.eta - c.eta,
                     g_scale,
                     alpha_offset: offset_at(0.5 * (r.t[lo] + r.t[hi - 1])),
+                    tol: opts.tol,
                 });
             }
         }

@@ -62,9 +62,9 @@ pub const RINGDOWN_BASE_STEPS: usize = 2_000;
 /// Steps per second of a ring-down simulation in [`ringdown_max_steps`].
 pub const RINGDOWN_STEPS_PER_S: f64 = 1_000.0;
 
-/// Simulates eq. `model` at the given times (at most [`ringdown_max_steps`] integration steps;
+/// Simulates eq. `model` at the given times (exact Filippov flow, relative tolerance `tol`; at most [`ringdown_max_steps`] integration steps;
 /// `None` beyond).
-pub fn simulate_model(p: &[f64], t0: f64, times: &[f64]) -> Option<Vec<f64>> {
+pub fn simulate_model(p: &[f64], t0: f64, times: &[f64], tol: f64) -> Option<Vec<f64>> {
     let (kappa, beta0, zeta, eta) = (p[0], p[1], p[2] * p[2], p[3] * p[3]);
     if kappa.is_nan() || kappa <= 0.0 || !p.iter().all(|v| v.is_finite()) {
         return None;
@@ -85,7 +85,7 @@ pub fn simulate_model(p: &[f64], t0: f64, times: &[f64]) -> Option<Vec<f64>> {
         alpha_rate: 0.0,
     };
     let t1 = *times.last()?;
-    let mut opts = FlowOptions::with_tol(1e-9).samples(times.to_vec());
+    let mut opts = FlowOptions::with_tol(tol).samples(times.to_vec());
     opts.max_steps = ringdown_max_steps(t1 - t0);
     let flow = EventDriven.flow(&sys, t0, [p[4], p[5]], t1, &opts).ok()?;
     if flow.samples.len() != times.len() {
@@ -94,13 +94,15 @@ pub fn simulate_model(p: &[f64], t0: f64, times: &[f64]) -> Option<Vec<f64>> {
     Some(flow.samples.iter().map(|s| s.beta).collect())
 }
 
-/// Fits one cleaned ring-down. `zeta0`, `eta0`: starting values.
+/// Fits one cleaned ring-down. `zeta0`, `eta0`: starting values; `tol`: relative tolerance of
+/// its simulations ([`super::diagnose::DiagnoseOptions::ringdown_tol`]).
 pub fn fit_ringdown(
     r: &CleanRun,
     file: &str,
     alpha0: f64,
     zeta0: f64,
     eta0: f64,
+    tol: f64,
 ) -> Option<RingdownFit> {
     let n = r.t.len();
     if n < 20 {
@@ -144,7 +146,7 @@ pub fn fit_ringdown(
     };
     let t0 = t[0];
     let f = |p: &[f64]| -> Option<Vec<f64>> {
-        let sim = simulate_model(p, t0, t)?;
+        let sim = simulate_model(p, t0, t, tol)?;
         Some(sim.iter().zip(b).map(|(s, m)| s - m).collect())
     };
     // ζ and η enter as squares (p[2]² = ζ, p[3]² = η) so they stay non-negative; the crossing

@@ -28,8 +28,8 @@ pub struct ModelState {
 }
 
 impl ModelState {
-    /// The simulated model.
-    pub fn model<'a>(&self, runs: &'a [CleanRun], geo: &Geometry) -> SimModel<'a> {
+    /// The simulated model, its windows simulated at the relative tolerance `tol`.
+    pub fn model<'a>(&self, runs: &'a [CleanRun], geo: &Geometry, tol: f64) -> SimModel<'a> {
         SimModel {
             runs,
             geo: *geo,
@@ -37,6 +37,7 @@ impl ModelState {
             latency: self.latency(),
             fit_latency: self.fit_latency,
             eta_static_excess: 0.0,
+            tol,
         }
     }
     /// The latency, s (0 when not fitted).
@@ -89,6 +90,8 @@ pub struct SelectCtx<'a> {
     pub folds: &'a Folds,
     /// Refit options.
     pub shooting: &'a ShootingOptions,
+    /// Relative tolerance of the window simulations ([`super::diagnose::DiagnoseOptions::tol`]).
+    pub tol: f64,
     /// The proposer.
     pub propose: &'a ProposeCtx<'a>,
     /// Most rounds.
@@ -140,6 +143,7 @@ fn evaluate_on(
         },
         fit_latency,
         eta_static_excess: 0.0,
+        tol: ctx.tol,
     };
     let fit = refit(&model, &theta0, wins, ctx.shooting)?;
     let held = heldout(&model, &fit, wins, ctx.folds);
@@ -175,7 +179,7 @@ pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
     let freed = terms != st.terms;
     let model = SimModel {
         terms: terms.clone(),
-        ..st.model(ctx.runs, ctx.geo)
+        ..st.model(ctx.runs, ctx.geo, ctx.tol)
     };
     let opts = ShootingOptions {
         patience: CONVERGED_PATIENCE,
@@ -216,7 +220,7 @@ fn added(cur: &ModelState, st: &ModelState) -> Vec<usize> {
 /// windows not re-selected) with its held-out errors, so that the next round's candidates are
 /// judged against a model at its optimum. The judged fit when the refit fails.
 fn converge(ctx: &SelectCtx, st: &ModelState) -> ModelState {
-    let model = st.model(ctx.runs, ctx.geo);
+    let model = st.model(ctx.runs, ctx.geo, ctx.tol);
     let opts = ShootingOptions {
         patience: CONVERGED_PATIENCE,
         ..*ctx.shooting

@@ -91,6 +91,8 @@ pub struct SimModel<'a> {
     pub fit_latency: bool,
     /// Breakaway excess of the static friction, s⁻² (not fitted here: [`super::release`]).
     pub eta_static_excess: f64,
+    /// Relative tolerance of the window simulations ([`super::diagnose::DiagnoseOptions::tol`]).
+    pub tol: f64,
 }
 
 impl SimModel<'_> {
@@ -135,6 +137,7 @@ impl SimModel<'_> {
             r.sigma_camera.max(1e-12),
             [b[0], r.v[w.lo]],
             true,
+            self.tol,
         )?;
         Some((f.rss, w.kept()))
     }
@@ -147,7 +150,7 @@ impl SimModel<'_> {
         let r = &self.runs[w.run];
         let sys = self.system(theta, w);
         let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
-        let (res, _) = project_state(&sys, t, b, &w.keep, r.sigma_camera.max(1e-12), x)?;
+        let (res, _) = project_state(&sys, t, b, &w.keep, r.sigma_camera.max(1e-12), x, self.tol)?;
         Some(res.iter().map(|v| v * v).sum())
     }
     /// χ² of window `w` at θ: from the warm start when there is one and its fit is good
@@ -300,7 +303,7 @@ pub fn mask_windows(model: &SimModel, theta: &[f64], chosen: &[(usize, usize, us
         let sys = model.system(theta, &w);
         let (t, b) = (&r.t[lo..hi], &r.beta[lo..hi]);
         let s = r.sigma_camera.max(1e-12);
-        let f = fit_window_state(&sys, t, b, &w.keep, s, [b[0], r.v[lo]], true)?;
+        let f = fit_window_state(&sys, t, b, &w.keep, s, [b[0], r.v[lo]], true, model.tol)?;
         w.keep = gross_outliers(t, &f.resid);
         (w.kept() * 5 >= 4 * (hi - lo)).then_some(w)
     })
@@ -437,7 +440,7 @@ fn followed_windows(
         let sys = model.system(theta, w);
         let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
         let s = r.sigma_camera.max(1e-12);
-        let f = fit_window_state(&sys, t, b, &w.keep, s, [b[0], r.v[w.lo]], true)?;
+        let f = fit_window_state(&sys, t, b, &w.keep, s, [b[0], r.v[w.lo]], true, model.tol)?;
         (f.rss / w.kept().max(1) as f64 <= 4.0).then_some([f.p[0], f.p[1]])
     });
     let mut out = vec![None; wins.len()];
@@ -477,7 +480,15 @@ fn fit_windows(
             let r = &model.runs[w.run];
             let sys = model.system(theta, w);
             let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
-            project_state(&sys, t, b, &w.keep, r.sigma_camera.max(1e-12), guesses[k])
+            project_state(
+                &sys,
+                t,
+                b,
+                &w.keep,
+                r.sigma_camera.max(1e-12),
+                guesses[k],
+                model.tol,
+            )
         });
         let mut out = Vec::with_capacity(row);
         let mut new_states = guesses;
@@ -566,8 +577,9 @@ fn project_state(
     keep: &[bool],
     sigma: f64,
     x: [f64; 2],
+    tol: f64,
 ) -> Option<(Vec<f64>, [f64; 2])> {
-    let resid = |p: [f64; 2]| window_residuals(sys, t, b, keep, sigma, p);
+    let resid = |p: [f64; 2]| window_residuals(sys, t, b, keep, sigma, p, tol);
     let rss = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
     let gn = || -> Option<(Vec<f64>, [f64; 2])> {
         let mut x = x;
@@ -611,7 +623,7 @@ fn project_state(
         Some((r, x))
     };
     gn().or_else(|| {
-        let f = fit_window_state(sys, t, b, keep, sigma, x, true)?;
+        let f = fit_window_state(sys, t, b, keep, sigma, x, true, tol)?;
         Some((f.resid, [f.p[0], f.p[1]]))
     })
 }

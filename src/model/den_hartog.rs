@@ -139,9 +139,10 @@ impl NonStopOrbit {
 pub fn non_stop_orbit(osc: &CoulombOscillator) -> Result<NonStopOrbit> {
     let (w0, xi, mu, force) = (osc.omega0, osc.xi, osc.mu, osc.force);
     if xi >= 1.0 {
-        return Err(Error::Unsupported(
-            "Den Hartog's closed form needs an underdamped oscillator (ξ < 1)".into(),
-        ));
+        return Err(Error::OutsideClosedForm {
+            closed_form: "Den Hartog's closed form",
+            needs: format!("an underdamped oscillator (ξ < 1), not ξ = {xi}"),
+        });
     }
     let w = TAU * osc.f;
     let (k, wd) = (xi * w0, w0 * (1.0 - xi * xi).sqrt());
@@ -170,7 +171,10 @@ pub fn non_stop_orbit(osc: &CoulombOscillator) -> Result<NonStopOrbit> {
         e * (wd * cd - k * sd),
     );
     let st = mu / (w0 * w0);
-    let singular = || Error::Unsupported("singular boundary conditions (Ω = ω_d/(2n+1))".into());
+    let singular = || Error::OutsideClosedForm {
+        closed_form: "Den Hartog's closed form",
+        needs: format!("regular boundary conditions (Ω ≠ ω_d/(2n+1)), not Ω = {w}"),
+    };
     let p = solve(&m, &Vector4::new(st, 0.0, st, 0.0)).ok_or_else(singular)?;
     let q = solve(&m, &Vector4::new(-1.0, 0.0, 1.0, 0.0)).ok_or_else(singular)?;
     // |p + X q|² = R² for the (a, b) components
@@ -179,15 +183,17 @@ pub fn non_stop_orbit(osc: &CoulombOscillator) -> Result<NonStopOrbit> {
     let qc = p[0] * p[0] + p[1] * p[1] - r_amp * r_amp;
     let disc = qb * qb - 4.0 * qa * qc;
     if disc < 0.0 || qa == 0.0 {
-        return Err(Error::Unsupported(
-            "no motion without stops: friction too large for this forcing".into(),
-        ));
+        return Err(Error::OutsideClosedForm {
+            closed_form: "Den Hartog's motion without stops",
+            needs: "a friction small enough for this forcing (no real amplitude)".into(),
+        });
     }
     let x_amp = (-qb + disc.sqrt()) / (2.0 * qa);
     if x_amp <= 0.0 {
-        return Err(Error::Unsupported(
-            "no motion without stops: no positive amplitude".into(),
-        ));
+        return Err(Error::OutsideClosedForm {
+            closed_form: "Den Hartog's motion without stops",
+            needs: format!("a positive amplitude, not X = {x_amp}"),
+        });
     }
     let z = p + q * x_amp;
     let (a, b) = (z[0], z[1]);
@@ -254,9 +260,13 @@ pub fn stop_boundary_frequency(
     };
     let (m_lo, m_hi) = (margin(f_lo)?, margin(f_hi)?);
     if m_lo.signum() == m_hi.signum() {
-        return Err(Error::Unsupported(format!(
-            "the reversal margin does not change sign on [{f_lo}, {f_hi}] ({m_lo:e}, {m_hi:e})"
-        )));
+        return Err(Error::NotBracketed {
+            what: "the reversal margin",
+            lo: f_lo,
+            hi: f_hi,
+            f_lo: m_lo,
+            f_hi: m_hi,
+        });
     }
     // orient: the low end of the root finder is where the margin is positive
     let (a, fa, b, fb) = if m_lo > 0.0 {

@@ -619,9 +619,10 @@ impl LockBranch {
         } else if (d + 1.0).abs() < 1e-12 {
             -1.0
         } else {
-            return Err(Error::Unsupported(format!(
-                "the analytic lock branch exists only at Δ = ±1 (cogging-free), not Δ = {d}"
-            )));
+            return Err(Error::OutsideClosedForm {
+                closed_form: "the analytic lock branch",
+                needs: format!("Δ = ±1 (cogging-free), not Δ = {d}"),
+            });
         };
         if gear.g <= 0.0 {
             return Err(Error::InvalidParameter {
@@ -633,9 +634,10 @@ impl LockBranch {
         let w = TAU * gear.f;
         let load = (w * gear.zeta + gear.eta) / gear.g;
         if load > 1.0 {
-            return Err(Error::Unsupported(format!(
-                "no locked state above f_c: (2πfζ + η)/g = {load} > 1"
-            )));
+            return Err(Error::OutsideClosedForm {
+                closed_form: "a locked state",
+                needs: format!("f below f_c, (2πfζ + η)/g ≤ 1, not {load}"),
+            });
         }
         let asn = load.asin();
         let off = gear.convention.beta_offset();

@@ -412,10 +412,9 @@ fn theta0_fold(gear: &GearParams) -> Result<Theta0Fold> {
         }
         if c.step()? == StepOutcome::Done {
             let b = c.into_branch();
-            return Err(crate::Error::Continuation(format!(
-                "the lock branch stopped ({:?}) without a fold",
-                b.stop
-            )));
+            return Err(crate::Error::NotFound {
+                what: format!("a fold on the lock branch (it stopped: {:?})", b.stop),
+            });
         }
     }
 }
@@ -440,17 +439,21 @@ fn theta25_symmetric(gear: &GearParams) -> Result<Branch> {
         Ok(c) => c,
         Err(e) => {
             let o = orbit_from_simulation(&g, [2.98, 0.6], 300, 1, true, &opts.shooting).map_err(
-                |e2| {
-                    crate::Error::Continuation(format!(
-                        "no symmetric orbit at {lo} Hz: {e}; from a simulation: {e2}"
-                    ))
+                |e2| crate::Error::NoStartOrbit {
+                    param: "f",
+                    value: lo,
+                    reason: format!("no symmetric orbit ({e}); from a simulation: {e2}"),
                 },
             )?;
             if o.spec != spec {
-                return Err(crate::Error::Continuation(format!(
-                    "no symmetric orbit of winding 1 at {lo} Hz ({e}); the simulation settles on {:?}",
-                    o.spec
-                )));
+                return Err(crate::Error::NoStartOrbit {
+                    param: "f",
+                    value: lo,
+                    reason: format!(
+                        "no symmetric orbit of winding 1 ({e}); the simulation settles on {:?}",
+                        o.spec
+                    ),
+                });
             }
             Continuation::from_orbit(g, GearParam::F, &o, opts)?
         }
