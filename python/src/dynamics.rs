@@ -171,6 +171,7 @@ fn simulate<'py>(
 /// jac_x, largest modulus first), trace, det, mode, events (list of dicts), stats.
 #[pyfunction]
 #[pyo3(signature = (system, x, *, section="stroboscopic", iterations=1, tol=1e-10, jacobians=true, method="dop853"))]
+#[allow(clippy::too_many_arguments)]
 fn poincare_map<'py>(
     py: Python<'py>,
     system: &Bound<'py, PyAny>,
