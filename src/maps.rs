@@ -132,7 +132,7 @@ pub fn stroboscopic<S: DrivenOscillator + ?Sized>(
 ) -> Result<MapImage> {
     let opts = FlowOptions::with_tol(tol).sensitivity(Sensitivity::StateAndParams);
     poincare_map(
-        &crate::integrator::EventDriven,
+        &crate::integrator::DEFAULT_METHOD,
         sys,
         Section::Stroboscopic,
         x,
@@ -149,7 +149,7 @@ pub fn half_period<S: DrivenOscillator + ?Sized>(
 ) -> Result<MapImage> {
     let opts = FlowOptions::with_tol(tol).sensitivity(Sensitivity::StateAndParams);
     poincare_map(
-        &crate::integrator::EventDriven,
+        &crate::integrator::DEFAULT_METHOD,
         sys,
         Section::HalfPeriod,
         x,

@@ -1,13 +1,13 @@
 //! Classification of one point, two-parameter sweeps, synthetic recordings, fitting and diagnosis.
 
 use crate::convert::{count, floats, state, to_python};
-use crate::dynamics::check_tol;
+use crate::dynamics::{check_tol, parse_method};
 use crate::errors::{invalid, IntoPyResult};
 use crate::systems::{dispatch, parse_convention, PyGearParams, PySystem, System};
 use gearbif::analysis::{classify_point, ClassifyOptions, PointResult};
 use gearbif::identification::diagnose::{diagnose as run_diagnosis, DiagnoseOptions};
 use gearbif::identification::synth::{synthesize, SynthOptions};
-use gearbif::integrator::EventDriven;
+use gearbif::integrator::{EventDriven, EventDriven853};
 use gearbif::io::recordings::{read_set, write_set};
 use gearbif::io::with_schema;
 use gearbif::model::gear::GearParam;
@@ -83,16 +83,17 @@ fn start(sys: &System, x0: Option<&Bound<'_, PyAny>>) -> PyResult<[f64; 2]> {
 /// for any system (Gear, CoulombOscillator, ForcedPendulum).
 ///
 /// classify(system, x0=None, *, settle_turns=90, record_turns=10, samples_per_turn=50,
-///          rigorous=True, analysis_turns=60, tol=1e-9, keep_samples=False)
+///          rigorous=True, analysis_turns=60, tol=1e-9, keep_samples=False, method="dop853")
 ///
 /// x0 = (β [rad], ω [rad/s]) at t = 0 (default (π/2, 0) for the gear, (0, 0) otherwise). δ is
 /// β − α for the gear (α the drive phase) and β itself for an oscillator. analysis_turns = 0
-/// skips the rigorous class. Returns the dict of `gearbif classify --json` (schema
+/// skips the rigorous class. method: "dop853" (event-driven Dormand–Prince 8(5,3), the default) or
+/// "event" (event-driven Dormand–Prince 5(4)). Returns the dict of `gearbif classify --json` (schema
 /// gearbif.classify/1, docs/formats.md): system (class name), params {name: value}, for the gear
 /// also theta_deg and f_hz, and event_driven = {paper metrics (rms, thd, class, …), rigorous class,
 /// agree, net_rotation_hz, end_state}.
 #[pyfunction]
-#[pyo3(signature = (system, x0=None, *, settle_turns=90, record_turns=10, samples_per_turn=50, rigorous=true, analysis_turns=60, tol=1e-9, keep_samples=false))]
+#[pyo3(signature = (system, x0=None, *, settle_turns=90, record_turns=10, samples_per_turn=50, rigorous=true, analysis_turns=60, tol=1e-9, keep_samples=false, method="dop853"))]
 #[allow(clippy::too_many_arguments)]
 fn classify<'py>(
     py: Python<'py>,
@@ -105,7 +106,9 @@ fn classify<'py>(
     analysis_turns: i64,
     tol: f64,
     keep_samples: bool,
+    method: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let method = parse_method(method)?;
     let sys = crate::systems::system(system)?;
     let x0 = start(&sys, x0)?;
     let opts = ClassifyArgs {
@@ -118,7 +121,10 @@ fn classify<'py>(
         keep_samples,
     }
     .options()?;
-    let r = py.detach(|| classify_point(sys.dynsys(), x0, &EventDriven, &opts));
+    let r = py.detach(|| match method {
+        Method::EventDriven => classify_point(sys.dynsys(), x0, &EventDriven, &opts),
+        _ => classify_point(sys.dynsys(), x0, &EventDriven853, &opts),
+    });
     let r = sys.finish(r)?;
     let mut doc = serde_json::json!({
         "schema": "gearbif.classify/1",
@@ -151,10 +157,14 @@ fn sweep_system<S: PySystem>(
     x0: [f64; 2],
     protocol: Protocol,
     opts: &ClassifyOptions,
+    method: Method,
 ) -> gearbif::Result<Vec<Vec<PointResult>>> {
     let r = (base.param_by_name(rows.0)?, rows.1);
     let c = (base.param_by_name(cols.0)?, cols.1);
-    let grid = sweep_grid(&EventDriven, base, r, c, x0, protocol, opts, &Silent)?;
+    let grid = match method {
+        Method::EventDriven => sweep_grid(&EventDriven, base, r, c, x0, protocol, opts, &Silent)?,
+        _ => sweep_grid(&EventDriven853, base, r, c, x0, protocol, opts, &Silent)?,
+    };
     Ok(grid
         .into_iter()
         .map(|row| row.into_iter().map(|(_, p)| p).collect())
@@ -187,12 +197,13 @@ fn grid_axis(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(String, Vec<f64>)>
 /// at every grid point classified as by `classify` (rows in parallel).
 ///
 /// sweep_grid(system, rows, cols, *, x0=None, protocol="fresh", settle_turns=90, record_turns=10,
-///            samples_per_turn=50, analysis_turns=60, tol=1e-9)
+///            samples_per_turn=50, analysis_turns=60, tol=1e-9, method="dop853")
 ///
 /// rows, cols = (name, values): a parameter of system.params and its values (1-d sequence or numpy
 /// array, in the parameter's unit); the other parameters keep their values in `system`. protocol
 /// "fresh": every point starts at x0 (default as in `classify`); "semi_static": along a row the
-/// end state of one point starts the next. analysis_turns = 0 skips the rigorous class.
+/// end state of one point starts the next. analysis_turns = 0 skips the rigorous class. method:
+/// "dop853" (event-driven Dormand–Prince 8(5,3), the default) or "event" (Dormand–Prince 5(4)).
 ///
 /// Returns a dict: row_param, row_values (numpy), col_param, col_values (numpy), label (list of
 /// lists of str: "T/2", "T", "3T", "QP", "chaos", "?" — the rigorous class, or the paper's class
@@ -200,7 +211,7 @@ fn grid_axis(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(String, Vec<f64>)>
 /// arrays of shape (rows, cols), NaN where not computed) and points (list of lists of the
 /// classification dicts).
 #[pyfunction]
-#[pyo3(name = "sweep_grid", signature = (system, rows, cols, *, x0=None, protocol="fresh", settle_turns=90, record_turns=10, samples_per_turn=50, analysis_turns=60, tol=1e-9))]
+#[pyo3(name = "sweep_grid", signature = (system, rows, cols, *, x0=None, protocol="fresh", settle_turns=90, record_turns=10, samples_per_turn=50, analysis_turns=60, tol=1e-9, method="dop853"))]
 #[allow(clippy::too_many_arguments)]
 fn sweep_grid_py<'py>(
     py: Python<'py>,
@@ -214,7 +225,9 @@ fn sweep_grid_py<'py>(
     samples_per_turn: i64,
     analysis_turns: i64,
     tol: f64,
+    method: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let method = parse_method(method)?;
     let sys = crate::systems::system(system)?;
     let (rname, rvals) = grid_axis(rows, "rows")?;
     let (cname, cvals) = grid_axis(cols, "cols")?;
@@ -230,7 +243,7 @@ fn sweep_grid_py<'py>(
     }
     .options()?;
     let r = py.detach(|| {
-        dispatch!(&sys, s => sweep_system(s, (&rname, &rvals), (&cname, &cvals), x0, protocol, &opts))
+        dispatch!(&sys, s => sweep_system(s, (&rname, &rvals), (&cname, &cvals), x0, protocol, &opts, method))
     });
     let grid = sys.finish(r)?;
     let (n, m) = (rvals.len(), cvals.len());
@@ -294,7 +307,7 @@ fn axis(obj: Option<&Bound<'_, PyAny>>, default: &str) -> PyResult<Axis> {
 ///
 /// sweep(rows="theta:0:50:10", cols="f:0.5:3:0.25", *, params=None, f=1.0, protocol="fresh",
 ///       alpha0_deg=90.0, beta0_deg=90.0, convention="physical", settle_turns=None,
-///       record_turns=10, analysis_turns=60, tol=1e-9, out_dir=None)
+///       record_turns=10, analysis_turns=60, tol=1e-9, out_dir=None, method="dop853")
 ///
 /// Axes as on the command line ("param:start:stop:step", "param:start:stop:n:log", param a name of
 /// the gear's lens — theta [deg], f [Hz], zeta [1/s], eta [1/s²], g [1/s²], delta — or inertia
@@ -302,10 +315,11 @@ fn axis(obj: Option<&Bound<'_, PyAny>>, default: &str) -> PyResult<Axis> {
 /// GearParams (default: the paper's gear); f [Hz] when f is not an axis; protocol "fresh" (every
 /// point from (alpha0_deg, beta0_deg), Fig. 7b) or "semi_static" (state carried along a row,
 /// Fig. 8); settle_turns default 90 (fresh) or 1000 (semi_static); analysis_turns = 0 skips the
-/// rigorous class. out_dir: also write points.csv and sweep.json there.
+/// rigorous class. out_dir: also write points.csv and sweep.json there. method: "dop853"
+/// (event-driven Dormand–Prince 8(5,3), the default, as `gearbif sweep`) or "event" (DP5).
 /// Returns the dict of sweep.json (schema gearbif.sweep/1, docs/formats.md).
 #[pyfunction]
-#[pyo3(signature = (rows=None, cols=None, *, params=None, f=1.0, protocol="fresh", alpha0_deg=90.0, beta0_deg=90.0, convention="physical", settle_turns=None, record_turns=10, analysis_turns=60, tol=1e-9, out_dir=None))]
+#[pyo3(signature = (rows=None, cols=None, *, params=None, f=1.0, protocol="fresh", alpha0_deg=90.0, beta0_deg=90.0, convention="physical", settle_turns=None, record_turns=10, analysis_turns=60, tol=1e-9, out_dir=None, method="dop853"))]
 #[allow(clippy::too_many_arguments)]
 fn sweep<'py>(
     py: Python<'py>,
@@ -322,7 +336,9 @@ fn sweep<'py>(
     analysis_turns: i64,
     tol: f64,
     out_dir: Option<PathBuf>,
+    method: &str,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let method = parse_method(method)?;
     let protocol = self::protocol(protocol)?;
     let settle = settle_turns.unwrap_or(match protocol {
         Protocol::Fresh => 90,
@@ -345,7 +361,7 @@ fn sweep<'py>(
         alpha0_deg,
         beta0_deg,
         convention: parse_convention(convention)?,
-        method: Method::EventDriven,
+        method,
         classify,
     };
     spec.validate().py()?;

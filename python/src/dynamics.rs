@@ -3,9 +3,12 @@
 use crate::convert::{complex2, count, floats, mat2, rows, state, to_python, vec2};
 use crate::errors::invalid;
 use crate::systems::{param_names, system as extract_system, System};
-use gearbif::integrator::{EventDriven, FlowMethod, FlowOptions, Mode, Sensitivity};
+use gearbif::integrator::{
+    EventDriven, EventDriven853, FlowMethod, FlowOptions, Mode, Sensitivity,
+};
 use gearbif::maps::{poincare_map as map, Section};
 use gearbif::orbits::{OrbitSpec, PeriodicOrbit, ShootingOptions};
+use gearbif::sweep::Method;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyAny, PyDict};
@@ -18,6 +21,18 @@ pub fn parse_section(s: &str) -> PyResult<Section> {
         "half_period" | "sym" | "G" => Ok(Section::HalfPeriod),
         _ => Err(invalid(format!(
             "section `{s}`: expected \"stroboscopic\" (P_T) or \"half_period\" (G)"
+        ))),
+    }
+}
+
+/// The `method=` keyword: "dop853" (the event-driven Dormand–Prince 8(5,3), the default, as the
+/// CLI's `--method`) or "event" (the event-driven Dormand–Prince 5(4)).
+pub fn parse_method(s: &str) -> PyResult<Method> {
+    match s {
+        "dop853" => Ok(Method::EventDriven853),
+        "event" => Ok(Method::EventDriven),
+        _ => Err(invalid(format!(
+            "method `{s}`: expected \"dop853\" (event-driven DOP853) or \"event\" (event-driven DP5)"
         ))),
     }
 }
@@ -50,21 +65,24 @@ pub fn check_tol(tol: f64) -> PyResult<()> {
     }
 }
 
-/// Integrates a system exactly (event-driven Filippov integration, Dormand–Prince 5(4) with the
-/// crossings, stick phases and releases on ω = 0 located to the tolerance).
+/// Integrates a system exactly (event-driven Filippov integration, Dormand–Prince 8(5,3) by
+/// default, with the crossings, stick phases and releases on ω = 0 located to the tolerance).
 ///
-/// simulate(system, x0, t_end, *, t0=0.0, samples_per_period=50, sample_times=None, tol=1e-9)
+/// simulate(system, x0, t_end, *, t0=0.0, samples_per_period=50, sample_times=None, tol=1e-9,
+///          method="dop853")
 ///
 /// x0 = (β [rad], ω [rad/s]) at t0 [s]; the trajectory is sampled at sample_times [s] (sorted, in
 /// [t0, t_end]) or on a uniform grid of samples_per_period points per drive period. tol is the
-/// relative local error tolerance (absolute 1e-3·tol).
+/// relative local error tolerance (absolute 1e-3·tol). method: "dop853" (event-driven
+/// Dormand–Prince 8(5,3), faster at every tolerance) or "event" (event-driven Dormand–Prince 5(4)),
+/// as the CLI's --method.
 ///
 /// Returns a dict: t [s], beta [rad, on the lift], omega [rad/s] (numpy arrays), for the gear also
 /// alpha [rad] = 2πft + α₀ and delta = beta − alpha [rad]; events (list of dicts: t [s],
 /// beta [rad], kind = crossing | stick_start | release | graze, and the sides from/to/side);
 /// x_end (numpy), mode at t_end (positive | negative | stick), stats (work counters).
 #[pyfunction]
-#[pyo3(signature = (system, x0, t_end, *, t0=0.0, samples_per_period=50, sample_times=None, tol=1e-9))]
+#[pyo3(signature = (system, x0, t_end, *, t0=0.0, samples_per_period=50, sample_times=None, tol=1e-9, method="dop853"))]
 #[allow(clippy::too_many_arguments)]
 fn simulate<'py>(
     py: Python<'py>,
@@ -75,10 +93,12 @@ fn simulate<'py>(
     samples_per_period: i64,
     sample_times: Option<&Bound<'py, PyAny>>,
     tol: f64,
+    method: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let sys = extract_system(system)?;
     let x0 = state(x0, "x0")?;
     check_tol(tol)?;
+    let method = parse_method(method)?;
     if !(t0.is_finite() && t_end.is_finite() && t_end >= t0) {
         return Err(invalid(format!(
             "need finite t0 <= t_end, got t0 = {t0}, t_end = {t_end}"
@@ -108,7 +128,10 @@ fn simulate<'py>(
     let opts = FlowOptions::with_tol(tol)
         .record_events(true)
         .samples(times);
-    let r = py.detach(|| EventDriven.flow(sys.dynsys(), t0, x0, t_end, &opts));
+    let r = py.detach(|| match method {
+        Method::EventDriven => EventDriven.flow(sys.dynsys(), t0, x0, t_end, &opts),
+        _ => EventDriven853.flow(sys.dynsys(), t0, x0, t_end, &opts),
+    });
     let flow = sys.finish(r)?;
     let d = PyDict::new(py);
     let t: Vec<f64> = flow.samples.iter().map(|s| s.t).collect();
@@ -135,17 +158,20 @@ fn simulate<'py>(
 /// Applies a Poincaré map `iterations` times, with its Jacobians (variational equations with
 /// saltation matrices at every event).
 ///
-/// poincare_map(system, x, *, section="stroboscopic", iterations=1, tol=1e-10, jacobians=True)
+/// poincare_map(system, x, *, section="stroboscopic", iterations=1, tol=1e-10, jacobians=True,
+///              method="dop853")
 ///
 /// section: "stroboscopic" = P_T: x(0) ↦ x(T) on the lift, or "half_period" = G = R⁻¹ ∘ P_{T/2}
 /// (systems with a half-period symmetry R; for the gear R(β, ω) = (β + π, ω), P_T = R² ∘ G²).
-/// x = (β [rad], ω [rad/s]) at t = 0.
+/// x = (β [rad], ω [rad/s]) at t = 0. method: "dop853" (event-driven Dormand–Prince 8(5,3)) or
+/// "event" (event-driven Dormand–Prince 5(4)), as in `simulate`.
 ///
 /// Returns a dict: x (image, numpy), jac_x = ∂map/∂x (2×2), jac_p = total ∂map/∂p (2×n, columns
 /// param_names, including the period's dependence on f), multipliers (complex eigenvalues of
 /// jac_x, largest modulus first), trace, det, mode, events (list of dicts), stats.
 #[pyfunction]
-#[pyo3(signature = (system, x, *, section="stroboscopic", iterations=1, tol=1e-10, jacobians=true))]
+#[pyo3(signature = (system, x, *, section="stroboscopic", iterations=1, tol=1e-10, jacobians=true, method="dop853"))]
+#[allow(clippy::too_many_arguments)]
 fn poincare_map<'py>(
     py: Python<'py>,
     system: &Bound<'py, PyAny>,
@@ -154,7 +180,9 @@ fn poincare_map<'py>(
     iterations: i64,
     tol: f64,
     jacobians: bool,
+    method: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let method = parse_method(method)?;
     let sys = extract_system(system)?;
     let x = state(x, "x")?;
     let section = parse_section(section)?;
@@ -167,7 +195,10 @@ fn poincare_map<'py>(
         } else {
             Sensitivity::None
         });
-    let r = py.detach(|| map(&EventDriven, sys.dynsys(), section, x, iterations, &opts));
+    let r = py.detach(|| match method {
+        Method::EventDriven => map(&EventDriven, sys.dynsys(), section, x, iterations, &opts),
+        _ => map(&EventDriven853, sys.dynsys(), section, x, iterations, &opts),
+    });
     let img = sys.finish(r)?;
     let d = PyDict::new(py);
     d.set_item("x", vec2(py, img.x))?;

@@ -8,7 +8,7 @@ use crate::continuation::palc2::{continue_curve, lock_loss_curves, CurveOptions}
 use crate::continuation::two_param::{follow, grid, Curve};
 use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
-use crate::integrator::EventDriven;
+use crate::integrator::DEFAULT_METHOD;
 use crate::maps::Section;
 use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::orbits::{OrbitSpec, ShootingOptions};
@@ -134,7 +134,7 @@ pub fn run(a: Args) -> Result<()> {
                 ds: if a.reverse { -copts.ds } else { copts.ds },
                 ..copts
             };
-            continue_curve(&EventDriven, &g, &spec, kind, free, along, x, f0, &o)?
+            continue_curve(&DEFAULT_METHOD, &g, &spec, kind, free, along, x, f0, &o)?
         } else {
             follow(&g, &spec, kind, free, along, x, f0, &vals, &opts)?
         };

@@ -3,7 +3,7 @@
 
 use super::common::{angle_deg, check_frequency, count, limits, tolerance, GearArgs, Output};
 use crate::analysis::{classify_point, ClassifyOptions, PointResult, ThdDefinition};
-use crate::integrator::{EventDriven, FixedStep};
+use crate::integrator::{EventDriven, FixedStep, DEFAULT_METHOD};
 use crate::model::Gear;
 use crate::Result;
 use serde::Serialize;
@@ -41,6 +41,9 @@ pub struct Args {
     /// Also run the paper's fixed-step RK4 (50 steps per period).
     #[arg(long)]
     rk4: bool,
+    /// Use the event-driven DP5 instead of the default event-driven DOP853.
+    #[arg(long)]
+    dp5: bool,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -127,7 +130,11 @@ pub fn run(a: Args) -> Result<()> {
         .with_alpha0(a.alpha0_deg.to_radians())?;
     let x0 = [a.beta0_deg.to_radians(), 0.0];
     let opts = options(&a);
-    let ev = classify_point(&gear, x0, &EventDriven, &opts)?;
+    let ev = if a.dp5 {
+        classify_point(&gear, x0, &EventDriven, &opts)?
+    } else {
+        classify_point(&gear, x0, &DEFAULT_METHOD, &opts)?
+    };
     let rk = if a.rk4 {
         let o = ClassifyOptions {
             rigorous: false,

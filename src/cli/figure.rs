@@ -82,6 +82,8 @@ fn window(g: &Gear, x0: [f64; 2], settle: usize) -> Result<crate::analysis::Poin
         keep_samples: true,
         ..ClassifyOptions::default()
     };
+    // the DP5, as `examples/theta31.rs`, whose table (docs/atlas.md) these windows show: the
+    // numbers of the chaotic points depend on the integrator's rounding
     classify_point(g, x0, &EventDriven, &o)
 }
 

@@ -3,11 +3,12 @@
 
 use super::common::{check_frequency, count, tolerance, GearArgs, Output};
 use super::continue_::{check_winding, parse_section, parse_state};
-use crate::continuation::two_param::{locate_augmented, CurvePoint};
+use crate::continuation::two_param::{locate_augmented_with, CurvePoint};
 use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
+use crate::integrator::{EventDriven, FlowMethod, DEFAULT_METHOD};
 use crate::maps::Section;
-use crate::model::{GearParam, Parameter, Parametrised};
+use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::orbits::{OrbitSpec, ShootingOptions};
 use serde::Serialize;
 
@@ -45,6 +46,9 @@ pub struct Args {
     /// Integrator tolerance, in (0, 1).
     #[arg(long, default_value_t = 1e-11)]
     tol: f64,
+    /// Use the event-driven DP5 instead of the default event-driven DOP853.
+    #[arg(long)]
+    dp5: bool,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -71,6 +75,30 @@ pub(crate) fn parse_kind(s: &str) -> Result<SpecialKind> {
     })
 }
 
+/// The point located at tolerance `tol` from `start` (state, parameter), then refined at `tol`/10
+/// from there (so both solves refine the same point), with `method`.
+fn locate_twice<M: FlowMethod<Gear>>(
+    method: &M,
+    gear: &Gear,
+    spec: &OrbitSpec,
+    kind: SpecialKind,
+    param: GearParam,
+    start: ([f64; 2], f64),
+    tol: f64,
+) -> Result<(CurvePoint, CurvePoint)> {
+    let o1 = ShootingOptions {
+        tol,
+        ..Default::default()
+    };
+    let o2 = ShootingOptions {
+        tol: tol * 0.1,
+        ..Default::default()
+    };
+    let p1 = locate_augmented_with(method, gear, spec, kind, param, start.0, start.1, &o1)?;
+    let p2 = locate_augmented_with(method, gear, spec, kind, param, p1.x, p1.free, &o2)?;
+    Ok((p1, p2))
+}
+
 /// Runs `gearbif locate`.
 pub fn run(a: Args) -> Result<()> {
     check_frequency(a.f)?;
@@ -86,17 +114,11 @@ pub fn run(a: Args) -> Result<()> {
     };
     let x = parse_state(&a.state)?;
     let lam0 = gear.param(param);
-    let o1 = ShootingOptions {
-        tol: a.tol,
-        ..Default::default()
+    let (p1, p2) = if a.dp5 {
+        locate_twice(&EventDriven, &gear, &spec, kind, param, (x, lam0), a.tol)?
+    } else {
+        locate_twice(&DEFAULT_METHOD, &gear, &spec, kind, param, (x, lam0), a.tol)?
     };
-    let o2 = ShootingOptions {
-        tol: a.tol * 0.1,
-        ..Default::default()
-    };
-    let p1 = locate_augmented(&gear, &spec, kind, param, x, lam0, &o1)?;
-    // the tighter solve starts from the first one, so both refine the same point
-    let p2 = locate_augmented(&gear, &spec, kind, param, p1.x, p1.free, &o2)?;
     let te = (p1.free - p2.free).abs();
     let out = Located {
         kind,

@@ -43,14 +43,18 @@ pub struct Cli {
 pub enum Command {
     /// Derived quantities of a gear: g, Δ, f_c, lock angles, cogging-free shaft angles.
     Info(info::Args),
-    /// Pseudo-arclength continuation of a periodic orbit in one parameter, with special points.
+    /// Pseudo-arclength continuation of a periodic orbit in one parameter, with special points
+    /// (event-driven DP5).
     Continue(continue_::Args),
-    /// Refine one special point (fold, flip, symmetry-breaking, Neimark–Sacker) by Newton.
+    /// Refine one special point (fold, flip, symmetry-breaking, Neimark–Sacker) by Newton
+    /// (event-driven DOP853; --dp5 for the DP5).
     Locate(locate::Args),
     /// The whole bifurcation diagram over a parameter range, automatically: seeds from simulations
-    /// and analytic branches, switching at every flip and symmetry-breaking point.
+    /// and analytic branches, switching at every flip and symmetry-breaking point (event-driven
+    /// DP5).
     Diagram(diagram::Args),
-    /// A two-parameter curve of special points, by default the lock-loss boundary f_c(Θ).
+    /// A two-parameter curve of special points, by default the lock-loss boundary f_c(Θ)
+    /// (event-driven DOP853).
     Boundary(boundary::Args),
     /// Integrate the driven gear: trajectory CSV (t, alpha, beta, omega, delta) and events on ω = 0.
     Simulate(simulate::Args),
@@ -68,13 +72,17 @@ pub enum Command {
     /// Measure the diagnosis on sets from an independent generator: false positives, power per
     /// effect against size, confusion matrix, σ coverage (campaign.json, campaign.md, figure).
     Campaign(campaign::Args),
-    /// Classify one point: the paper's flowchart (harmonic fit, RMS, THD) and the rigorous class.
+    /// Classify one point: the paper's flowchart (harmonic fit, RMS, THD) and the rigorous class
+    /// (event-driven DOP853; --dp5 for the DP5).
     Classify(classify::Args),
-    /// Two-parameter atlas (Θ × f, …), parallel, resumable; CSV/JSON and an RMS_δ map.
+    /// Two-parameter atlas (Θ × f, …), parallel, resumable; CSV/JSON and an RMS_δ map
+    /// (event-driven DOP853; --dp5, --rk4).
     Sweep(sweep::Args),
-    /// The report of a gear: derived quantities, lock branch, classification map, operating advice.
+    /// The report of a gear: derived quantities, lock branch, classification map, operating advice
+    /// (sweeps with the event-driven DOP853, continuation with the DP5).
     Report(report::Args),
-    /// The paper's figures (fig5 … fig10), orbit diagram, Lyapunov exponent: SVG and PNG.
+    /// The paper's figures (fig5 … fig10), orbit diagram, Lyapunov exponent: SVG and PNG (fig7 …
+    /// fig10 with the event-driven DOP853; fig5, fig6, orbit and lyapunov with the DP5).
     Figure(figure::Args),
 }
 

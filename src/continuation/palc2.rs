@@ -774,7 +774,7 @@ pub fn lock_loss_curves(
             ..*opts
         };
         let c = continue_curve(
-            &crate::integrator::EventDriven,
+            &crate::integrator::DEFAULT_METHOD,
             &s.gear,
             &s.spec,
             SpecialKind::Fold,

@@ -17,7 +17,7 @@ use super::codim2::Codim2Point;
 use super::minaug::linearise_map;
 use super::SpecialKind;
 use crate::error::{Error, Result};
-use crate::integrator::{EventDriven, FlowMethod};
+use crate::integrator::{FlowMethod, DEFAULT_METHOD};
 use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::numerics::{newton, Linearisation, NewtonOptions};
 use crate::orbits::{EventCounts, Floquet, OrbitSpec, ShootingOptions};
@@ -257,7 +257,7 @@ pub fn locate_augmented<S: Parametrised>(
     lambda0: f64,
     opts: &ShootingOptions,
 ) -> Result<CurvePoint> {
-    locate_augmented_with(&EventDriven, sys, spec, kind, free, x0, lambda0, opts)
+    locate_augmented_with(&DEFAULT_METHOD, sys, spec, kind, free, x0, lambda0, opts)
 }
 
 /// [`locate_augmented`] with the flow computed by `method`: Newton on (F, ψ) = 0 to
@@ -353,7 +353,7 @@ pub fn follow<S: Parametrised>(
     opts: &ShootingOptions,
 ) -> Result<Curve<S>> {
     follow_with(
-        &EventDriven,
+        &DEFAULT_METHOD,
         sys,
         spec,
         kind,

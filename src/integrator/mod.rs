@@ -26,6 +26,20 @@ mod tableau;
 
 pub use dop853::EventDriven853;
 pub use dopri5::EventDriven;
+
+/// The method of the library's entry points that take none where it wins (`maps::stroboscopic`,
+/// `maps::half_period`, `two_param::locate_augmented` and `follow`, the lock-loss curves, the
+/// classification of `sweep::hysteresis`) and of the CLI's `--method` default: the event-driven
+/// Dormand–Prince 8(5,3). It is faster than the DP5 at every tolerance of the work-precision table
+/// in docs/performance.md (P_T with the state Jacobian at tol 1e-10: 18.9 µs against 46.7 µs, errors
+/// 4.9e-11 against 9.6e-11). Single shooting (`orbits::shoot`, …) and one-parameter continuation
+/// (`Continuation::new`, `switch_branch`, `diagram`) keep [`EventDriven`]: there the onset of
+/// sticking at a grazing is located to its stated bracket with the DP5 but not with the DOP853
+/// (tests/den_hartog.rs, docs/performance.md). The `_with` variants take any [`FlowMethod`].
+pub type DefaultMethod = EventDriven853;
+
+/// The value of [`DefaultMethod`].
+pub const DEFAULT_METHOD: DefaultMethod = EventDriven853;
 pub use fixed_step::FixedStep;
 #[cfg(feature = "diffsol-check")]
 pub use regularised::{ImplicitMethod, Regularised};

@@ -843,7 +843,7 @@ pub fn compute_report(
         alpha0_deg: 0.0,
         beta0_deg: 180.0,
         convention: Convention::Paper,
-        method: Method::EventDriven,
+        method: Method::EventDriven853,
         classify: classify.clone(),
     };
     let map = match SweepRunner::new(spec).observer(observer).run()? {
