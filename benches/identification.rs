@@ -94,7 +94,7 @@ fn bench(c: &mut Criterion) {
         ..DiagnoseOptions::default()
     };
     grp.bench_function("diagnose (4 ring-downs + 2 driven x 15 turns)", |b| {
-        b.iter(|| diagnose(&set, &dopts, &|_| {}).unwrap())
+        b.iter(|| diagnose(&set, &dopts, &gearbif::progress::Silent).unwrap())
     });
     grp.finish();
 }

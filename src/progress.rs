@@ -73,6 +73,22 @@ impl<F: Fn(&Event<'_>) + Sync> Observer for F {
     }
 }
 
+/// Reports one line of a computation's log as [`Event::Stage`] (the diagnosis and the campaigns
+/// report their steps this way).
+pub fn stage(obs: &dyn Observer, line: &str) {
+    obs.observe(&Event::Stage(line));
+}
+
+/// An observer that passes the [`Event::Stage`] lines to `f` and ignores the rest:
+/// `lines(|s| eprintln!("{s}"))`.
+pub fn lines<F: Fn(&str) + Sync>(f: F) -> impl Observer {
+    move |e: &Event<'_>| {
+        if let Event::Stage(s) = e {
+            f(s)
+        }
+    }
+}
+
 /// An observer that ignores everything.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Silent;

@@ -157,7 +157,7 @@ fn ci_campaign() -> &'static CampaignDoc {
             keep_sets: false,
             tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
         };
-        let doc = run_campaign(&spec, &out, &|_| {}).unwrap();
+        let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
         std::fs::remove_dir_all(&out).ok();
         doc
     })
@@ -262,8 +262,15 @@ fn refit_sizes_are_unbiased_at_low_noise() {
     )
     .unwrap();
     let opts = DiagnoseOptions::default();
-    let prep = prepare(&set, &opts, &|_| {}).unwrap();
-    let base = fit_base(&prep, &set, &opts, &Folds::new(&prep.runs, 4), &|_| {}).unwrap();
+    let prep = prepare(&set, &opts, &gearbif::progress::Silent).unwrap();
+    let base = fit_base(
+        &prep,
+        &set,
+        &opts,
+        &Folds::new(&prep.runs, 4),
+        &gearbif::progress::Silent,
+    )
+    .unwrap();
     let extra = [Term::SinB, Term::CosB, Term::Sin(0, 2), Term::Cos(0, 2)];
     let mut terms = BASE_TERMS.to_vec();
     terms.extend(extra);
@@ -414,9 +421,10 @@ fn remainder_is_located_out_of_family_and_absent_on_a_control() {
         gearbif::io::recordings::write_set(&c.set, &d, true).unwrap();
         let set = gearbif::io::recordings::read_set(&d).unwrap();
         let opts = gearbif::identification::diagnose::DiagnoseOptions::default();
-        let rep = gearbif::identification::diagnose::diagnose(&set, &opts, &|_| {})
-            .unwrap()
-            .report;
+        let rep =
+            gearbif::identification::diagnose::diagnose(&set, &opts, &gearbif::progress::Silent)
+                .unwrap()
+                .report;
         let r = rep.remaining.clone().expect("a remainder in the report");
         let z = r.excess_chi2_per_dof / r.excess_sigma;
         assert_eq!(!r.within_noise, left, "{id}: E/σ = {z:.2}, {:?}", r.located);
@@ -450,10 +458,11 @@ fn frequency_dependent_damping_is_a_condition_dependence_of_zeta() {
         seeds: (1..=4).collect(),
         null_seeds: Vec::new(),
         set: SetSize::ci(),
+        tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
         rk4_step_s: 2.5e-4,
         keep_sets: false,
     };
-    let doc = run_campaign(&spec, &out, &|_| {}).unwrap();
+    let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
     std::fs::remove_dir_all(&out).ok();
     assert_eq!(doc.cases.len(), 4);
     let per_run = |f: &&gearbif::campaign::metrics::FoundEffect| {
@@ -528,8 +537,15 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
         )
         .unwrap();
         let opts = DiagnoseOptions::default();
-        let prep = prepare(&set, &opts, &|_| {}).unwrap();
-        let base = fit_base(&prep, &set, &opts, &Folds::new(&prep.runs, 4), &|_| {}).unwrap();
+        let prep = prepare(&set, &opts, &gearbif::progress::Silent).unwrap();
+        let base = fit_base(
+            &prep,
+            &set,
+            &opts,
+            &Folds::new(&prep.runs, 4),
+            &gearbif::progress::Silent,
+        )
+        .unwrap();
         let st = base.state.as_ref().unwrap();
         let mut terms = BASE_TERMS.to_vec();
         terms.extend([
@@ -542,6 +558,7 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
         let model = SimModel {
             runs: &prep.runs,
             geo: base.geo,
+            tol: opts.tol,
             terms,
             latency: 0.0,
             fit_latency: false,

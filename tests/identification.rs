@@ -35,7 +35,7 @@ fn dopts() -> DiagnoseOptions {
 }
 
 fn run_set(set: &RecordingSet) -> Diagnosis {
-    diagnose(set, &dopts(), &|_| {}).unwrap()
+    diagnose(set, &dopts(), &gearbif::progress::Silent).unwrap()
 }
 
 fn finding<'a>(d: &'a Diagnosis, effect: &str) -> &'a gearbif::identification::report::Finding {
@@ -452,7 +452,7 @@ fn diagnosis_tolerance_reaches_the_integrator() {
     let (loose, tight) = (1e-4, 1e-2 * default_tol);
     // ring-downs: κ of each fit at the three tolerances
     let kappa = |tol: f64| -> Vec<f64> {
-        let p = prepare(&set, &at(tol), &|_| {}).unwrap();
+        let p = prepare(&set, &at(tol), &gearbif::progress::Silent).unwrap();
         assert_eq!(p.ringdowns.len(), 2, "a ring-down fit failed at tol {tol}");
         p.ringdowns.iter().map(|f| f.kappa).collect()
     };
@@ -494,7 +494,7 @@ fn diagnosis_tolerance_reaches_the_integrator() {
             ringdown_tol_ratio: ratio,
             ..DiagnoseOptions::default()
         };
-        match diagnose(&set, &opts, &|_| {}) {
+        match diagnose(&set, &opts, &gearbif::progress::Silent) {
             Err(gearbif::Error::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
             other => panic!(
                 "tol {tol}, ratio {ratio}: {:?}",

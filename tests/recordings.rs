@@ -238,7 +238,11 @@ fn diagnosis_of_degenerate_sets_errs_without_panicking() {
             gear: GearSetup::paper(),
             runs,
         };
-        let r = diagnose(&set, &DiagnoseOptions::default(), &|_| {});
+        let r = diagnose(
+            &set,
+            &DiagnoseOptions::default(),
+            &gearbif::progress::Silent,
+        );
         assert!(r.is_err(), "a set without motion cannot be diagnosed");
     }
 }

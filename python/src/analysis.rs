@@ -463,7 +463,7 @@ fn fit<'py>(py: Python<'py>, set_dir: PathBuf, tol: Option<f64>) -> PyResult<Bou
     let d = py
         .detach(|| {
             let set = read_set(&set_dir)?;
-            run_diagnosis(&set, &opts, &|_| {})
+            run_diagnosis(&set, &opts, &gearbif::progress::Silent)
         })
         .py()?;
     let v = serde_json::json!({
@@ -503,7 +503,7 @@ fn diagnose<'py>(
     let d = py
         .detach(|| {
             let set = read_set(&set_dir)?;
-            let d = run_diagnosis(&set, &opts, &|_| {})?;
+            let d = run_diagnosis(&set, &opts, &gearbif::progress::Silent)?;
             if let Some(o) = &out_dir {
                 gearbif::io::write_json_atomic(o.join("report.json"), &d.report)?;
             }

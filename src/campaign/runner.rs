@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::identification::diagnose::{diagnose, DiagnoseOptions};
 use crate::io::recordings::{read_set, write_set};
 use crate::io::write_json_atomic;
+use crate::progress::{stage, Observer};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -153,7 +154,7 @@ pub fn run_case(
         tol: spec.tol,
         ..DiagnoseOptions::default()
     };
-    let diag = diagnose(&set, &opts, &|_| {});
+    let diag = diagnose(&set, &opts, &crate::progress::Silent);
     let seconds = t0.elapsed().as_secs_f64();
     if !keep {
         let _ = std::fs::remove_dir_all(&dir);
@@ -219,7 +220,7 @@ fn cases_dir(out: &Path) -> PathBuf {
 pub fn run_campaign(
     spec: &CampaignSpec,
     out: &Path,
-    progress: &(dyn Fn(&str) + Sync),
+    progress: &dyn Observer,
 ) -> Result<CampaignDoc> {
     let cases = plan(spec)?;
     let spec_path = out.join("spec.json");
@@ -246,23 +247,29 @@ pub fn run_campaign(
     let pending: Vec<&Case> = cases.iter().filter(|c| load(c).is_none()).collect();
     let total = cases.len();
     let done = AtomicUsize::new(total - pending.len());
-    progress(&format!(
-        "{total} cases, {} already done, {} to run",
-        total - pending.len(),
-        pending.len()
-    ));
+    stage(
+        progress,
+        &format!(
+            "{total} cases, {} already done, {} to run",
+            total - pending.len(),
+            pending.len()
+        ),
+    );
     let sets_dir = out.join("sets");
     let run_one = |c: &&Case| -> Result<()> {
         let r = run_case(c, spec, &sets_dir, spec.keep_sets)?;
         write_json_atomic(cdir.join(format!("{}.json", c.key())), &r)?;
         let k = done.fetch_add(1, Ordering::SeqCst) + 1;
-        progress(&format!(
-            "[{k}/{total}] {}: verdict {} ({}, {:.1} s)",
-            c.key(),
-            r.verdict,
-            if r.named_right { "right" } else { "wrong" },
-            r.seconds
-        ));
+        stage(
+            progress,
+            &format!(
+                "[{k}/{total}] {}: verdict {} ({}, {:.1} s)",
+                c.key(),
+                r.verdict,
+                if r.named_right { "right" } else { "wrong" },
+                r.seconds
+            ),
+        );
         Ok(())
     };
     #[cfg(feature = "parallel")]

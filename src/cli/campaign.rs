@@ -130,9 +130,11 @@ pub fn run(a: Args) -> Result<()> {
         .ok_or_else(|| Error::option("--out", "is required"))?;
     super::common::output_dir("--out", &out)?;
     let t0 = Instant::now();
-    let doc = run_campaign(&spec, &out, &|s| {
-        eprintln!("[{:7.1} s] {s}", t0.elapsed().as_secs_f64())
-    })?;
+    let doc = run_campaign(
+        &spec,
+        &out,
+        &crate::progress::lines(|s| eprintln!("[{:7.1} s] {s}", t0.elapsed().as_secs_f64())),
+    )?;
     if !a.no_figures {
         let fig = crate::plotting::campaign::CampaignFigure {
             summary: &doc.summary,

@@ -51,21 +51,25 @@ pub fn run(a: Args) -> Result<()> {
         ..DiagnoseOptions::default()
     };
     let set = read_set(&a.set)?;
-    let d = diagnose(&set, &opts, &|s| {
-        if a.timing {
-            let sims = crate::identification::predict::simulations();
-            let (steps, over) = crate::identification::predict::simulation_steps();
-            eprintln!(
-                "[{:6.1} s, cpu {:6.1} s, {:8} sims, {:5.0} steps/sim, {over} over budget] {s}",
-                t0.elapsed().as_secs_f64(),
-                cpu_seconds().unwrap_or(f64::NAN),
-                sims,
-                steps as f64 / sims.max(1) as f64
-            )
-        } else {
-            eprintln!("[{:6.1} s] {s}", t0.elapsed().as_secs_f64())
-        }
-    })?;
+    let d = diagnose(
+        &set,
+        &opts,
+        &crate::progress::lines(|s| {
+            if a.timing {
+                let sims = crate::identification::predict::simulations();
+                let (steps, over) = crate::identification::predict::simulation_steps();
+                eprintln!(
+                    "[{:6.1} s, cpu {:6.1} s, {:8} sims, {:5.0} steps/sim, {over} over budget] {s}",
+                    t0.elapsed().as_secs_f64(),
+                    cpu_seconds().unwrap_or(f64::NAN),
+                    sims,
+                    steps as f64 / sims.max(1) as f64
+                )
+            } else {
+                eprintln!("[{:6.1} s] {s}", t0.elapsed().as_secs_f64())
+            }
+        }),
+    )?;
     let title = a
         .set
         .file_name()

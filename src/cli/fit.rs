@@ -30,7 +30,11 @@ pub fn run(a: Args) -> Result<()> {
         ..DiagnoseOptions::default()
     };
     let set = read_set(&a.set)?;
-    let d = diagnose(&set, &opts, &|s| eprintln!("[fit] {s}"))?;
+    let d = diagnose(
+        &set,
+        &opts,
+        &crate::progress::lines(|s| eprintln!("[fit] {s}")),
+    )?;
     let v = serde_json::json!({
         "schema": "gearbif.fit/1",
         "baseline": d.report.baseline,

@@ -30,6 +30,7 @@ use super::shooting::{
 };
 use crate::error::{Error, Result};
 use crate::io::recordings::{RecordingSet, RunKind};
+use crate::progress::{stage, Observer};
 use serde_json::json;
 use std::collections::BTreeMap;
 
@@ -160,7 +161,7 @@ pub struct Prepared {
 pub fn prepare(
     set: &RecordingSet,
     opts: &DiagnoseOptions,
-    progress: &dyn Fn(&str),
+    progress: &dyn Observer,
 ) -> Result<Prepared> {
     opts.check()?;
     if set.runs.is_empty() {
@@ -168,7 +169,10 @@ pub fn prepare(
     }
     let setup = &set.gear;
     let hint = setup.beta_noise_deg.map(|d| d.to_radians());
-    progress("cleaning runs (outlier rejection, noise, velocity)");
+    stage(
+        progress,
+        "cleaning runs (outlier rejection, noise, velocity)",
+    );
     let mut runs: Vec<CleanRun> = set.runs.iter().map(|r| clean(r, hint)).collect();
     if hint.is_none() {
         let mut s: Vec<f64> = runs.iter().map(|r| r.sigma_beta).collect();
@@ -182,10 +186,10 @@ pub fn prepare(
     let mut ringdowns = Vec::new();
     if opts.ringdown_fits {
         let rd: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].ringdown).collect();
-        progress(&format!(
-            "ring-down fits of {} runs (in parallel)",
-            rd.len()
-        ));
+        stage(
+            progress,
+            &format!("ring-down fits of {} runs (in parallel)", rd.len()),
+        );
         // independent fits, collected in file order
         let fits = par_map(rd.len(), |k| {
             let i = rd[k];
@@ -235,14 +239,14 @@ pub fn fit_base(
     set: &RecordingSet,
     opts: &DiagnoseOptions,
     folds: &Folds,
-    progress: &dyn Fn(&str),
+    progress: &dyn Observer,
 ) -> Result<BaseModel> {
     let setup = &set.gear;
     let geo0 = Geometry {
         theta: setup.theta_deg.to_radians(),
         phi: setup.phi_deg.to_radians(),
     };
-    progress("equation-error rows (weak form), base fit");
+    stage(progress, "equation-error rows (weak form), base fit");
     // every catalog and dictionary term (base terms first): the mismatch tests use them
     let mut terms: Vec<Term> = BASE_TERMS.to_vec();
     for t in super::catalog::catalog()
@@ -268,7 +272,10 @@ pub fn fit_base(
     let mut wins = Vec::new();
     let mut state = None;
     if opts.simulation_refit {
-        progress("base model refitted by simulation on the judging windows");
+        stage(
+            progress,
+            "base model refitted by simulation on the judging windows",
+        );
         let model = SimModel {
             runs: &prep.runs,
             geo,
@@ -286,7 +293,7 @@ pub fn fit_base(
             ..opts.shooting
         };
         if let Some(f) = refit(&model, &weak.coef, &wins, &converged) {
-            progress("base model: held-out predictions of the folds");
+            stage(progress, "base model: held-out predictions of the folds");
             let held = super::judge::heldout(&model, &f, &wins, folds);
             state = Some(ModelState {
                 terms: BASE_TERMS.to_vec(),
@@ -310,12 +317,15 @@ pub fn fit_base(
 pub fn diagnose(
     set: &RecordingSet,
     opts: &DiagnoseOptions,
-    progress: &dyn Fn(&str),
+    progress: &dyn Observer,
 ) -> Result<Diagnosis> {
     let prep = prepare(set, opts, progress)?;
     let folds = Folds::new(&prep.runs, opts.folds);
     let base = fit_base(&prep, set, opts, &folds, progress)?;
-    progress("locating the mismatch (fingerprints, symmetry, consistency)");
+    stage(
+        progress,
+        "locating the mismatch (fingerprints, symmetry, consistency)",
+    );
     let (mut mismatch, chi_run) = locate(
         &base.design,
         &base.weak,
@@ -354,7 +364,7 @@ pub fn diagnose(
         };
         let (t, fin) = select(&sctx, b.clone(), progress);
         tried = t;
-        progress("final model refitted to convergence");
+        stage(progress, "final model refitted to convergence");
         let fin = super::select::polish(&sctx, &fin);
         let mut before = b;
         for t in tried.iter().filter(|t| t.accepted) {
@@ -364,7 +374,10 @@ pub fn diagnose(
             }
             before = t.state.as_ref().expect("accepted state");
         }
-        progress("static friction (stick phases), judged on held-out runs");
+        stage(
+            progress,
+            "static friction (stick phases), judged on held-out runs",
+        );
         let stribeck_found = findings.iter().any(|f| f.effect == "static_friction");
         let judged = if stribeck_found {
             None
@@ -497,7 +510,7 @@ fn report(
     (mismatch, chi_run): (Vec<Mismatch>, Vec<f64>),
     findings: Vec<Finding>,
     tried: &[Tried],
-    progress: &dyn Fn(&str),
+    progress: &dyn Observer,
 ) -> Result<Diagnosis> {
     let runs = &prep.runs;
     let nr = runs.len();
@@ -539,7 +552,10 @@ fn report(
     params.insert("eq_chi2_per_dof".to_string(), w.chi2_dof);
     params.insert("n_rows".to_string(), w.n as f64);
     params.insert("n_eff".to_string(), w.n_eff);
-    progress("short-horizon predictions of every run (base and final model)");
+    stage(
+        progress,
+        "short-horizon predictions of every run (base and final model)",
+    );
     let base_model = SimModel {
         runs,
         geo: base.geo,

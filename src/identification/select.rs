@@ -11,6 +11,7 @@ use super::propose::{propose, Candidate, ProposeCtx};
 use super::regression::Term;
 use super::shooting::{par_map, refit, ShootingOptions, SimFit, SimModel, Win, CONVERGED_PATIENCE};
 use super::spec::{fix_shapes, free_shapes};
+use crate::progress::{stage, Observer};
 
 /// A model with its refit by simulation and its held-out errors.
 #[derive(Debug, Clone, PartialEq)]
@@ -291,7 +292,7 @@ fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Compari
 pub fn select(
     ctx: &SelectCtx,
     base: ModelState,
-    progress: &dyn Fn(&str),
+    progress: &dyn Observer,
 ) -> (Vec<Tried>, ModelState) {
     let mut cur = base;
     let mut tried: Vec<Tried> = Vec::new();
@@ -316,22 +317,27 @@ pub fn select(
             (scr, st)
         });
         for (c, (scr, st)) in cands.into_iter().zip(judged) {
-            progress(&format!(
-                "round {round}: judged {} ({}) by simulation on held-out runs",
-                c.effect.id,
-                c.terms
-                    .iter()
-                    .map(|t| t.name())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
+            stage(
+                progress,
+                &format!(
+                    "round {round}: judged {} ({}) by simulation on held-out runs",
+                    c.effect.id,
+                    c.terms
+                        .iter()
+                        .map(|t| t.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            );
             let cmp = st
                 .as_ref()
                 .map(|s| compare(&cur.held, &s.held, ctx.wins, ctx.runs));
             let added_z = st
                 .as_ref()
                 .map(|s| added_parameters_z(&s.fit, &added(&cur, s)));
-            progress(&format!(
+            stage(
+                progress,
+                &format!(
                 "  screening z = {} (gain {}), held-out z = {} (threshold {z_crit:.2}), gain = {}, \
                  added parameters' Wald z = {}; windows it could not simulate: {}",
                 scr.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
@@ -342,7 +348,8 @@ pub fn select(
                 cmp.or(scr)
                     .map(|c| c.failed_after.to_string())
                     .unwrap_or("–".into()),
-            ));
+            ),
+            );
             tried.push(Tried {
                 round,
                 candidate: c,
