@@ -155,6 +155,16 @@ pub enum Error {
         /// Why it stopped.
         reason: String,
     },
+    /// The integrator used up its step budget (`FlowOptions::max_steps`, accepted and rejected
+    /// steps) before the end time: a motion that needs far more steps than expected (a run-away
+    /// trial model, chattering).
+    #[error("integration stopped at t = {t}: more than {max_steps} steps")]
+    StepBudget {
+        /// Time reached.
+        t: f64,
+        /// The budget.
+        max_steps: usize,
+    },
     /// A Newton iteration did not converge.
     #[error(
         "Newton iteration failed after {iterations} iterations (residual {residual:e}): {reason}"

@@ -4,7 +4,7 @@
 
 use approx::assert_relative_eq;
 use gearbif::integrator::{
-    EventDriven, EventKind, FixedStep, FlowMethod, FlowOptions, Mode, Sensitivity,
+    EventDriven, EventDriven853, EventKind, FixedStep, FlowMethod, FlowOptions, Mode, Sensitivity,
 };
 use gearbif::maps::{multipliers, poincare_map, Section};
 use gearbif::model::{
@@ -438,6 +438,17 @@ fn bad_input_gives_errors_not_panics() {
         ),
         Err(Error::InvalidOption { ref option, .. }) if option == "iterations"
     ));
+    // a step budget too small for ten drive periods: the typed budget error, for both methods
+    let tight = FlowOptions {
+        max_steps: 5,
+        ..FlowOptions::default()
+    };
+    for m in [&EventDriven as &dyn FlowMethod<Gear>, &EventDriven853] {
+        assert!(matches!(
+            m.flow(&gear, 0.0, [0.5, 2.0], 10.0 / 2.7, &tight),
+            Err(Error::StepBudget { max_steps: 5, t }) if t > 0.0 && t < 10.0 / 2.7
+        ));
+    }
 }
 
 /// Bad options of the analyses, sweeps and curves give their specific error variant.

@@ -97,7 +97,7 @@ pub fn to_py(e: Error) -> PyErr {
         Error::Stopped { .. } => GearbifError::new_err(msg),
         Error::NoParameterColumn { .. } => UnsupportedError::new_err(msg),
         Error::NoPeriodDetected { .. } => NoPeriodError::new_err(msg),
-        Error::Integration { .. } => IntegrationError::new_err(msg),
+        Error::Integration { .. } | Error::StepBudget { .. } => IntegrationError::new_err(msg),
         Error::NewtonFailed { .. } => NewtonError::new_err(msg),
         Error::SingularMatrix { .. }
         | Error::DegenerateDirection { .. }

@@ -134,8 +134,7 @@ pub fn simulate(
     let f = match EventDriven853.flow(sys, t0, x0, t1, &opts) {
         Ok(f) => f,
         Err(e) => {
-            if matches!(&e, crate::error::Error::Integration { reason, .. } if reason.starts_with("more than"))
-            {
+            if matches!(e, crate::error::Error::StepBudget { .. }) {
                 OVER_BUDGET.fetch_add(1, Ordering::Relaxed);
                 STEPS.fetch_add(WINDOW_MAX_STEPS as u64, Ordering::Relaxed);
             }

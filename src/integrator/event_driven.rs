@@ -341,9 +341,9 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
 
         while t < t1 {
             if self.stats.steps + self.stats.rejected > self.opts.max_steps {
-                return Err(Error::Integration {
+                return Err(Error::StepBudget {
                     t,
-                    reason: format!("more than {} steps", self.opts.max_steps),
+                    max_steps: self.opts.max_steps,
                 });
             }
             if mode == Mode::Stick {

@@ -250,9 +250,9 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for Regularised {
                 solver.set_stop_time(t1).map_err(|e| dsol_err(t0, e))?;
                 loop {
                     if stats.steps + stats.rejected > opts.max_steps {
-                        return Err(Error::Integration {
+                        return Err(Error::StepBudget {
                             t: solver.state().t,
-                            reason: format!("more than {} steps", opts.max_steps),
+                            max_steps: opts.max_steps,
                         });
                     }
                     if solver.state().h > hmax {
