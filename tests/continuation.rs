@@ -276,6 +276,114 @@ fn theta25_switch_to_asymmetric_branch_and_find_its_flip() {
     assert!(r1[0].hypot(r1[1]) > 1e-4);
 }
 
+/// The asymmetric P_T branch of `theta25_switch_to_asymmetric_branch_and_find_its_flip` (switched
+/// from the symmetric branch continued by `method`) continued by `method2`.
+fn theta25_asymmetric_branch<M, M2>(method: M, method2: M2) -> Branch
+where
+    M: gearbif::integrator::FlowMethod<Gear> + Clone,
+    M2: gearbif::integrator::FlowMethod<Gear>,
+{
+    let opts = ContinuationOptions {
+        ds: 0.02,
+        ds_max: 0.05,
+        param_min: 1.5,
+        param_max: 3.0,
+        shooting: ShootingOptions {
+            tol: 1e-11,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let gear = Gear::paper(25.0, 1.5).unwrap();
+    let b = Continuation::with_method(
+        method.clone(),
+        gear,
+        GearParam::F,
+        OrbitSpec::symmetric(1),
+        [2.98, 0.6],
+        opts,
+    )
+    .unwrap()
+    .run(None)
+    .unwrap();
+    let sb = b
+        .specials_of(SpecialKind::SymmetryBreaking)
+        .find(|s| s.param > 2.4)
+        .unwrap()
+        .clone();
+    let sw = switch_branch_with(&method, &b, &sb, -1e-3, &ShootingOptions::default()).unwrap();
+    let opts = ContinuationOptions {
+        ds: -0.005,
+        ds_max: 0.02,
+        param_min: 1.8,
+        param_max: 3.0,
+        max_steps: 400,
+        ..Default::default()
+    };
+    Continuation::with_method(
+        method2,
+        sw.system,
+        GearParam::F,
+        sw.orbit.spec,
+        sw.orbit.x,
+        opts,
+    )
+    .unwrap()
+    .run(None)
+    .unwrap()
+}
+
+/// The checks of `theta25_switch_to_asymmetric_branch_and_find_its_flip` on that branch.
+fn check_theta25_asymmetric_branch(a: &Branch, label: &str) {
+    for s in &a.specials {
+        eprintln!("{label}: {:?} at {} ± {:e}", s.kind, s.param, s.precision);
+    }
+    assert_eq!(a.stop, StopReason::ParameterBound(1.8), "{:?}", a.stop);
+    let flips: Vec<_> = a.specials_of(SpecialKind::Flip).collect();
+    assert_eq!(flips.len(), 1, "{:?}", a.specials);
+    assert!((flips[0].param - 1.8549349).abs() < 1e-5);
+    assert!(flips[0].precision < 1e-7);
+    for s in a.specials_of(SpecialKind::Nonsmooth) {
+        assert!(s.precision < 1e-7, "{} ± {:e}", s.param, s.precision);
+    }
+}
+
+#[test]
+fn theta25_asymmetric_branch_with_the_dop853_finds_the_same_points() {
+    // The whole chain (symmetric branch, switch, asymmetric branch) with the DOP853 and with the
+    // DP5: the orbit first sticks at F ≈ 2.37033877 (ω = 0 touched where static friction holds,
+    // a corner of the branch). With a sign test at 16 points per step the DOP853 bracketed a
+    // nonsmooth point only to ≥ 1e-7; an exact search of the whole step found spurious re-sticks
+    // right after tangential releases (15 nonsmooth points, two bracketed to 5.7e-5 and 2.8e-3).
+    // With the exact search from 1/16 of a step that starts on Σ on, both methods find the same
+    // three nonsmooth points and flip within their brackets (measured, DOP853 / DP5:
+    // 2.3703387830 / 2.3703387657, 2.3641732853 / 2.3641732821, 2.3429963756 / 2.3429963706,
+    // flip 1.8549348707 / 1.8549348727).
+    use gearbif::integrator::{EventDriven, EventDriven853};
+    let a = theta25_asymmetric_branch(EventDriven853, EventDriven853);
+    check_theta25_asymmetric_branch(&a, "DOP853");
+    let b = theta25_asymmetric_branch(EventDriven, EventDriven);
+    let pa: Vec<_> = a
+        .specials
+        .iter()
+        .map(|s| (s.kind, s.param, s.precision))
+        .collect();
+    let pb: Vec<_> = b
+        .specials
+        .iter()
+        .map(|s| (s.kind, s.param, s.precision))
+        .collect();
+    assert_eq!(pa.len(), pb.len(), "{pa:?} vs {pb:?}");
+    for ((ka, xa, ea), (kb, xb, eb)) in pa.iter().zip(&pb) {
+        assert_eq!(ka, kb);
+        // both located to their brackets; the two integrators' orbits differ by their errors
+        assert!(
+            (xa - xb).abs() < ea + eb + 1e-7,
+            "{ka:?}: {xa} ± {ea:e} vs {xb} ± {eb:e}"
+        );
+    }
+}
+
 #[test]
 fn fc_boundary_in_theta_hits_analytic_endpoints() {
     let opts = ShootingOptions::default();

@@ -3,6 +3,7 @@
 //! closed-form continuous-motion steady state and the frequency where stops begin.
 
 use gearbif::continuation::{Continuation, ContinuationOptions, SpecialKind};
+use gearbif::integrator::{EventDriven, EventDriven853, FlowMethod};
 use gearbif::model::den_hartog::{
     den_hartog_coulomb_amplitude, den_hartog_coulomb_stop_ratio, non_stop_orbit,
     stop_boundary_frequency,
@@ -150,6 +151,13 @@ fn published_boundary_limits_and_closed_form_agree() {
 /// ξ = 0, ω₀ = 2π (so r = f in Hz), F = 1: the first nonsmooth point of the generic continuation,
 /// started on the non-stop orbit at f = 0.84 Hz and run down in f.
 fn continued_onset_of_stops(ratio: f64) -> (f64, f64) {
+    continued_onset_of_stops_with(EventDriven, ratio)
+}
+
+fn continued_onset_of_stops_with<M: FlowMethod<CoulombOscillator>>(
+    method: M,
+    ratio: f64,
+) -> (f64, f64) {
     let f_start = 0.84;
     let osc = CoulombOscillator::new(TAU, 0.0, ratio, 1.0, f_start).unwrap();
     let x0 = non_stop_orbit(&osc).unwrap().state(0.0);
@@ -160,10 +168,17 @@ fn continued_onset_of_stops(ratio: f64) -> (f64, f64) {
         param_max: 0.9,
         ..Default::default()
     };
-    let b = Continuation::new(osc, CoulombParam::F, OrbitSpec::symmetric(0), x0, opts)
-        .unwrap()
-        .run(None)
-        .unwrap();
+    let b = Continuation::with_method(
+        method,
+        osc,
+        CoulombParam::F,
+        OrbitSpec::symmetric(0),
+        x0,
+        opts,
+    )
+    .unwrap()
+    .run(None)
+    .unwrap();
     let onset = b
         .specials_of(SpecialKind::Nonsmooth)
         .next()
@@ -211,10 +226,27 @@ fn below_the_published_boundary_stops_begin_inside_the_half_period() {
 }
 
 #[test]
+fn dop853_continuation_finds_the_interior_onset_as_exactly() {
+    // the DOP853's steps are 3–7 times longer than the DP5's: with a sign test at 16 points per
+    // step it missed the shallow first dip of the velocity through 0 and put the onset at
+    // μ/F = 0.2 at 0.4283459102 ± 1.3e-8, 6.7e-8 below the closed form; with the exact search of
+    // each step (Bernstein form of the continuous extension) it finds it within the bracket
+    for &(ratio, lo, hi) in &[(0.2, 0.42, 0.44), (0.3, 0.47, 0.5)] {
+        let (f, prec) = continued_onset_of_stops_with(EventDriven853, ratio);
+        let vmin = |f: f64| {
+            let osc = CoulombOscillator::new(TAU, 0.0, ratio, 1.0, f).unwrap();
+            non_stop_orbit(&osc).unwrap().interior_velocity_min().1
+        };
+        let graze = bisect(vmin, lo, hi, 1e-13);
+        eprintln!("μ/F = {ratio}: DOP853 continuation {f} ± {prec:e}, interior grazing {graze}");
+        assert!((f - graze).abs() < prec + 1e-9, "{f} vs {graze}");
+    }
+}
+
+#[test]
 fn generic_sweep_classifies_den_hartog_orbits() {
     // the sweep and the classification of the gear, run on the Coulomb oscillator through its lens
     use gearbif::analysis::{ClassifyOptions, Dynamics};
-    use gearbif::integrator::EventDriven;
     use gearbif::progress::Silent;
     use gearbif::sweep::{sweep_grid, Protocol};
     let opts = ClassifyOptions {

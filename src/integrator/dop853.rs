@@ -6,7 +6,7 @@
 // the coefficients are kept digit for digit as published (30 digits; rounded to f64 on parsing)
 #![allow(clippy::excessive_precision)]
 
-use super::tableau::{row, ErrorEstimate, Pair, Tableau, SMAX};
+use super::tableau::{row, ErrorEstimate, Pair, Tableau, Touch, SMAX};
 use super::{Flow, FlowMethod, FlowOptions};
 use crate::error::Result;
 use crate::model::DrivenOscillator;
@@ -303,13 +303,13 @@ pub(super) const DOP853: Tableau = Tableau {
     fac_max: 1.0 / 0.333,
 };
 
-/// DOP853 with 16 interior probes per step for a sign change of ω (more than DP5's 8: the steps
-/// are longer).
+/// DOP853 with the exact search of each step for a touch of ω = 0 (its steps are 3–7 times longer
+/// than DP5's, so a fixed number of probes per step misses shallow dips: docs/performance.md).
 pub(super) struct Dop853;
 
 impl Pair for Dop853 {
     const TAB: Tableau = DOP853;
-    const PROBES: usize = 16;
+    const TOUCH: Touch = Touch::Exact;
 }
 
 /// The exact event-driven Filippov integrator with adaptive Dormand–Prince 8(5,3): the same events,

@@ -2,7 +2,7 @@
 //! continuous extension of order 4 (as in Hairer's DOPRI5); the event location, stick phases and
 //! saltation matrices are those of `event_driven.rs`.
 
-use super::tableau::{row, ErrorEstimate, Pair, Tableau, SMAX};
+use super::tableau::{row, ErrorEstimate, Pair, Tableau, Touch, SMAX};
 use super::{FlowMethod, FlowOptions};
 use crate::error::Result;
 use crate::integrator::Flow;
@@ -92,7 +92,7 @@ pub(super) struct Dp5;
 
 impl Pair for Dp5 {
     const TAB: Tableau = DOPRI5;
-    const PROBES: usize = 8;
+    const TOUCH: Touch = Touch::Probes(8);
 }
 
 /// The exact event-driven Filippov integrator with adaptive Dormand–Prince 5(4).

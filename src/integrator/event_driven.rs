@@ -10,7 +10,8 @@
 //! solved directly (the release time is a root of |a(t, β)| − r_s, no integration while stuck).
 
 use super::augmented::{augmented_rhs_law, param_col, z_beta, z_omega, Layout, NMAX};
-use super::tableau::{nested, ErrorEstimate, Pair, Tableau, DMAX, SMAX};
+use super::bernstein;
+use super::tableau::{nested, ErrorEstimate, Pair, Tableau, Touch, DMAX, SMAX};
 use super::{
     check_interval, Event, EventKind, Flow, FlowOptions, Mode, Sample, Sensitivity, Stats,
 };
@@ -21,9 +22,9 @@ use crate::numerics::Illinois;
 /// Largest number of coefficients r of the continuous extension.
 const RMAX: usize = 4 + DMAX;
 
-/// Integrates `sys` from (t₀, x₀) to t₁ with the pair `P`, checking [`Pair::PROBES`] interior
-/// points of the continuous extension per step for a sign change of ω (catches short slips that
-/// start and end inside one step).
+/// Integrates `sys` from (t₀, x₀) to t₁ with the pair `P`, searching the continuous extension of
+/// each step that may reach Σ for the first point with s·ω ≤ 0 as [`Pair::TOUCH`] says (probes at
+/// fixed points, or exactly: catches short slips that start and end inside one step).
 ///
 /// The solver is compiled for each augmented dimension separately (2: the state alone, 6: with
 /// the 2×2 state Jacobian, [`NMAX`]: with parameter columns), so the stage combinations of the
@@ -441,7 +442,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             let dense_state = |i: usize, th: f64| -> f64 { nested(&state_coeffs[i][..m], th) };
 
             let root = if near_sigma {
-                self.find_crossing(s, &y, &yn, &dense_state)
+                self.find_crossing(s, &y, &yn, &state_coeffs[1][..m], &dense_state)
             } else {
                 None
             };
@@ -548,28 +549,40 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         }
     }
 
-    /// The first θ ∈ (0, 1] of the step with s·ω(θ) ≤ 0 on the continuous extension: sign test at
-    /// the probes, then Illinois regula falsi on the bracket.
+    /// The first θ ∈ (0, 1] of the step with s·ω(θ) ≤ 0 on the continuous extension (nested
+    /// coefficients `coeffs` of ω), bracketed as [`Pair::TOUCH`] says: the first probe with
+    /// s·ω ≤ 0, or exactly from the Bernstein form of s·ω (`bernstein.rs`: convex hull and
+    /// Descartes' rule, de Casteljau splitting), which also finds a touch of Σ between any two
+    /// points of the step; then Illinois regula falsi on the bracket.
     fn find_crossing<F: Fn(usize, f64) -> f64>(
         &self,
         s: f64,
         y: &[f64; N],
         yn: &[f64; N],
+        coeffs: &[f64],
         dense: &F,
     ) -> Option<f64> {
         let e = |th: f64| -> f64 { s * dense(1, th) };
-        let probes = P::PROBES;
-        let mut root: Option<(f64, f64)> = None;
-        let mut th_prev = 0.0;
-        for j in 1..=probes {
-            let th = j as f64 / probes as f64;
-            let ev = if j == probes { s * yn[1] } else { e(th) };
-            if ev <= 0.0 {
-                root = Some((th_prev, th));
-                break;
+        let root = if let Touch::Probes(probes) = P::TOUCH {
+            let mut root: Option<(f64, f64)> = None;
+            let mut th_prev = 0.0;
+            for j in 1..=probes {
+                let th = j as f64 / probes as f64;
+                let ev = if j == probes { s * yn[1] } else { e(th) };
+                if ev <= 0.0 {
+                    root = Some((th_prev, th));
+                    break;
+                }
+                th_prev = th;
             }
-            th_prev = th;
-        }
+            root
+        } else {
+            let (mut b, d) = bernstein::from_nested(coeffs, s);
+            // the end coefficients are the end values: the same numbers as the state's
+            b[0] = s * y[1];
+            b[d] = s * yn[1];
+            bernstein::first_zero(&b, d)
+        };
         let (lo, hi) = root?;
         // bracket: e(lo) > 0 (or lo = 0, the start), e(hi) ≤ 0; refined by Illinois regula falsi
         let mut flo = if lo == 0.0 { s * y[1] } else { e(lo) };

@@ -16,6 +16,7 @@
 //!   diffsol; an independent cross-check.
 
 mod augmented;
+mod bernstein;
 mod dop853;
 mod dopri5;
 mod event_driven;
@@ -33,9 +34,10 @@ pub use dopri5::EventDriven;
 /// Dormand–Prince 8(5,3). It is faster than the DP5 at every tolerance of the work-precision table
 /// in docs/performance.md (P_T with the state Jacobian at tol 1e-10: 18.9 µs against 46.7 µs, errors
 /// 4.9e-11 against 9.6e-11). Single shooting (`orbits::shoot`, …) and one-parameter continuation
-/// (`Continuation::new`, `switch_branch`, `diagram`) keep [`EventDriven`]: there the onset of
-/// sticking at a grazing is located to its stated bracket with the DP5 but not with the DOP853
-/// (tests/den_hartog.rs, docs/performance.md). The `_with` variants take any [`FlowMethod`].
+/// (`Continuation::new`, `switch_branch`, `diagram`) keep [`EventDriven`]: with the DOP853 there,
+/// the event-edge curve of tests/nonsmooth_curves.rs finds no arrival to track from the located
+/// nonsmooth point (docs/performance.md, "Which method is the default where"). The `_with`
+/// variants take any [`FlowMethod`].
 pub type DefaultMethod = EventDriven853;
 
 /// The value of [`DefaultMethod`].

@@ -76,9 +76,19 @@ pub(super) struct Tableau {
 pub(super) trait Pair: 'static {
     /// The coefficients.
     const TAB: Tableau;
-    /// Interior points per step at which the continuous extension is checked for a sign change
-    /// of ω.
-    const PROBES: usize;
+    /// How a step's continuous extension is searched for the first point with s·ω ≤ 0.
+    const TOUCH: Touch;
+}
+
+/// The search of a step's continuous extension for the first point with s·ω ≤ 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Touch {
+    /// Sign test at this many equally spaced points of the step (the last one its end): a dip of
+    /// ω through 0 that starts and ends between two points is not seen.
+    Probes(usize),
+    /// Exact: from the Bernstein form of the continuous extension (`bernstein.rs`), whatever
+    /// the step length.
+    Exact,
 }
 
 impl Tableau {
