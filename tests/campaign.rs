@@ -13,6 +13,22 @@ use gearbif::model::Gear;
 use std::f64::consts::TAU;
 use std::sync::OnceLock;
 
+/// The first two stages of the diagnosis of `set` (cleaning and ring-downs, the base model with
+/// its judging windows, 4 folds), for the tests that refit a chosen model on those windows.
+fn prepared_base(
+    set: &gearbif::io::recordings::RecordingSet,
+    opts: &gearbif::identification::diagnose::DiagnoseOptions,
+) -> (
+    gearbif::identification::diagnose::Prepared,
+    gearbif::identification::diagnose::BaseModel,
+) {
+    use gearbif::identification::diagnose::{fit_base, prepare};
+    let prep = prepare(set, opts, &gearbif::progress::Silent).unwrap();
+    let folds = gearbif::identification::judge::Folds::new(&prep.runs, 4);
+    let base = fit_base(&prep, set, opts, &folds, &gearbif::progress::Silent).unwrap();
+    (prep, base)
+}
+
 /// Camera noise of the documented sets, rad (0.5°).
 const CAMERA_NOISE: f64 = 0.5 * std::f64::consts::PI / 180.0;
 
@@ -232,8 +248,7 @@ fn refit_sizes_are_unbiased_at_low_noise() {
     use gearbif::campaign::cases::draw_lab;
     use gearbif::campaign::generator::{generate, Measurement};
     use gearbif::campaign::rng::Rng;
-    use gearbif::identification::diagnose::{fit_base, prepare, DiagnoseOptions};
-    use gearbif::identification::judge::Folds;
+    use gearbif::identification::diagnose::DiagnoseOptions;
     use gearbif::identification::regression::{fit, Term, BASE_TERMS};
     use gearbif::identification::shooting::{refit, ShootingOptions, SimModel};
     let mut rng = Rng::new(5, 77);
@@ -262,15 +277,7 @@ fn refit_sizes_are_unbiased_at_low_noise() {
     )
     .unwrap();
     let opts = DiagnoseOptions::default();
-    let prep = prepare(&set, &opts, &gearbif::progress::Silent).unwrap();
-    let base = fit_base(
-        &prep,
-        &set,
-        &opts,
-        &Folds::new(&prep.runs, 4),
-        &gearbif::progress::Silent,
-    )
-    .unwrap();
+    let (prep, base) = prepared_base(&set, &opts);
     let extra = [Term::SinB, Term::CosB, Term::Sin(0, 2), Term::Cos(0, 2)];
     let mut terms = BASE_TERMS.to_vec();
     terms.extend(extra);
@@ -510,8 +517,7 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
     use gearbif::campaign::cases::draw_lab;
     use gearbif::campaign::generator::{generate, Measurement};
     use gearbif::campaign::rng::Rng;
-    use gearbif::identification::diagnose::{fit_base, prepare, DiagnoseOptions};
-    use gearbif::identification::judge::Folds;
+    use gearbif::identification::diagnose::DiagnoseOptions;
     use gearbif::identification::model::Shape;
     use gearbif::identification::regression::{Term, BASE_TERMS};
     use gearbif::identification::select::refit_to_convergence;
@@ -537,15 +543,7 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
         )
         .unwrap();
         let opts = DiagnoseOptions::default();
-        let prep = prepare(&set, &opts, &gearbif::progress::Silent).unwrap();
-        let base = fit_base(
-            &prep,
-            &set,
-            &opts,
-            &Folds::new(&prep.runs, 4),
-            &gearbif::progress::Silent,
-        )
-        .unwrap();
+        let (prep, base) = prepared_base(&set, &opts);
         let st = base.state.as_ref().unwrap();
         let mut terms = BASE_TERMS.to_vec();
         terms.extend([
