@@ -178,21 +178,35 @@ pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
     }
     let (terms, theta0) = free_shapes(&st.terms, &st.fit.theta);
     let freed = terms != st.terms;
+    refit_state(ctx, st, terms, &theta0, true, !freed)
+}
+
+/// `st` with `terms` refitted from `theta0` to convergence ([`refit_to_convergence`] at
+/// [`CONVERGED_PATIENCE`]; windows re-selected at the solution when `reselect`), its held-out
+/// errors recomputed when `new_heldout` (else kept); `st` itself when the refit fails.
+fn refit_state(
+    ctx: &SelectCtx,
+    st: &ModelState,
+    terms: Vec<Term>,
+    theta0: &[f64],
+    reselect: bool,
+    new_heldout: bool,
+) -> ModelState {
     let model = SimModel {
         terms: terms.clone(),
         ..st.model(ctx.runs, ctx.geo, ctx.tol)
     };
     let opts = ShootingOptions {
         patience: CONVERGED_PATIENCE,
-        reselect: true,
+        reselect,
         ..*ctx.shooting
     };
-    match refit_to_convergence(&model, &theta0, ctx.wins, &opts) {
+    match refit_to_convergence(&model, theta0, ctx.wins, &opts) {
         Some(fit) => {
-            let held = if freed {
-                st.held.clone()
-            } else {
+            let held = if new_heldout {
                 heldout(&model, &fit, ctx.wins, ctx.folds)
+            } else {
+                st.held.clone()
             };
             ModelState {
                 terms,
@@ -217,26 +231,11 @@ fn added(cur: &ModelState, st: &ModelState) -> Vec<usize> {
     idx
 }
 
-/// The accepted model of a round refitted to convergence ([`CONVERGED_PATIENCE`]; shapes held,
-/// windows not re-selected) with its held-out errors, so that the next round's candidates are
-/// judged against a model at its optimum. The judged fit when the refit fails.
+/// The accepted model of a round refitted to convergence (shapes held, windows not re-selected)
+/// with its held-out errors, so that the next round's candidates are judged against a model at
+/// its optimum ([`refit_state`]).
 fn converge(ctx: &SelectCtx, st: &ModelState) -> ModelState {
-    let model = st.model(ctx.runs, ctx.geo, ctx.tol);
-    let opts = ShootingOptions {
-        patience: CONVERGED_PATIENCE,
-        ..*ctx.shooting
-    };
-    match refit_to_convergence(&model, &st.fit.theta, ctx.wins, &opts) {
-        Some(fit) => {
-            let held = heldout(&model, &fit, ctx.wins, ctx.folds);
-            ModelState {
-                fit,
-                held,
-                ..st.clone()
-            }
-        }
-        None => st.clone(),
-    }
+    refit_state(ctx, st, st.terms.clone(), &st.fit.theta, false, true)
 }
 
 /// Most restarts of the final refit from its own solution ([`refit_to_convergence`]).
