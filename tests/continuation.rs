@@ -34,6 +34,14 @@ fn lock_branch_theta0() -> Branch {
 }
 
 fn sym_branch_theta25(tol: f64) -> Branch {
+    sym_branch_theta25_with(gearbif::integrator::EventDriven, tol)
+}
+
+/// The symmetric T-orbit branch at Θ = 25° from 1.5 Hz to 3 Hz, continued by `method`.
+fn sym_branch_theta25_with<M: gearbif::integrator::FlowMethod<Gear>>(
+    method: M,
+    tol: f64,
+) -> Branch {
     let gear = Gear::paper(25.0, 1.5).unwrap();
     let opts = ContinuationOptions {
         ds: 0.02,
@@ -46,7 +54,8 @@ fn sym_branch_theta25(tol: f64) -> Branch {
         },
         ..Default::default()
     };
-    Continuation::new(
+    Continuation::with_method(
+        method,
         gear,
         GearParam::F,
         OrbitSpec::symmetric(1),
@@ -283,29 +292,7 @@ where
     M: gearbif::integrator::FlowMethod<Gear> + Clone,
     M2: gearbif::integrator::FlowMethod<Gear>,
 {
-    let opts = ContinuationOptions {
-        ds: 0.02,
-        ds_max: 0.05,
-        param_min: 1.5,
-        param_max: 3.0,
-        shooting: ShootingOptions {
-            tol: 1e-11,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    let gear = Gear::paper(25.0, 1.5).unwrap();
-    let b = Continuation::with_method(
-        method.clone(),
-        gear,
-        GearParam::F,
-        OrbitSpec::symmetric(1),
-        [2.98, 0.6],
-        opts,
-    )
-    .unwrap()
-    .run(None)
-    .unwrap();
+    let b = sym_branch_theta25_with(method.clone(), 1e-11);
     let sb = b
         .specials_of(SpecialKind::SymmetryBreaking)
         .find(|s| s.param > 2.4)
