@@ -132,6 +132,34 @@ pub struct SynthTruth {
 
 /// Makes a synthetic recording set (not yet written; see [`crate::io::recordings::write_set`]).
 pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
+    check_options(opts)?;
+    let mut rng = Rng::new(opts.seed);
+    let setup = GearSetup::paper();
+    let mut truth = draw_truth(opts, &setup, &mut rng)?;
+    // parameter_drift: η of run k (file order: ring-downs, then driven runs)
+    if opts.effect == "parameter_drift" {
+        let n_runs = opts.ringdowns + opts.driven;
+        truth.eta_per_run = (0..n_runs)
+            .map(|k| coefficients_of_run(opts, &truth.coefficients, k).eta)
+            .collect();
+    }
+    let mut runs = ringdown_runs(opts, &truth, &mut rng)?;
+    runs.extend(driven_runs(opts, &mut truth, &mut rng)?);
+    let mut gear = setup;
+    gear.inertia = None;
+    gear.beta_noise_deg = None;
+    Ok((
+        RecordingSet {
+            dir: std::path::PathBuf::new(),
+            gear,
+            runs,
+        },
+        truth,
+    ))
+}
+
+/// Rejects unknown effects and out-of-range options.
+fn check_options(opts: &SynthOptions) -> Result<()> {
     if !SYNTH_EFFECTS.iter().any(|(e, _)| *e == opts.effect) {
         return Err(Error::unknown_name(
             "effect",
@@ -149,9 +177,20 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
             format!("{} (need >= 8)", opts.samples_per_turn),
         ));
     }
-    let mut rng = Rng::new(opts.seed);
-    let setup = GearSetup::paper();
-    // concealed truth: within the set-up's tolerances
+    if opts.effect == "drive_steps" && !(0.0..1.0).contains(&opts.size) {
+        return Err(Error::InvalidParameter {
+            name: "size",
+            value: opts.size,
+            reason: "the size of drive_steps is a probability per step, in [0, 1)",
+        });
+    }
+    Ok(())
+}
+
+/// The concealed truth: the set-up within its tolerances (shaft angle, inertia, ζ, η drawn from
+/// `rng` in this order) and the chosen effect at its size. The coupling with the input angle
+/// offset ε is −g sin(α+ε) cos β + gΔ cos(α+ε) sin β.
+fn draw_truth(opts: &SynthOptions, setup: &GearSetup, rng: &mut Rng) -> Result<SynthTruth> {
     let theta_true = (setup.theta_deg + 2.0 * (rng.uniform() - 0.5) * 3.0).to_radians();
     let phi_true = theta_true;
     let inertia_true = 6.45e-5 * (1.0 + 0.1 * (rng.uniform() - 0.5));
@@ -159,10 +198,6 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
     let delta = crate::model::gear::shaft_index(theta_true, phi_true);
     let zeta = 1.1 * (0.8 + 0.4 * rng.uniform());
     let eta = 23.1 * (0.8 + 0.4 * rng.uniform());
-    let geo = Geometry {
-        theta: theta_true,
-        phi: phi_true,
-    };
     let mut alpha_offset = 0.0;
     let mut latency = opts.latency_s;
     let mut extra = Coefficients::default();
@@ -179,61 +214,60 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
         "load_dependent_friction" => extra.eta_load = opts.size * eta,
         "sensor_latency" => latency += opts.size,
         "input_compliance" => extra.compliance = opts.size.to_radians() / g,
-        "drive_steps" if !(0.0..1.0).contains(&opts.size) => {
-            return Err(Error::InvalidParameter {
-                name: "size",
-                value: opts.size,
-                reason: "the size of drive_steps is a probability per step, in [0, 1)",
-            })
-        }
         "static_friction" => extra.eta_static_excess = opts.size * eta,
         _ => {}
     }
-    // coupling with the input angle offset: −g sin(α+ε) cos β + gΔ cos(α+ε) sin β
     let (se, ce) = alpha_offset.sin_cos();
-    let coef = Coefficients {
-        zeta,
-        eta,
-        c_sc: -g * ce,
-        c_cs: g * delta * ce,
-        c_cc: -g * se,
-        c_ss: -g * delta * se,
-        ..extra
-    };
-    let mut truth = SynthTruth {
-        coefficients: coef,
-        geometry: geo,
+    Ok(SynthTruth {
+        coefficients: Coefficients {
+            zeta,
+            eta,
+            c_sc: -g * ce,
+            c_cs: g * delta * ce,
+            c_cc: -g * se,
+            c_ss: -g * delta * se,
+            ..extra
+        },
+        geometry: Geometry {
+            theta: theta_true,
+            phi: phi_true,
+        },
         alpha_offset,
         latency,
         eta_per_run: vec![],
         lost_steps: vec![],
-    };
-    // parameter_drift: η of run k (file order: ring-downs, then driven runs)
-    let n_runs = opts.ringdowns + opts.driven;
-    let coef_of_run = |k: usize| -> Coefficients {
-        if opts.effect != "parameter_drift" {
-            return coef;
-        }
-        let s = if n_runs > 1 {
-            k as f64 / (n_runs - 1) as f64 - 0.5
-        } else {
-            0.0
-        };
-        Coefficients {
-            eta: coef.eta * (1.0 + opts.size * s),
-            ..coef
-        }
-    };
-    if opts.effect == "parameter_drift" {
-        truth.eta_per_run = (0..n_runs).map(|k| coef_of_run(k).eta).collect();
+    })
+}
+
+/// The coefficients of run `k` (file order: ring-downs, then driven runs): `coef` itself, or for
+/// `parameter_drift` η(1 + size·(k/(n − 1) − ½)).
+fn coefficients_of_run(opts: &SynthOptions, coef: &Coefficients, k: usize) -> Coefficients {
+    if opts.effect != "parameter_drift" {
+        return *coef;
     }
+    let n_runs = opts.ringdowns + opts.driven;
+    let s = if n_runs > 1 {
+        k as f64 / (n_runs - 1) as f64 - 0.5
+    } else {
+        0.0
+    };
+    Coefficients {
+        eta: coef.eta * (1.0 + opts.size * s),
+        ..*coef
+    }
+}
+
+/// The ring-downs: released at rest about a quarter turn from the coupling potential's minimum at
+/// evenly spread input angles α0, alternately on either side.
+fn ringdown_runs(opts: &SynthOptions, truth: &SynthTruth, rng: &mut Rng) -> Result<Vec<Run>> {
+    let coef = truth.coefficients;
     let noise = opts.noise_deg.to_radians();
     let mut runs = Vec::new();
     for k in 0..opts.ringdowns {
         let alpha0 = TAU * (k as f64 + 0.37) / opts.ringdowns as f64;
         let sys = AugmentedGear {
-            c: coef_of_run(k),
-            geo,
+            c: coefficients_of_run(opts, &coef, k),
+            geo: truth.geometry,
             alpha0,
             alpha_rate: 0.0,
         };
@@ -244,7 +278,7 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
         let beta_start = psi + side * (0.5 * PI - 0.1 + 0.2 * rng.uniform());
         let n = (opts.ringdown_s * opts.fps).floor() as usize;
         let times: Vec<f64> = (0..n).map(|i| i as f64 / opts.fps).collect();
-        let (t, beta) = simulate(&sys, [beta_start, 0.0], &times, latency)?;
+        let (t, beta) = simulate(&sys, [beta_start, 0.0], &times, truth.latency)?;
         let alpha = vec![alpha0; t.len()];
         runs.push(measure(
             RunKind::Ringdown { alpha0 },
@@ -254,9 +288,17 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
             beta,
             noise,
             opts,
-            &mut rng,
+            rng,
         ));
     }
+    Ok(runs)
+}
+
+/// The driven runs at frequencies evenly spread over `f_range` (rounded to 1 mHz), the output
+/// released at rest at a random angle; `drive_steps` records the steps each run lost in `truth`.
+fn driven_runs(opts: &SynthOptions, truth: &mut SynthTruth, rng: &mut Rng) -> Result<Vec<Run>> {
+    let noise = opts.noise_deg.to_radians();
+    let mut runs = Vec::new();
     for k in 0..opts.driven {
         let (f0, f1) = opts.f_range;
         let f = if opts.driven > 1 {
@@ -267,8 +309,8 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
         let f = (f * 1000.0).round() / 1000.0;
         // the coefficients carry the input angle offset: the drive itself starts at α = 0
         let sys = AugmentedGear {
-            c: coef_of_run(opts.ringdowns + k),
-            geo,
+            c: coefficients_of_run(opts, &truth.coefficients, opts.ringdowns + k),
+            geo: truth.geometry,
             alpha0: 0.0,
             alpha_rate: TAU * f,
         };
@@ -283,12 +325,12 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
                 &times,
                 TAU / opts.samples_per_turn as f64,
                 opts.size,
-                &mut rng,
+                rng,
             )?;
             truth.lost_steps.push(lost);
             (t, beta)
         } else {
-            simulate(&sys, [beta_start, 0.0], &times, latency)?
+            simulate(&sys, [beta_start, 0.0], &times, truth.latency)?
         };
         let alpha: Vec<f64> = t
             .iter()
@@ -302,20 +344,10 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
             beta,
             noise,
             opts,
-            &mut rng,
+            rng,
         ));
     }
-    let mut gear = setup;
-    gear.inertia = None;
-    gear.beta_noise_deg = None;
-    Ok((
-        RecordingSet {
-            dir: std::path::PathBuf::new(),
-            gear,
-            runs,
-        },
-        truth,
-    ))
+    Ok(runs)
 }
 
 /// Simulates from t = −latency so that β(t_k − latency) is available at every recorded time.
