@@ -2,13 +2,14 @@
 //! against a second, independent route.
 
 use gearbif::analysis::relock::{homoclinic_frequency, ramp_relock, saddle, slip_cycle};
+use gearbif::continuation::minaug::nearest_edge_arrival;
 use gearbif::continuation::palc2::{
     continue_event_edge_curve, continue_grazing_curve, locate_grazing, CurveOptions,
 };
 use gearbif::continuation::{Continuation, ContinuationOptions, SpecialPoint};
-use gearbif::integrator::EventDriven;
+use gearbif::integrator::{EventDriven, EventDriven853, FlowMethod, DEFAULT_METHOD};
 use gearbif::model::{Gear, GearParam};
-use gearbif::orbits::OrbitSpec;
+use gearbif::orbits::{shoot_with, OrbitSpec, ShootingOptions};
 
 /// The stick onset (a nonsmooth point with no events on one side) that a one-parameter
 /// continuation in f over [f0 − w, f0 + w] at Θ = `theta` locates.
@@ -23,7 +24,8 @@ fn onset_by_continuation(
 }
 
 /// The nonsmooth point of a one-parameter continuation in f over [f0 − w, f0 + w] at Θ = `theta`
-/// whose event signatures are in `sigs` (on one side if `!both`, on both sides if `both`).
+/// whose event signatures are in `sigs` (on one side if `!both`, on both sides if `both`), with
+/// the default integrator.
 fn nonsmooth_by_continuation(
     theta: f64,
     spec: OrbitSpec,
@@ -33,7 +35,20 @@ fn nonsmooth_by_continuation(
     sigs: &[(usize, usize)],
     both: bool,
 ) -> SpecialPoint {
-    let b = Continuation::new(
+    let place = (theta, spec, x, f0, w);
+    nonsmooth_by_continuation_with(DEFAULT_METHOD, place, sigs, both)
+}
+
+/// [`nonsmooth_by_continuation`] integrated by `method`; `place` = (Θ, spec, x, f0, w).
+fn nonsmooth_by_continuation_with<M: FlowMethod<Gear>>(
+    method: M,
+    place: (f64, OrbitSpec, [f64; 2], f64, f64),
+    sigs: &[(usize, usize)],
+    both: bool,
+) -> SpecialPoint {
+    let (theta, spec, x, f0, w) = place;
+    let b = Continuation::with_method(
+        method,
         Gear::paper(theta, f0 + w).unwrap(),
         GearParam::F,
         spec,
@@ -196,4 +211,74 @@ fn end_of_sticking_curve_point_agrees_with_a_continuation_in_f() {
 fn crossing_onset_curve_point_agrees_with_a_continuation_in_f() {
     // near 2.364 Hz the arrival before the stick phase starts to cross first
     event_edge_curve_agrees([(0, 1), (1, 1)]);
+}
+
+/// The crossing onset (0, 1) → (1, 1) on the asymmetric T orbit at Θ = 25° from both sides of the
+/// bracket a continuation in f locates, by the DP5 and by the DOP853. On the (1, 1) side the
+/// arrival from ω > 0 crosses with a = −η − ε and the orbit returns to Σ at once from ω < 0 with
+/// a ≈ −η + ε, a tangential arrival as near to |a| = η as the crossing; only the crossing (the
+/// stick entry on the (0, 1) side) exists on both sides, so the edge curve must track it from
+/// either side. Before the edge arrival was chosen by its side, the start on the (1, 1) side could
+/// pick the return and the curve's corrector then crossed the edge onto the side where the
+/// return does not exist ("no arrival on Σ to track"): with the DOP853 as the continuation's
+/// method in `crossing_onset_curve_point_agrees_with_a_continuation_in_f`.
+#[test]
+fn crossing_onset_edge_curve_starts_from_either_side_with_either_method() {
+    edge_curves_from_both_sides(EventDriven, "DP5");
+    edge_curves_from_both_sides(EventDriven853, "DOP853");
+}
+
+/// The crossing onset near 2.364 Hz located by a continuation in f with `method`, and the edge
+/// curve from both ends of its bracket.
+fn edge_curves_from_both_sides<M: FlowMethod<Gear> + Copy>(method: M, name: &str) {
+    let spec = OrbitSpec::stroboscopic(1, 1);
+    let place = (25.0, spec, [2.9748, 24.3248], 2.36, 0.025);
+    let sp = nonsmooth_by_continuation_with(method, place, &[(0, 1), (1, 1)], true);
+    let jump = sp.jump.clone().unwrap();
+    let sides = [
+        (jump.param_before, jump.events_before.signature()),
+        (jump.param_after, jump.events_after.signature()),
+    ];
+    for (param, sig) in sides {
+        edge_curve_from(&method, name, &sp, param, sig);
+    }
+}
+
+/// The orbit at `param` (one end of the bracket of `sp`, event signature `sig`), the edge arrival
+/// chosen there, and two steps of the event-edge curve from it, all integrated by `method`.
+fn edge_curve_from<M: FlowMethod<Gear>>(
+    method: &M,
+    name: &str,
+    sp: &SpecialPoint,
+    param: f64,
+    sig: (usize, usize),
+) {
+    let spec = OrbitSpec::stroboscopic(1, 1);
+    let g = Gear::paper(25.0, param).unwrap();
+    let sh = ShootingOptions::default();
+    let o = shoot_with(method, &g, &spec, sp.x, &sh).unwrap();
+    assert_eq!(o.events.signature(), sig, "{name}: orbit at {param}");
+    // the arrival from ω > 0 at its edge a = −η (σ = −1), on either side
+    let (sigma, side, t) = nearest_edge_arrival(method, &g, &spec, o.x, sh.tol).unwrap();
+    assert_eq!((sigma, side), (-1.0, 1.0), "{name}: {sig:?} side, t = {t}");
+    let opts = CurveOptions {
+        ds: 0.3,
+        max_steps: 2,
+        ..Default::default()
+    };
+    let (f, th) = (GearParam::F, GearParam::ThetaDeg);
+    let c = continue_event_edge_curve(method, &g, &spec, f, th, o.x, param, &opts).unwrap();
+    let (p0, p) = (&c.points[0], c.points.last().unwrap());
+    println!(
+        "{name}, from the {sig:?} side: continuation {:.10}, edge curve {:.12} Hz; 2 steps: \
+         Θ = {:.6}°, {:.12} Hz",
+        sp.param, p0.free, p.along, p.free
+    );
+    assert!((p0.free - sp.param).abs() < 1e-7, "{name}: {}", p0.free);
+    assert!(
+        c.points.len() == 3 && p.along > 25.1,
+        "{name}: {:?}",
+        c.stopped
+    );
+    assert!(p.test_value.abs() < 1e-8, "{name}: {p:?}");
 }

@@ -253,8 +253,17 @@ pub fn arrival_edge<S: Parametrised, M: FlowMethod<S>>(
     })
 }
 
-/// The arrival on Σ whose |a| is nearest to the static bound r_s: (σ = sgn a, the side it comes
-/// from, its time).
+/// The arrival on Σ nearest to the edge between sticking and crossing: (σ, the side s it comes
+/// from, its time), with σ = −s.
+///
+/// An arrival from side s (s·ω̇ = s·a − r ≤ 0) sticks while |a| ≤ r_s and crosses once
+/// s·a < −r_s, so the only edge it can reach is a = −s r_s, with the margin a + s r_s; the
+/// arrival with the smallest |a + s r_s| is chosen. Near such an edge, on its crossing side, the
+/// orbit may return to Σ from the other side −s at once with a ≈ −s r_s (where r = r_s, as in the
+/// gear, tangentially: −s·ω̇ = −s·a − r → 0). That return also has |a| ≈ r_s but is not an edge of
+/// this kind: it exists only on one side of the edge (it disappears with the crossing), so a curve
+/// that tracked it would correct the orbit across the edge onto a side where the tracked arrival
+/// does not exist.
 pub fn nearest_edge_arrival<S: Parametrised, M: FlowMethod<S>>(
     method: &M,
     sys: &S,
@@ -263,14 +272,15 @@ pub fn nearest_edge_arrival<S: Parametrised, M: FlowMethod<S>>(
     tol: f64,
 ) -> Result<(f64, f64, f64)> {
     let ev = arrivals(method, sys, spec, x, tol)?;
-    let gap = |e: &crate::integrator::Event| {
-        (sys.forces(e.t, e.beta, 0.0).a.abs() - sys.static_friction(e.t, e.beta)).abs()
+    let gap = |(e, side): &(crate::integrator::Event, f64)| {
+        (sys.forces(e.t, e.beta, 0.0).a + side * sys.static_friction(e.t, e.beta)).abs()
     };
     let (e, side) = ev
         .iter()
-        .min_by(|a, b| gap(&a.0).total_cmp(&gap(&b.0)))
+        .filter(|(_, side)| *side != 0.0)
+        .min_by(|a, b| gap(a).total_cmp(&gap(b)))
         .ok_or(Error::NoArrival)?;
-    Ok((sys.forces(e.t, e.beta, 0.0).a.signum(), *side, e.t))
+    Ok((-side, *side, e.t))
 }
 
 /// Unit vector along `v` (unchanged if it is zero or not finite).

@@ -514,8 +514,10 @@ pub fn locate_grazing<S: Parametrised, M: FlowMethod<OneSided<S>>>(
 ///
 /// with t_e the arrival from the same side tracked from point to point (the one nearest to the
 /// previous point's).
-/// The arrival and σ are chosen at the start as the arrival whose |a| is nearest to r_s (the
-/// nonsmooth point a one-parameter continuation located). Turning points and fold/flip points of
+/// The arrival and σ are chosen at the start (the nonsmooth point a one-parameter continuation
+/// located, on either side of the edge) as the arrival from a side s nearest to its edge
+/// a = −s r_s, so σ = −s ([`nearest_edge_arrival`]: not the tangential return to Σ that follows a
+/// crossing, which exists on one side of the edge only). Turning points and fold/flip points of
 /// the orbit on the curve are located as on the grazing curves.
 #[allow(clippy::too_many_arguments)]
 pub fn continue_event_edge_curve<S: Parametrised, M: FlowMethod<S>>(
