@@ -20,7 +20,7 @@ pub mod block_cyclic;
 pub mod multiple_shooting;
 
 use crate::error::{Error, Result};
-use crate::integrator::{EventDriven, EventKind, FlowMethod, FlowOptions, Sensitivity};
+use crate::integrator::{EventKind, FlowMethod, FlowOptions, Sensitivity, DEFAULT_METHOD};
 use crate::maps::{multipliers, poincare_map, MapImage, Section};
 use crate::model::DrivenOscillator;
 use crate::numerics::{newton, Linearisation, NewtonOptions};
@@ -287,7 +287,7 @@ impl PeriodicOrbit {
 }
 
 /// Evaluates the shooting residual F(x) = Pᵏ(x) − x − (s, 0) and the map image (with Jacobians),
-/// with the event-driven integrator.
+/// with the default integrator (the event-driven DOP853, [`DEFAULT_METHOD`]).
 pub fn residual<S: DrivenOscillator + ?Sized>(
     sys: &S,
     spec: &OrbitSpec,
@@ -295,7 +295,7 @@ pub fn residual<S: DrivenOscillator + ?Sized>(
     opts: &ShootingOptions,
     events: bool,
 ) -> Result<([f64; 2], MapImage)> {
-    residual_with(&EventDriven, sys, spec, x, opts, events)
+    residual_with(&DEFAULT_METHOD, sys, spec, x, opts, events)
 }
 
 /// [`residual`] with the flow computed by `method`.
@@ -344,7 +344,8 @@ fn check_state(x: [f64; 2]) -> Result<()> {
     crate::error::finite_state("initial state", &x)
 }
 
-/// Newton shooting for a periodic orbit from the guess `x0`, with the event-driven integrator.
+/// Newton shooting for a periodic orbit from the guess `x0`, with the default integrator (the
+/// event-driven DOP853, [`DEFAULT_METHOD`]).
 ///
 /// ```
 /// use gearbif::model::Gear;
@@ -362,7 +363,7 @@ pub fn shoot<S: DrivenOscillator + ?Sized>(
     x0: [f64; 2],
     opts: &ShootingOptions,
 ) -> Result<PeriodicOrbit> {
-    shoot_with(&EventDriven, sys, spec, x0, opts)
+    shoot_with(&DEFAULT_METHOD, sys, spec, x0, opts)
 }
 
 /// [`shoot`] with the flow computed by `method`: Newton ([`crate::numerics::newton`], with line
@@ -427,7 +428,7 @@ pub struct DetectedPeriod {
 
 /// Relaxes a simulation for `relax_periods` drive periods from `x0`, then detects its period k ≤
 /// `max_period` and winding on P_T (closing error below `closing_tol`), integrating at tolerance
-/// `tol` with the event-driven integrator.
+/// `tol` with the default integrator (the event-driven DOP853, [`DEFAULT_METHOD`]).
 pub fn detect_period<S: DrivenOscillator + ?Sized>(
     sys: &S,
     x0: [f64; 2],
@@ -437,7 +438,7 @@ pub fn detect_period<S: DrivenOscillator + ?Sized>(
     tol: f64,
 ) -> Result<DetectedPeriod> {
     detect_period_with(
-        &EventDriven,
+        &DEFAULT_METHOD,
         sys,
         x0,
         relax_periods,
@@ -493,7 +494,8 @@ where
 
 /// Finds a periodic orbit from a simulation: relax, detect period and winding, then shoot. A period-1
 /// orbit of a system with a half-period symmetry whose half-period map closes is returned as a
-/// symmetric orbit (on G) when `prefer_symmetric` is set. Event-driven integrator at `opts.tol`.
+/// symmetric orbit (on G) when `prefer_symmetric` is set. The default integrator (the event-driven
+/// DOP853, [`DEFAULT_METHOD`]) at `opts.tol`.
 pub fn orbit_from_simulation<S: DrivenOscillator + ?Sized>(
     sys: &S,
     x0: [f64; 2],
@@ -503,7 +505,7 @@ pub fn orbit_from_simulation<S: DrivenOscillator + ?Sized>(
     opts: &ShootingOptions,
 ) -> Result<PeriodicOrbit> {
     orbit_from_simulation_with(
-        &EventDriven,
+        &DEFAULT_METHOD,
         sys,
         x0,
         relax_periods,
@@ -565,7 +567,8 @@ pub struct SweepPoint {
 /// A quasi-static sweep, as in the paper: at each value the simulation continues from the last state
 /// and relaxes for `relax_periods` periods; then symmetry (on G) and closing (on P_T) are measured.
 /// `make` builds the system at each value. An independent check of the continuation: no Newton, no
-/// Jacobians. Event-driven integrator at tolerance `tol`.
+/// Jacobians. The default integrator (the event-driven DOP853, [`DEFAULT_METHOD`]) at tolerance
+/// `tol`.
 pub fn quasi_static_sweep<S, F>(
     make: F,
     values: &[f64],
@@ -577,7 +580,7 @@ where
     S: DrivenOscillator,
     F: Fn(f64) -> Result<S>,
 {
-    quasi_static_sweep_with(&EventDriven, make, values, x0, relax_periods, tol)
+    quasi_static_sweep_with(&DEFAULT_METHOD, make, values, x0, relax_periods, tol)
 }
 
 /// [`quasi_static_sweep`] with the flow computed by `method`.

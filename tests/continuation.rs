@@ -34,7 +34,7 @@ fn lock_branch_theta0() -> Branch {
 }
 
 fn sym_branch_theta25(tol: f64) -> Branch {
-    sym_branch_theta25_with(gearbif::integrator::EventDriven, tol)
+    sym_branch_theta25_with(gearbif::integrator::DEFAULT_METHOD, tol)
 }
 
 /// The symmetric T-orbit branch at Θ = 25° from 1.5 Hz to 3 Hz, continued by `method`.

@@ -3,7 +3,7 @@
 //! closed-form continuous-motion steady state and the frequency where stops begin.
 
 use gearbif::continuation::{Continuation, ContinuationOptions, SpecialKind};
-use gearbif::integrator::{EventDriven, EventDriven853, FlowMethod};
+use gearbif::integrator::{EventDriven, FlowMethod, DEFAULT_METHOD};
 use gearbif::model::den_hartog::{
     den_hartog_coulomb_amplitude, den_hartog_coulomb_stop_ratio, non_stop_orbit,
     stop_boundary_frequency,
@@ -149,9 +149,9 @@ fn published_boundary_limits_and_closed_form_agree() {
 }
 
 /// ξ = 0, ω₀ = 2π (so r = f in Hz), F = 1: the first nonsmooth point of the generic continuation,
-/// started on the non-stop orbit at f = 0.84 Hz and run down in f.
+/// started on the non-stop orbit at f = 0.84 Hz and run down in f, with the default integrator.
 fn continued_onset_of_stops(ratio: f64) -> (f64, f64) {
-    continued_onset_of_stops_with(EventDriven, ratio)
+    continued_onset_of_stops_with(DEFAULT_METHOD, ratio)
 }
 
 fn continued_onset_of_stops_with<M: FlowMethod<CoulombOscillator>>(
@@ -226,19 +226,21 @@ fn below_the_published_boundary_stops_begin_inside_the_half_period() {
 }
 
 #[test]
-fn dop853_continuation_finds_the_interior_onset_as_exactly() {
-    // the DOP853's steps are 3–7 times longer than the DP5's: with a sign test at 16 points per
-    // step it missed the shallow first dip of the velocity through 0 and put the onset at
-    // μ/F = 0.2 at 0.4283459102 ± 1.3e-8, 6.7e-8 below the closed form; with the exact search of
-    // each step (Bernstein form of the continuous extension) it finds it within the bracket
+fn dp5_continuation_finds_the_interior_onset_as_exactly() {
+    // the continuation's default is the DOP853 (`below_the_published_boundary_…` above), whose
+    // steps are 3–7 times longer than the DP5's: with a sign test at 16 points per step it missed
+    // the shallow first dip of the velocity through 0 and put the onset at μ/F = 0.2 at
+    // 0.4283459102 ± 1.3e-8, 6.7e-8 below the closed form; with the exact search of each step
+    // (Bernstein form of the continuous extension) it finds it within the bracket. The DP5 (8
+    // probes per step), the second method, finds it within its bracket as well
     for &(ratio, lo, hi) in &[(0.2, 0.42, 0.44), (0.3, 0.47, 0.5)] {
-        let (f, prec) = continued_onset_of_stops_with(EventDriven853, ratio);
+        let (f, prec) = continued_onset_of_stops_with(EventDriven, ratio);
         let vmin = |f: f64| {
             let osc = CoulombOscillator::new(TAU, 0.0, ratio, 1.0, f).unwrap();
             non_stop_orbit(&osc).unwrap().interior_velocity_min().1
         };
         let graze = bisect(vmin, lo, hi, 1e-13);
-        eprintln!("μ/F = {ratio}: DOP853 continuation {f} ± {prec:e}, interior grazing {graze}");
+        eprintln!("μ/F = {ratio}: DP5 continuation {f} ± {prec:e}, interior grazing {graze}");
         assert!((f - graze).abs() < prec + 1e-9, "{f} vs {graze}");
     }
 }

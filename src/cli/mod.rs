@@ -44,14 +44,14 @@ pub enum Command {
     /// Derived quantities of a gear: g, Δ, f_c, lock angles, cogging-free shaft angles.
     Info(info::Args),
     /// Pseudo-arclength continuation of a periodic orbit in one parameter, with special points
-    /// (event-driven DP5).
+    /// (event-driven DOP853; multiple shooting with the DP5).
     Continue(continue_::Args),
     /// Refine one special point (fold, flip, symmetry-breaking, Neimark–Sacker) by Newton
     /// (event-driven DOP853; --dp5 for the DP5).
     Locate(locate::Args),
     /// The whole bifurcation diagram over a parameter range, automatically: seeds from simulations
     /// and analytic branches, switching at every flip and symmetry-breaking point (event-driven
-    /// DP5).
+    /// DOP853; multiple shooting with the DP5).
     Diagram(diagram::Args),
     /// A two-parameter curve of special points, by default the lock-loss boundary f_c(Θ)
     /// (event-driven DOP853).
@@ -79,7 +79,7 @@ pub enum Command {
     /// (event-driven DOP853; --dp5, --rk4).
     Sweep(sweep::Args),
     /// The report of a gear: derived quantities, lock branch, classification map, operating advice
-    /// (sweeps with the event-driven DOP853, continuation with the DP5).
+    /// (sweeps and continuation with the event-driven DOP853).
     Report(report::Args),
     /// The paper's figures (fig5 … fig10), orbit diagram, Lyapunov exponent: SVG and PNG (fig7 …
     /// fig10 with the event-driven DOP853; fig5, fig6, orbit and lyapunov with the DP5).

@@ -12,7 +12,7 @@
 
 use super::Branch;
 use crate::error::Result;
-use crate::integrator::{EventDriven, FlowOptions};
+use crate::integrator::{FlowOptions, DEFAULT_METHOD};
 use crate::maps::{poincare_map, Section};
 use crate::model::{DrivenOscillator, Parametrised};
 use crate::orbits::{shoot, OrbitSpec, ShootingOptions};
@@ -54,7 +54,7 @@ impl OrbitImages {
         let mut y = x;
         let mut primitive = n;
         for j in 1..n {
-            y = poincare_map(&EventDriven, sys, section, y, 1, &o)?.x;
+            y = poincare_map(&DEFAULT_METHOD, sys, section, y, 1, &o)?.x;
             if primitive == n && section_distance(y, x, 1.0) < close_tol {
                 primitive = j;
             }

@@ -16,7 +16,7 @@ use super::branch::{Branch, BranchPoint, StopReason};
 use super::minaug::linearise_map;
 use super::options::ContinuationOptions;
 use crate::error::{Error, Result};
-use crate::integrator::{EventDriven, FlowMethod};
+use crate::integrator::{DefaultMethod, FlowMethod, DEFAULT_METHOD};
 use crate::model::{Parameter, Parametrised};
 use crate::numerics::{newton, Linearisation, NewtonOptions};
 use crate::orbits::{shoot_with, EventCounts, Floquet, OrbitSpec, PeriodicOrbit};
@@ -41,7 +41,7 @@ impl Solved {
 
 /// The continuation solver and its state, for system `S` integrated by method `M`.
 #[derive(Debug, Clone)]
-pub struct Continuation<S: Parametrised, M = EventDriven> {
+pub struct Continuation<S: Parametrised, M = DefaultMethod> {
     pub(super) method: M,
     pub(super) sys: S,
     pub(super) param: S::Param,
@@ -64,10 +64,10 @@ pub enum StepOutcome {
     Done,
 }
 
-impl<S: Parametrised> Continuation<S, EventDriven> {
+impl<S: Parametrised> Continuation<S, DefaultMethod> {
     /// Starts a continuation in `param` from the orbit near `x0` of `sys` (the parameter's start
-    /// value is its value in `sys`), with the event-driven integrator. Shoots the first orbit at
-    /// fixed parameter.
+    /// value is its value in `sys`), with the default integrator, the event-driven DOP853
+    /// ([`crate::integrator::DEFAULT_METHOD`]). Shoots the first orbit at fixed parameter.
     pub fn new(
         sys: S,
         param: S::Param,
@@ -75,7 +75,7 @@ impl<S: Parametrised> Continuation<S, EventDriven> {
         x0: [f64; 2],
         opts: ContinuationOptions,
     ) -> Result<Self> {
-        Self::with_method(EventDriven, sys, param, spec, x0, opts)
+        Self::with_method(DEFAULT_METHOD, sys, param, spec, x0, opts)
     }
 
     /// Starts from a periodic orbit already found (e.g. by [`crate::orbits::orbit_from_simulation`]).

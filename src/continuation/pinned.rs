@@ -6,7 +6,7 @@ use super::identity::{section_distance, OrbitImages};
 use super::minaug::linearise_map;
 use super::{Branch, SpecialKind, SpecialPoint};
 use crate::error::{Error, Result};
-use crate::integrator::EventDriven;
+use crate::integrator::DEFAULT_METHOD;
 use crate::model::{Parameter, Parametrised};
 use crate::orbits::{shoot, OrbitSpec, PeriodicOrbit, ShootingOptions};
 use nalgebra::{Matrix3, Vector3};
@@ -132,7 +132,7 @@ fn pinned_newton<S: Parametrised>(
     let mut u = u0;
     for it in 0..sh.max_iter {
         let gear = b.system.with_param(b.param, u[2])?;
-        let lin = linearise_map(&EventDriven, &gear, spec, [u[0], u[1]], &[b.param], sh)?;
+        let lin = linearise_map(&DEFAULT_METHOD, &gear, spec, [u[0], u[1]], &[b.param], sh)?;
         let (r, jac, fl) = (lin.residual, lin.jac, lin.columns[0]);
         let g = q.dot(&(u - ustar)) - eps;
         let a = Matrix3::new(

@@ -5,7 +5,7 @@
 use super::branch::{Branch, SpecialPoint};
 use super::pinned::new_spec;
 use crate::error::{Error, Result};
-use crate::integrator::{EventDriven, FlowMethod};
+use crate::integrator::{FlowMethod, DEFAULT_METHOD};
 use crate::model::{Gear, Parameter, Parametrised};
 use crate::orbits::{detect_period_with, shoot_with, OrbitSpec, PeriodicOrbit, ShootingOptions};
 use serde::{Deserialize, Serialize};
@@ -24,7 +24,8 @@ pub struct SwitchStart<S = Gear> {
     pub separation: f64,
 }
 
-/// Switches branch at `special` of `branch` with the event-driven integrator: shoots from
+/// Switches branch at `special` of `branch` with the default integrator (the event-driven
+/// DOP853, [`crate::integrator::DEFAULT_METHOD`]): shoots from
 /// x* ± ε v at parameter values λ* ± dλ and returns the first orbit distinct from the old branch.
 pub fn switch_branch<S: Parametrised>(
     branch: &Branch<S>,
@@ -32,7 +33,7 @@ pub fn switch_branch<S: Parametrised>(
     dparam: f64,
     opts: &ShootingOptions,
 ) -> Result<SwitchStart<S>> {
-    switch_branch_with(&EventDriven, branch, special, dparam, opts)
+    switch_branch_with(&DEFAULT_METHOD, branch, special, dparam, opts)
 }
 
 /// Distance of two orbits on the section, β modulo 2π.
