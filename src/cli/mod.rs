@@ -44,14 +44,14 @@ pub enum Command {
     /// Derived quantities of a gear: g, Δ, f_c, lock angles, cogging-free shaft angles.
     Info(info::Args),
     /// Pseudo-arclength continuation of a periodic orbit in one parameter, with special points
-    /// (event-driven DOP853; multiple shooting with the DP5).
+    /// (event-driven DOP853).
     Continue(continue_::Args),
     /// Refine one special point (fold, flip, symmetry-breaking, Neimark–Sacker) by Newton
     /// (event-driven DOP853; --dp5 for the DP5).
     Locate(locate::Args),
     /// The whole bifurcation diagram over a parameter range, automatically: seeds from simulations
     /// and analytic branches, switching at every flip and symmetry-breaking point (event-driven
-    /// DOP853; multiple shooting with the DP5).
+    /// DOP853).
     Diagram(diagram::Args),
     /// A two-parameter curve of special points, by default the lock-loss boundary f_c(Θ)
     /// (event-driven DOP853).

@@ -15,11 +15,13 @@
 //! (single shooting loses log₁₀|μ| digits; at Θ = 0, 0.2 Hz on the unstable lock, |μ_G| ≈ 1e18).
 //! The multipliers are those of the product, computed from its trace and determinant
 //! ([`Floquet::of_orbit`]): the large one to relative rounding accuracy, the small one as det/μ₁.
+//! The segments are integrated by the default integrator, the event-driven DOP853
+//! ([`crate::integrator::DEFAULT_METHOD`]), as single shooting and the continuation.
 
 use super::block_cyclic::CyclicBlockSystem;
 use super::{EventCounts, Floquet, OrbitSpec, PeriodicOrbit, ShootingOptions};
 use crate::error::{Error, Result};
-use crate::integrator::{initial_mode, vector_field, EventDriven, FlowMethod, FlowOptions};
+use crate::integrator::{initial_mode, vector_field, FlowMethod, FlowOptions, DEFAULT_METHOD};
 use crate::maps::{MapImage, Section};
 use crate::model::DrivenOscillator;
 use nalgebra::{DMatrix, DVector, Matrix2};
@@ -151,7 +153,7 @@ pub fn evaluate<S: DrivenOscillator + ?Sized>(
     let mut residuals = Vec::with_capacity(m);
     for i in 0..m {
         let (t0, t1) = (times[i], times[i + 1]);
-        let fl = EventDriven.flow(sys, t0, states[i], t1, &flow_opts)?;
+        let fl = DEFAULT_METHOD.flow(sys, t0, states[i], t1, &flow_opts)?;
         let mut jac_x = fl.jac_x;
         let mut jac_p = fl.jac_p;
         if let (Some(jp), Some(jx)) = (jac_p.as_mut(), jac_x.as_ref()) {
@@ -220,7 +222,7 @@ pub fn segment_states<S: DrivenOscillator + ?Sized>(
     let mut out = vec![x0];
     let mut x = x0;
     for i in 0..m - 1 {
-        x = EventDriven.flow(sys, times[i], x, times[i + 1], &o)?.x;
+        x = DEFAULT_METHOD.flow(sys, times[i], x, times[i + 1], &o)?.x;
         out.push(x);
     }
     Ok(out)
@@ -240,7 +242,7 @@ pub fn refine<S: DrivenOscillator + ?Sized>(
     for (i, x) in states.iter().enumerate() {
         out.push(*x);
         out.push(
-            EventDriven
+            DEFAULT_METHOD
                 .flow(sys, times[2 * i], *x, times[2 * i + 1], &o)?
                 .x,
         );
