@@ -180,6 +180,20 @@ pub const EFFECTS: &[EffectSpec] = &[
                run at f, the ring-downs at ζ, k = size; headline: the change of ζ over the driven \
                runs' frequencies, ζ k (f_max − f_min)",
     },
+    EffectSpec {
+        id: "none_ar1_weak",
+        expected: &["none"],
+        reference: 0.0,
+        unit: "",
+        form: "base model; coloured camera noise, AR(1) with ρ = 0.3 between frames, 0.5° stationary σ",
+    },
+    EffectSpec {
+        id: "none_ar1_strong",
+        expected: &["none"],
+        reference: 0.0,
+        unit: "",
+        form: "base model; coloured camera noise, AR(1) with ρ = 0.9 between frames, 0.5° stationary σ",
+    },
 ];
 
 /// Looks an effect up by id.
@@ -282,6 +296,8 @@ pub fn build_case(
     match spec.id {
         "none" => {}
         "none_ar1" => meas.ar1 = 0.7,
+        "none_ar1_weak" => meas.ar1 = 0.3,
+        "none_ar1_strong" => meas.ar1 = 0.9,
         "none_jitter" => meas.jitter_s = 0.5e-3,
         "none_coarse" => {
             set_size.samples_per_turn = 20;

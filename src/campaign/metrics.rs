@@ -63,6 +63,13 @@ pub struct CaseResult {
     /// findings (report key `remaining`; `None` when it has none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub remaining_above_noise: Option<bool>,
+    /// z = E/σ_E of that remainder.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub remaining_z: Option<f64>,
+    /// The camera noise behind its floor: σ (rad) and the lag-1 correlation measured at rest
+    /// (report key `remaining.noise`; absent when the floor is white noise).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_at_rest: Option<[f64; 2]>,
     /// The error, if the diagnosis failed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,

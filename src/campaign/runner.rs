@@ -165,6 +165,12 @@ pub fn run_case(
         .ok()
         .and_then(|d| d.report.remaining.as_ref())
         .map(|r| !r.within_noise);
+    let rem = diag.as_ref().ok().and_then(|d| d.report.remaining.as_ref());
+    let remaining_z = rem.map(|r| r.excess_chi2_per_dof / r.excess_sigma);
+    let noise_at_rest = rem
+        .and_then(|r| r.noise.as_ref())
+        .filter(|n| n.method == "rest" && !n.correlation.is_empty())
+        .map(|n| [n.sigma_rad, n.correlation[0]]);
     let (verdict, findings, error) = match diag {
         Ok(d) => (
             d.report.verdict.clone(),
@@ -194,6 +200,8 @@ pub fn run_case(
         truths: g.truths,
         seconds,
         remaining_above_noise,
+        remaining_z,
+        noise_at_rest,
         error,
     })
 }

@@ -401,12 +401,19 @@ pub fn diagnose(
             }
         }
         remaining(&mut mismatch, &fin, &base.wins, runs, &prep.files);
+        // the floor's window geometry and stick phases under the final model (with the
+        // breakaway excess when it stands)
+        let mut model = fin.model(runs, &base.geo, opts.tol);
+        model.eta_static_excess = excess;
+        let warm = fin.fit.warm_starts(base.wins.len());
+        let geom = super::mismatch::window_geometry(&model, &fin.fit.theta, &base.wins, &warm);
         remains = super::mismatch::remainder(
             runs,
             &base.wins,
             &b.held.chi2,
             &final_held.chi2,
             (opts.weak.rest_sigmas, opts.weak.rest_run),
+            &geom,
         );
         final_state = Some(fin);
     }

@@ -3,12 +3,16 @@
 //! and κ(α0) from the ring-downs. Words with the numbers behind them; nothing here names an
 //! effect.
 
-use super::preprocess::CleanRun;
+use super::model::AugmentedGear;
+use super::predict::fit_window_state;
+use super::preprocess::{rest_autocovariance, CleanRun, RestAutocov, RestPiece};
 use super::regression::{delta_bic, fit, Design, LinFit, Term};
-use super::report::{Mismatch, Remainder, RemainderBin};
+use super::report::{Mismatch, NoiseFloor, Remainder, RemainderBin};
 use super::ringdown::KappaFit;
-use super::shooting::Win;
+use super::shooting::{par_map, SimModel, Win};
+use crate::integrator::{EventDriven853, FlowMethod, FlowOptions};
 use crate::numerics::least_squares::{weighted, DEFAULT_RCOND};
+use nalgebra::DMatrix;
 use serde_json::json;
 use std::collections::BTreeMap;
 
@@ -341,7 +345,8 @@ fn kappa_checks(k: &KappaFit, mismatch: &mut Vec<Mismatch>) {
 /// judge's smallest threshold.
 pub const REMAINDER_Z: f64 = 3.0;
 
-/// E and σ_E of windows given as pairs (χ², dof), see [`Remainder`].
+/// E and σ_E of windows given as pairs (χ², floor), see [`Remainder`]: E = Σχ²/Σf − 1 with the
+/// ratio estimator's σ over the windows.
 fn ratio_excess(pairs: &[(f64, f64)]) -> (f64, f64) {
     let n = pairs.len();
     let (sc, sd): (f64, f64) = pairs.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
@@ -353,6 +358,281 @@ fn ratio_excess(pairs: &[(f64, f64)]) -> (f64, f64) {
         / (n - 1) as f64
         / (sd * sd);
     (r - 1.0, v.sqrt())
+}
+
+/// What the noise floor of one judging window needs ([`window_geometry`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WindowGeometry {
+    /// Camera frame numbers of the kept frames (from the run's first sample and its median
+    /// interval).
+    pub frames: Vec<i64>,
+    /// Hat matrix of the fitted initial state on the kept frames, H = U Uᵀ with U the left
+    /// singular vectors of J = ∂β_sim/∂(β₀, β̇₀) (a direction J cannot see dropped).
+    pub hat: DMatrix<f64>,
+    /// Samples from the window's first (masked ones included, and up to a window length past
+    /// its end) at which the model's trajectory from the window's state is stuck.
+    pub stuck: Vec<bool>,
+}
+
+/// β and β̇ of `sys` from `x0` at the first of `t` (the diagnosis's window integrator and budget).
+fn window_flow(sys: &AugmentedGear, t: &[f64], x0: [f64; 2], tol: f64) -> Option<Vec<(f64, f64)>> {
+    let mut opts = FlowOptions::with_tol(tol).samples(t.to_vec());
+    opts.max_steps = super::predict::WINDOW_MAX_STEPS;
+    let f = EventDriven853.flow(sys, t[0], x0, *t.last()?, &opts).ok()?;
+    (f.samples.len() == t.len()).then(|| f.samples.iter().map(|s| (s.beta, s.omega)).collect())
+}
+
+/// The geometry of every window of `wins` under `model` at θ: the window's state fitted (from the
+/// warm start of the refit when there is one, else multi-start), the Jacobian of the simulated β
+/// with respect to that state by forward differences, its hat matrix H (the first-order
+/// projection of the state fit), and the samples at which
+/// the simulated output is stuck (β̇ = 0 in the Filippov stick mode). `None` for a window the
+/// model cannot fit or simulate.
+pub fn window_geometry(
+    model: &SimModel,
+    theta: &[f64],
+    wins: &[Win],
+    warm: &[Option<[f64; 2]>],
+) -> Vec<Option<WindowGeometry>> {
+    par_map(wins.len(), |k| {
+        let w = &wins[k];
+        let r = &model.runs[w.run];
+        let sys = model.system(theta, w);
+        let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
+        let x = match warm.get(k).copied().flatten() {
+            Some(x) => x,
+            None => {
+                let f = fit_window_state(
+                    &sys,
+                    t,
+                    b,
+                    &w.keep,
+                    r.sigma_camera,
+                    [b[0], r.v[w.lo]],
+                    true,
+                    model.tol,
+                )?;
+                [f.p[0], f.p[1]]
+            }
+        };
+        // the stuck flags over the window and up to a window length past it (a stick phase
+        // continues across the next window's start, where that window's own fitted velocity
+        // may move the model for a frame or two)
+        let ext = &r.t[w.lo..(w.hi + super::predict::WINDOW).min(r.t.len())];
+        let stuck: Vec<bool> = window_flow(&sys, ext, x, model.tol)?
+            .iter()
+            .map(|s| s.1 == 0.0)
+            .collect();
+        let s0 = window_flow(&sys, t, x, model.tol)?;
+        // steps of 1 % of the camera noise (β) and of σ/dt (β̇): far above the integration error
+        // on a lifted β of many turns, far inside the range where the trajectory is linear in
+        // the state
+        let h = [
+            0.01 * r.sigma_camera,
+            0.01 * r.sigma_camera / r.dt.max(1e-12),
+        ];
+        let s1 = window_flow(&sys, t, [x[0] + h[0], x[1]], model.tol)?;
+        let s2 = window_flow(&sys, t, [x[0], x[1] + h[1]], model.tol)?;
+        let kept: Vec<usize> = (0..t.len()).filter(|&q| w.keep[q]).collect();
+        let j = DMatrix::from_fn(kept.len(), 2, |i, c| {
+            let q = kept[i];
+            if c == 0 {
+                (s1[q].0 - s0[q].0) / h[0]
+            } else {
+                (s2[q].0 - s0[q].0) / h[1]
+            }
+        });
+        let svd = j.svd(true, false);
+        let u = svd.u?;
+        let smax = svd.singular_values.max();
+        let mut hat = DMatrix::zeros(kept.len(), kept.len());
+        for c in 0..svd.singular_values.len() {
+            if svd.singular_values[c] > 1e-9 * smax {
+                let col = u.column(c).clone_owned();
+                hat += &col * col.transpose();
+            }
+        }
+        let dt = r.dt.max(1e-12);
+        Some(WindowGeometry {
+            frames: kept
+                .iter()
+                .map(|&q| ((t[q] - r.t[0]) / dt).round() as i64)
+                .collect(),
+            hat,
+            stuck,
+        })
+    })
+}
+
+/// The frames at rest of the judging windows: samples at which the model's trajectory from a
+/// window's state is stuck (over the window and up to a window length past it), without the
+/// first and last stuck sample of a stick phase that begins or ends there (the model's stop and
+/// release instants are uncertain by a fraction of a frame, where the output moves by up to
+/// ½ a dt²) and without the frames a window masks, joined over the windows of a run.
+pub fn rest_pieces(
+    runs: &[CleanRun],
+    wins: &[Win],
+    geom: &[Option<WindowGeometry>],
+) -> Vec<RestPiece> {
+    let mut rest: Vec<Vec<bool>> = runs.iter().map(|r| vec![false; r.t.len()]).collect();
+    let mut masked: Vec<Vec<bool>> = runs.iter().map(|r| vec![false; r.t.len()]).collect();
+    for w in wins {
+        for (q, &k) in w.keep.iter().enumerate() {
+            masked[w.run][w.lo + q] |= !k;
+        }
+    }
+    for (w, g) in wins.iter().zip(geom) {
+        let Some(g) = g else { continue };
+        let n = g.stuck.len();
+        for q in 0..n {
+            let inner = g.stuck[q] && (q == 0 || g.stuck[q - 1]) && (q + 1 == n || g.stuck[q + 1]);
+            if inner {
+                rest[w.run][w.lo + q] = true;
+            }
+        }
+    }
+    for (rr, mm) in rest.iter_mut().zip(&masked) {
+        rr.iter_mut().zip(mm).for_each(|(r, &m)| *r &= !m);
+    }
+    let mut out = Vec::new();
+    for (ri, r) in runs.iter().enumerate() {
+        let dt = r.dt.max(1e-12);
+        let mut cur = RestPiece::default();
+        for (i, &at_rest) in rest[ri].iter().enumerate() {
+            if at_rest {
+                cur.frames.push(((r.t[i] - r.t[0]) / dt).round() as i64);
+                cur.beta.push(r.beta[i]);
+            } else if !cur.frames.is_empty() {
+                out.push(std::mem::take(&mut cur));
+            }
+        }
+        if !cur.frames.is_empty() {
+            out.push(cur);
+        }
+    }
+    out
+}
+
+/// The noise floor of every window, f_w = tr((I − H_w)Γ_w)/σ²_camera = Σ_l c_w(l) γ(l): the expected
+/// χ² of the window's held-out residuals when the model is right and the camera noise has the
+/// autocovariance γ (Γ_w: γ at the frame lags of its kept frames, 0 beyond the lags measured).
+/// Returns the coefficients c_w (`None` without geometry).
+fn floor_coefficients(
+    runs: &[CleanRun],
+    wins: &[Win],
+    geom: &[Option<WindowGeometry>],
+    lags: usize,
+) -> Vec<Option<Vec<f64>>> {
+    wins.iter()
+        .zip(geom)
+        .map(|(w, g)| {
+            let g = g.as_ref()?;
+            let s2 = runs[w.run].sigma_camera.max(1e-12).powi(2);
+            let n = g.frames.len();
+            let mut c = vec![0.0; lags];
+            c[0] = (n as f64 - g.hat.trace()) / s2;
+            for i in 0..n {
+                for j in 0..n {
+                    let l = (g.frames[i] - g.frames[j]).unsigned_abs() as usize;
+                    if i != j && l < lags {
+                        c[l] -= g.hat[(i, j)] / s2;
+                    }
+                }
+            }
+            Some(c)
+        })
+        .collect()
+}
+
+/// The camera-noise floor of the judging windows: per window its expected χ² under the noise
+/// measured at rest ([`rest_autocovariance`]), the same for every leave-one-piece-out estimate
+/// (the jackknife of the floor), and the report's description. Without two pieces at rest, the
+/// floor of white noise at the cleaning's σ, d_w = frames − 2, with a note.
+pub fn noise_floor(
+    runs: &[CleanRun],
+    wins: &[Win],
+    geom: &[Option<WindowGeometry>],
+) -> (Vec<f64>, Vec<Vec<f64>>, NoiseFloor) {
+    let white: Vec<f64> = wins
+        .iter()
+        .map(|w| (w.kept() as f64 - 2.0).max(1.0))
+        .collect();
+    let mut cams: Vec<f64> = runs.iter().map(|r| r.sigma_camera).collect();
+    cams.sort_by(f64::total_cmp);
+    let cam = cams.get(cams.len() / 2).copied().unwrap_or(f64::NAN);
+    let pieces = rest_pieces(runs, wins, geom);
+    let ac = rest_autocovariance(&pieces, super::predict::WINDOW - 1);
+    let Some(ac) = ac else {
+        let nf = NoiseFloor {
+            method: "white".into(),
+            sigma_rad: cam,
+            sigma_cleaning_rad: cam,
+            rest_frames: pieces.iter().map(|p| p.frames.len()).sum(),
+            rest_pieces: pieces.len(),
+            floor_over_frames_minus_2: 1.0,
+            note: "fewer than two stretches of two frames at rest in the judging windows: the \
+                   floor is white camera noise at the cleaning's σ (frames − 2 per window), which \
+                   is too low for a correlated noise"
+                .into(),
+            ..NoiseFloor::default()
+        };
+        return (white, vec![], nf);
+    };
+    let lags = ac.gamma.len().min(super::predict::WINDOW);
+    let coef = floor_coefficients(runs, wins, geom, lags);
+    let floors_for = |g: &[f64]| -> Vec<f64> {
+        coef.iter()
+            .zip(wins)
+            .map(|(c, w)| match c {
+                Some(c) => c.iter().zip(g).map(|(a, b)| a * b).sum(),
+                // no geometry: white at the measured variance
+                None => (w.kept() as f64 - 2.0).max(1.0) * g[0] / runs[w.run].sigma_camera.powi(2),
+            })
+            .collect()
+    };
+    let floors = floors_for(&ac.gamma);
+    let jack: Vec<Vec<f64>> = ac.jackknife.iter().map(|g| floors_for(g)).collect();
+    let ratio = |g: &[f64]| floors_for(g).iter().sum::<f64>() / white.iter().sum::<f64>();
+    (floors, jack, describe(&ac, cam, lags, &ratio))
+}
+
+/// The report's description of the noise measured at rest.
+fn describe(ac: &RestAutocov, cam: f64, lags: usize, ratio: &dyn Fn(&[f64]) -> f64) -> NoiseFloor {
+    let shown = lags.min(ac.gamma.len()).max(1);
+    let rho = ac.correlation();
+    NoiseFloor {
+        method: "rest".into(),
+        sigma_rad: ac.gamma[0].max(0.0).sqrt(),
+        sigma_rad_err: ac.sigma_of(|g| g[0].max(0.0).sqrt()),
+        sigma_cleaning_rad: cam,
+        correlation: rho[1..shown].to_vec(),
+        correlation_sigma: (1..shown).map(|k| ac.sigma_of(|g| g[k] / g[0])).collect(),
+        max_lag: ac.gamma.len() - 1,
+        rest_frames: ac.frames,
+        rest_pieces: ac.pieces,
+        floor_over_frames_minus_2: ratio(&ac.gamma),
+        floor_over_frames_minus_2_sigma: ac.sigma_of(ratio),
+        note: format!(
+            "autocovariance of the camera noise measured on {} frames at rest ({} stretches, the \
+             final model's stick phases in the judging windows); window floors tr((I − H)Γ)/σ²",
+            ac.frames, ac.pieces
+        ),
+    }
+}
+
+/// Relative jackknife σ of the floor summed over the windows `idx`.
+fn floor_rel_sigma(floors: &[f64], jack: &[Vec<f64>], idx: &[usize]) -> f64 {
+    if jack.len() < 2 {
+        return 0.0;
+    }
+    let d: f64 = idx.iter().map(|&k| floors[k]).sum();
+    let v: Vec<f64> = jack
+        .iter()
+        .map(|f| idx.iter().map(|&k| f[k]).sum())
+        .collect();
+    let p = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / p;
+    ((p - 1.0) / p * v.iter().map(|x| (x - mean).powi(2)).sum::<f64>()).sqrt() / d
 }
 
 /// Bins of one grouping: (label, window indices).
@@ -386,67 +666,17 @@ fn win_info(runs: &[CleanRun], w: &Win, rest_sigmas: f64, rest_run: usize) -> Wi
     }
 }
 
-/// The remainder of the final model's held-out χ² `fin` against the base model's `base` on the
-/// judging windows `wins` (see [`Remainder`]). A sample is at rest when |β̇| < `rest_sigmas` σ_v;
-/// a window with `rest_run` consecutive samples at rest is a stick window (the weak form's
-/// criterion). `None` without windows predicted by the final model.
-pub fn remainder(
+/// The groupings of the remainder's windows `used` (see [`Remainder`]): run kind, drive
+/// frequency, β phase, speed quartile, stick or slip.
+fn remainder_groups(
     runs: &[CleanRun],
-    wins: &[Win],
-    base: &[Option<f64>],
-    fin: &[Option<f64>],
-    rest: (f64, usize),
-) -> Option<Remainder> {
-    let dof = |w: &Win| (w.kept() as f64 - 2.0).max(1.0);
-    let used: Vec<usize> = (0..wins.len()).filter(|&k| fin[k].is_some()).collect();
-    if used.len() < 2 {
-        return None;
-    }
-    let pairs = |idx: &[usize]| -> Vec<(f64, f64)> {
-        idx.iter()
-            .filter_map(|&k| Some((fin[k]?, dof(&wins[k]))))
-            .collect()
-    };
-    let (e, se) = ratio_excess(&pairs(&used));
-    let both: Vec<usize> = used
-        .iter()
-        .copied()
-        .filter(|&k| base[k].is_some())
-        .collect();
-    let base_pairs: Vec<(f64, f64)> = both
-        .iter()
-        .filter_map(|&k| Some((base[k]?, dof(&wins[k]))))
-        .collect();
-    let (eb, seb) = ratio_excess(&base_pairs);
-    // fraction removed: 1 − Σ(χ²_fin − d)/Σ(χ²_base − d), ratio σ over windows
-    let (mut fraction, mut fraction_sigma) = (None, None);
-    if eb.is_finite() && eb >= REMAINDER_Z * seb && both.len() >= 2 {
-        let ab: Vec<(f64, f64)> = both
-            .iter()
-            .filter_map(|&k| {
-                let d = dof(&wins[k]);
-                Some((fin[k]? - d, base[k]? - d))
-            })
-            .collect();
-        let (sa, sb) = ab.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
-        let r = sa / sb;
-        let n = ab.len() as f64;
-        let v = ab.iter().map(|p| (p.0 - r * p.1).powi(2)).sum::<f64>() * n / (n - 1.0) / (sb * sb);
-        fraction = Some(1.0 - r);
-        fraction_sigma = Some(v.sqrt());
-    }
-    let info: Vec<WinInfo> = wins
-        .iter()
-        .map(|w| win_info(runs, w, rest.0, rest.1))
-        .collect();
-    let total_excess: f64 = used
-        .iter()
-        .filter_map(|&k| Some(fin[k]? - dof(&wins[k])))
-        .sum();
-    let mut groups: Vec<(&str, Bins)> = Vec::new();
+    info: &[WinInfo],
+    used: &[usize],
+) -> Vec<(&'static str, Bins)> {
+    let mut groups: Vec<(&'static str, Bins)> = Vec::new();
     let by = |label: &dyn Fn(usize) -> Option<String>| -> Bins {
         let mut m: BTreeMap<String, Vec<usize>> = BTreeMap::new();
-        for &k in &used {
+        for &k in used {
             if let Some(l) = label(k) {
                 m.entry(l).or_default().push(k);
             }
@@ -502,14 +732,74 @@ pub fn remainder(
             })
         }),
     ));
+    groups
+}
+
+/// The remainder of the final model's held-out χ² `fin` against the base model's `base` on the
+/// judging windows `wins` (see [`Remainder`]), over the camera-noise floor of each window
+/// ([`noise_floor`], from the final model's window geometry `geom`). σ_E combines the ratio
+/// estimator's σ over the windows with the floor's jackknife σ: σ_E² = σ_win² + ((1 + E) σ_D/D)².
+/// A sample is at rest when |β̇| < `rest_sigmas` σ_v; a window with `rest_run` consecutive
+/// samples at rest is a stick window (the weak form's criterion). `None` without windows
+/// predicted by the final model.
+pub fn remainder(
+    runs: &[CleanRun],
+    wins: &[Win],
+    base: &[Option<f64>],
+    fin: &[Option<f64>],
+    rest: (f64, usize),
+    geom: &[Option<WindowGeometry>],
+) -> Option<Remainder> {
+    let used: Vec<usize> = (0..wins.len()).filter(|&k| fin[k].is_some()).collect();
+    if used.len() < 2 {
+        return None;
+    }
+    let (floors, jack, noise) = noise_floor(runs, wins, geom);
+    let dof = |k: usize| floors[k];
+    let excess = |chi: &[Option<f64>], idx: &[usize]| -> (f64, f64) {
+        let pairs: Vec<(f64, f64)> = idx
+            .iter()
+            .filter_map(|&k| Some((chi[k]?, dof(k))))
+            .collect();
+        let (e, se) = ratio_excess(&pairs);
+        let rel = floor_rel_sigma(&floors, &jack, idx);
+        (e, se.hypot((1.0 + e) * rel))
+    };
+    let (e, se) = excess(fin, &used);
+    let both: Vec<usize> = used
+        .iter()
+        .copied()
+        .filter(|&k| base[k].is_some())
+        .collect();
+    let (eb, seb) = excess(base, &both);
+    // fraction removed: 1 − Σ(χ²_fin − d)/Σ(χ²_base − d), ratio σ over windows
+    let (mut fraction, mut fraction_sigma) = (None, None);
+    if eb.is_finite() && eb >= REMAINDER_Z * seb && both.len() >= 2 {
+        let ab: Vec<(f64, f64)> = both
+            .iter()
+            .filter_map(|&k| {
+                let d = dof(k);
+                Some((fin[k]? - d, base[k]? - d))
+            })
+            .collect();
+        let (sa, sb) = ab.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+        let r = sa / sb;
+        let n = ab.len() as f64;
+        let v = ab.iter().map(|p| (p.0 - r * p.1).powi(2)).sum::<f64>() * n / (n - 1.0) / (sb * sb);
+        fraction = Some(1.0 - r);
+        fraction_sigma = Some(v.sqrt());
+    }
+    let info: Vec<WinInfo> = wins
+        .iter()
+        .map(|w| win_info(runs, w, rest.0, rest.1))
+        .collect();
+    let total_excess: f64 = used.iter().filter_map(|&k| Some(fin[k]? - dof(k))).sum();
+    let groups = remainder_groups(runs, &info, &used);
     let mut bins = Vec::new();
     for (group, members) in groups {
         for (bin, idx) in members {
-            let (be, bse) = ratio_excess(&pairs(&idx));
-            let ex: f64 = idx
-                .iter()
-                .filter_map(|&k| Some(fin[k]? - dof(&wins[k])))
-                .sum();
+            let (be, bse) = excess(fin, &idx);
+            let ex: f64 = idx.iter().filter_map(|&k| Some(fin[k]? - dof(k))).sum();
             bins.push(RemainderBin {
                 group: group.to_string(),
                 bin,
@@ -547,5 +837,6 @@ pub fn remainder(
         windows: used.len(),
         bins,
         located,
+        noise: Some(noise),
     })
 }

@@ -64,6 +64,42 @@ pub struct Remainder {
     /// The bins whose excess is above noise (E_bin ≥ [`super::mismatch::REMAINDER_Z`] σ_bin), largest share of the
     /// remaining excess χ² first: where the remainder sits.
     pub located: Vec<RemainderBin>,
+    /// The camera-noise floor: the noise measured at rest (absent in reports of earlier versions,
+    /// whose floor was white noise at the cleaning's σ).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<NoiseFloor>,
+}
+
+/// The camera noise behind the remainder's floor (`identification::mismatch::noise_floor`): its
+/// autocovariance measured on frames at rest, or white noise at the cleaning's σ when the set has
+/// too few frames at rest.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct NoiseFloor {
+    /// `rest` (measured at rest) or `white` (the cleaning's σ, no correlation).
+    pub method: String,
+    /// Stationary σ of the noise measured at rest, rad (for `white`: the cleaning's σ).
+    pub sigma_rad: f64,
+    /// Its jackknife 1σ over the stretches at rest.
+    pub sigma_rad_err: f64,
+    /// The cleaning's σ (median over the runs), rad: the scale of the window χ².
+    pub sigma_cleaning_rad: f64,
+    /// Correlation ρ(k) at the frame lags k = 1, 2, … (up to the window length − 1).
+    pub correlation: Vec<f64>,
+    /// Their jackknife 1σ.
+    pub correlation_sigma: Vec<f64>,
+    /// Largest lag measured (the correlation beyond it is taken as 0).
+    pub max_lag: usize,
+    /// Frames at rest used.
+    pub rest_frames: usize,
+    /// Stretches at rest used (the jackknife's units).
+    pub rest_pieces: usize,
+    /// The floor summed over the windows, over Σ(frames − 2): 1 for white noise at the
+    /// cleaning's σ.
+    pub floor_over_frames_minus_2: f64,
+    /// Its jackknife 1σ.
+    pub floor_over_frames_minus_2_sigma: f64,
+    /// How the floor was obtained.
+    pub note: String,
 }
 
 /// One bin of the remainder.
@@ -247,6 +283,39 @@ pub fn markdown(r: &Report, title: &str) -> String {
     s
 }
 
+/// The camera-noise floor's paragraph of report.md.
+fn noise_markdown(n: &NoiseFloor) -> String {
+    if n.method != "rest" {
+        return format!(
+            "Camera-noise floor: white noise at the cleaning's σ = {:.3}° ({}).\n\n",
+            n.sigma_cleaning_rad.to_degrees(),
+            n.note
+        );
+    }
+    let rho: Vec<String> = [1usize, 2, 3, 5, 10]
+        .iter()
+        .filter(|&&k| k <= n.correlation.len())
+        .map(|&k| {
+            format!(
+                "ρ({k}) = {:.2} ± {:.2}",
+                n.correlation[k - 1],
+                n.correlation_sigma[k - 1]
+            )
+        })
+        .collect();
+    format!(
+        "Camera-noise floor: the noise measured at rest has σ = {:.3} ± {:.3}° (the cleaning's \
+         estimate: {:.3}°) and {}; the windows' floor is {:.2} ± {:.2} × (frames − 2) ({}).\n\n",
+        n.sigma_rad.to_degrees(),
+        n.sigma_rad_err.to_degrees(),
+        n.sigma_cleaning_rad.to_degrees(),
+        rho.join(", "),
+        n.floor_over_frames_minus_2,
+        n.floor_over_frames_minus_2_sigma,
+        n.note
+    )
+}
+
 /// The "what remains and where" section of report.md.
 fn remainder_markdown(rem: &Remainder) -> String {
     let mut s = String::from("## What remains and where\n\n");
@@ -266,10 +335,12 @@ fn remainder_markdown(rem: &Remainder) -> String {
         rem.base_excess_chi2_per_dof,
         rem.base_excess_sigma
     );
+    let noise = rem.noise.as_ref().map(noise_markdown).unwrap_or_default();
     if rem.within_noise {
-        s.push_str(&format!("Nothing left above noise: {numbers}.\n\n"));
+        s.push_str(&format!("Nothing left above noise: {numbers}.\n\n{noise}"));
         return s;
     }
+    s.push_str(&noise);
     s.push_str(&format!(
         "The final model leaves a mismatch above the camera-noise floor: {numbers}.\n\n"
     ));
