@@ -29,7 +29,8 @@
 //! - **The parameters added must differ from zero.** A held-out gain counts only when the
 //!   parameters the candidate adds are themselves significantly non-zero in its refit
 //!   ([`added_parameters_z`]: the Wald statistic of the new coefficients, and of the latency when
-//!   it is newly fitted, with the refit's covariance, as a normal equivalent), at the same
+//!   it is newly fitted, with the refit's covariance — the window-clustered sandwich of
+//!   [`super::shooting`] — as a normal equivalent), at the same
 //!   threshold. The paired windows of a run share the error of the fold's parameters, so a
 //!   candidate whose refit merely moves the current coefficients can win a run's windows by
 //!   chance (a corotating drag of 0.012 ± 0.011 s⁻¹ gained χ² 37 at z = 3.7 on a set with only

@@ -8,19 +8,21 @@
 //! window. The window initial states (β, β̇) are nuisance parameters, profiled out (variable
 //! projection: for every trial parameter vector θ each window's state is refitted, warm-started);
 //! θ is fitted to the residuals (β_sim − β_meas)/σ_camera by Levenberg–Marquardt with a central
-//! finite-difference Jacobian of the profiled residuals, whose Gauss–Newton covariance is then the
-//! marginal covariance of θ (inflated by the small autocorrelation of the residuals, with two
-//! degrees of freedom per window removed).
+//! finite-difference Jacobian of the profiled residuals. The covariance of θ is the
+//! window-clustered sandwich built on that Jacobian, never below the white-noise s²(JᵀJ)⁻¹
+//! ([`window_covariance`]): the windows are the independent units, and the scatter of their
+//! scores carries the correlation of a window's residuals and a misfit of the model, which
+//! s²(JᵀJ)⁻¹ assumes away.
 //!
 //! θ is the coefficient vector of a [`SimModel`]'s terms (mapped by [`super::spec`]) and optionally
 //! the sensor latency. The Jacobian at the solution is kept: the judge uses it for the one-step
 //! leave-fold-out refits ([`SimFit::step_without`]).
 
-use super::lm::least_squares_tol;
+use super::lm::{cluster_sandwich, covariance_floor, gauss_newton_cov, least_squares_tol, LsqFit};
 use super::model::{AugmentedGear, Coefficients, Geometry};
 use super::predict::{fit_window_state, prediction_windows, window_residuals, window_system};
 use super::preprocess::CleanRun;
-use super::regression::{autocorr_time, Term};
+use super::regression::Term;
 use super::spec::{coefficients_for_run, simulable};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
@@ -319,7 +321,8 @@ pub struct SimFit {
     pub theta: Vec<f64>,
     /// 1σ of θ.
     pub err: Vec<f64>,
-    /// Covariance of θ (inflated as described in the module).
+    /// Covariance of θ: the window-clustered sandwich, floored at the white-noise covariance
+    /// ([`window_covariance`]).
     pub cov: DMatrix<f64>,
     /// Jacobian of the profiled residuals at θ (rows: the used windows' frames, in order).
     pub jac: DMatrix<f64>,
@@ -335,7 +338,8 @@ pub struct SimFit {
     pub rms_start_rad: f64,
     /// Frames used.
     pub samples: usize,
-    /// Covariance inflation n/n_eff from the residual autocorrelation.
+    /// How much the covariance widens the white-noise one s²(JᵀJ)⁻¹: the largest variance ratio
+    /// over all directions ([`window_covariance`]; ≥ 1).
     pub inflation: f64,
     /// Whether the optimiser reported convergence.
     pub converged: bool,
@@ -527,24 +531,8 @@ fn fit_windows(
         Some((1e-6, 1e-5)),
         true,
     )?;
-    // residual autocorrelation within windows: inflate the covariance by n/n_eff
-    let (mut ratio_n, mut ratio_d) = (0.0, 0.0);
-    for &(wi, row0) in &used {
-        let w = &wins[wi];
-        let e: Vec<f64> = (0..w.keep.len())
-            .filter(|&k| w.keep[k])
-            .map(|k| sol.resid[row0 + k])
-            .collect();
-        ratio_n += e.len() as f64;
-        ratio_d += e.len() as f64 / autocorr_time(&e);
-    }
-    let inflation = (ratio_n / ratio_d.max(1e-300)).max(1.0);
-    // degrees of freedom: the profiled states took two per window
     let samples: usize = used.iter().map(|&(wi, _)| wins[wi].kept()).sum();
-    let m = samples as f64;
-    let dof = (m - 2.0 * used.len() as f64 - theta0.len() as f64).max(1.0);
-    let s2_fix = (sol.rss / dof) / (sol.rss / (sol.resid.len() - theta0.len()) as f64);
-    let cov: DMatrix<f64> = &sol.cov * (inflation * s2_fix);
+    let (cov, inflation) = window_covariance(&sol, &used, wins, samples);
     let err: Vec<f64> = (0..theta0.len())
         .map(|k| cov[(k, k)].max(0.0).sqrt())
         .collect();
@@ -564,6 +552,48 @@ fn fit_windows(
         inflation,
         converged: sol.converged,
     })
+}
+
+/// The covariance of θ of a refit: the window-clustered sandwich ([`cluster_sandwich`], CR2)
+///
+/// R = A [Σ_w (s_w − s̄)(s_w − s̄)ᵀ] A,  A = (JᵀJ)⁻¹,  s_w = J_wᵀ (I − H_ww)^(−1/2) r_w,
+///
+/// over the windows w used (J_w, r_w: the window's rows of the Jacobian of the profiled residuals
+/// and its residuals, σ units; H_ww = J_w A J_wᵀ), floored in every direction at the white-noise
+/// covariance W = s²A, s² = RSS/(frames − 2·windows − parameters) ([`covariance_floor`]:
+/// C ⪰ R and C ⪰ W). A window's residuals share its fitted initial state, the camera's correlated
+/// noise and the model's misfit along the window; windows are near-independent (their own states
+/// and noise), so the scatter of their scores carries all three without a model of the noise.
+/// The profiled Jacobian is orthogonal to the directions of each window's state, so the two
+/// degrees of freedom per window that the states take need no correction in R. The floor: a
+/// parameter that few windows determine (the latency: the fast windows of the driven runs) has a
+/// sandwich from few effective clusters, noisy and biased low, and the camera noise sets a variance
+/// below which no estimate is honest. Also returns the covariance's inflation, the largest variance
+/// ratio of C to W over all directions. With a single window there is no scatter to measure, and
+/// the covariance is W.
+fn window_covariance(
+    sol: &LsqFit,
+    used: &[(usize, usize)],
+    wins: &[Win],
+    samples: usize,
+) -> (DMatrix<f64>, f64) {
+    let clusters: Vec<(usize, usize)> = used
+        .iter()
+        .map(|&(wi, row0)| (row0, wins[wi].keep.len()))
+        .collect();
+    let p = sol.p.len();
+    let dof = (samples as f64 - 2.0 * used.len() as f64 - p as f64).max(1.0);
+    let white = gauss_newton_cov(&sol.jac).map(|v| {
+        if v.is_infinite() {
+            v
+        } else {
+            v * sol.rss / dof
+        }
+    });
+    match cluster_sandwich(&sol.jac, &sol.resid, &clusters) {
+        Some(robust) => covariance_floor(&robust, &white),
+        None => (white, 1.0),
+    }
 }
 
 /// Refits a window's state from the warm start `x` by Gauss–Newton steps (forward-difference

@@ -110,6 +110,31 @@ pub struct LmSolution {
     pub termination: Termination,
 }
 
+/// The R factor (upper triangle, min(m, n) × n) of the QR factorisation of `a`, computed
+/// sequentially. faer's default (global) parallelism splits the blocked Householder updates of a
+/// tall matrix over rayon's threads, so the rounding, and with it every fit by simulation, depended
+/// on the thread count (a campaign set's base refit: ζ and g differed by 1e-8 and 5e-9 relative
+/// between 1 and 2 threads);
+/// the matrices here are a few thousand rows by a few columns, too small to gain from threads.
+fn thin_r(mut a: Mat<f64>) -> Mat<f64> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::qr::no_pivoting::factor;
+    let (m, n) = a.shape();
+    let size = m.min(n);
+    let block = factor::recommended_block_size::<f64>(m, n);
+    let mut coeff = Mat::zeros(block, size);
+    let par = faer::Par::Seq;
+    let scratch = factor::qr_in_place_scratch::<f64>(m, n, block, par, Default::default());
+    factor::qr_in_place(
+        a.as_mut(),
+        coeff.as_mut(),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    );
+    Mat::from_fn(size, n, |i, j| if j >= i { a[(i, j)] } else { 0.0 })
+}
+
 /// The trust-region subproblem of one Jacobian in the scaled variable u = D p.
 struct Subproblem {
     /// Singular values of R (R from the QR of [J D⁻¹ | r]).
@@ -124,8 +149,7 @@ impl Subproblem {
     fn new(j: &DMatrix<f64>, r: &[f64], d: &[f64]) -> Option<Self> {
         let (m, n) = j.shape();
         let aug = Mat::from_fn(m, n + 1, |i, k| if k < n { j[(i, k)] / d[k] } else { r[i] });
-        let qr = aug.qr();
-        let rr = qr.thin_R();
+        let rr = thin_r(aug);
         let rmat = Mat::from_fn(n, n, |a, b| if b >= a { rr[(a, b)] } else { 0.0 });
         let svd = rmat.thin_svd().ok()?;
         let (u, s, vv) = (svd.U(), svd.S(), svd.V());
