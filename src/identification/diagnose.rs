@@ -12,7 +12,7 @@
 //! 6. **report** ([`report`]): findings, rejected candidates, predictions for the figures.
 
 use super::breakaway;
-use super::findings::{judged_finding, rejected, rivals};
+use super::findings::{judged_finding, profiled_size, rejected, rivals};
 use super::judge::{rms_per_run, rms_rad, Folds};
 use super::mismatch::{locate, MismatchOptions};
 use super::model::{Coefficients, Geometry};
@@ -284,6 +284,7 @@ pub fn fit_base(
             fit_latency: false,
             eta_static_excess: 0.0,
             tol: opts.tol,
+            held_shapes: Vec::new(),
         };
         let chosen = choose_windows(&prep.runs, opts.shooting.max_windows);
         wins = mask_windows(&model, &weak.coef, &chosen);
@@ -365,11 +366,13 @@ pub fn diagnose(
         let (t, fin) = select(&sctx, b.clone(), progress);
         tried = t;
         stage(progress, "final model refitted to convergence");
-        let fin = super::select::polish(&sctx, &fin);
+        let (fin, profiles) = super::select::polish_profiled(&sctx, &fin);
         let mut before = b;
         for t in tried.iter().filter(|t| t.accepted) {
             let rv = rivals(t, &tried);
-            if let Some(f) = judged_finding(t, before, &base.wins, runs, folds.k, &rv, &fin) {
+            if let Some(mut f) = judged_finding(t, before, &base.wins, runs, folds.k, &rv, &fin) {
+                let e = &t.candidate.effect;
+                f.size = profiled_size(e, &fin, &profiles, f.size.take(), &mut f.params);
                 findings.push(f);
             }
             before = t.state.as_ref().expect("accepted state");
@@ -564,6 +567,7 @@ fn report(
         fit_latency: false,
         eta_static_excess: 0.0,
         tol: opts.tol,
+        held_shapes: Vec::new(),
     };
     let base_pred: Vec<Prediction> = par_map(nr, |r| {
         predict(
