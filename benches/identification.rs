@@ -82,6 +82,7 @@ fn bench(c: &mut Criterion) {
         fit_latency: false,
         eta_static_excess: 0.0,
         tol: DiagnoseOptions::default().tol,
+        held_shapes: Vec::new(),
     };
     let wins = mask_windows(&model, &f.coef, &choose_windows(&all, so.max_windows));
     let w = refit(&model, &f.coef, &wins, &so).unwrap().used.len();

@@ -172,6 +172,7 @@ fn ci_campaign() -> &'static CampaignDoc {
             rk4_step_s: 2.5e-4,
             keep_sets: false,
             tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
+            profile_shapes: false,
         };
         let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
         std::fs::remove_dir_all(&out).ok();
@@ -258,6 +259,7 @@ fn remainder_floor_holds_under_coloured_noise() {
         rk4_step_s: 2.5e-4,
         keep_sets: false,
         tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
+        profile_shapes: false,
     };
     let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
     std::fs::remove_dir_all(&out).ok();
@@ -363,6 +365,7 @@ fn refit_sizes_are_unbiased_at_low_noise() {
         fit_latency: true,
         eta_static_excess: 0.0,
         tol: opts.tol,
+        held_shapes: Vec::new(),
     };
     let sopts = ShootingOptions {
         patience: 4,
@@ -536,6 +539,7 @@ fn frequency_dependent_damping_is_a_condition_dependence_of_zeta() {
         null_seeds: Vec::new(),
         set: SetSize::ci(),
         tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
+        profile_shapes: false,
         rk4_step_s: 2.5e-4,
         keep_sets: false,
     };
@@ -631,6 +635,7 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
             latency: 0.0,
             fit_latency: false,
             eta_static_excess: 0.0,
+            held_shapes: Vec::new(),
         };
         let sopts = ShootingOptions {
             patience: 4,
@@ -663,5 +668,64 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
         ));
     }
     assert!(covered >= 2 && worst <= 4.0, "{}", lines.join("\n"));
+    eprintln!("{}", lines.join("\n"));
+}
+
+/// The drag family's exponent, diagnosed end to end on recordings of the campaign generator
+/// (−c |β̇|^1.5 sgn β̇ with c = 0.4 rad^-0.5 s^-0.5, level 2, `ci` sets: 6 ring-downs of 3 s and 3
+/// driven runs of 12 turns) over 4 seeds: every detection reports the exponent with a σ, and
+/// the truth 1.5 lies within ±2σ of it in ≥ 90 % of the detections — more misses than
+/// `max_consistent_failures(n, 0.10, 0.01)` refute that at the 1 % level — with at least 3 of
+/// the 4 sets named `power_law_drag` (5 of 5 in the campaign of docs/diagnosis.md). Before the
+/// final model's shape was profiled (`identification::profile`) the refit crept from the
+/// quadratic member and stopped at 1.88–2.00 with σ 0.01–0.06: 0 of 11 covered in the campaign.
+///
+/// The campaign runs with `profile_shapes` (the diagnosis's opt-in shape profile). Ignored for
+/// its cost: the profile makes each of these diagnoses about 270 s CPU (release
+/// build; seed 1 measured: 1.577 ± 0.039, inside ±2σ), about 18 min CPU for the four, beyond the
+/// CI budget. Run with `cargo test --release --test campaign drag_exponent_covers -- --ignored`.
+#[test]
+#[ignore = "about 18 min CPU: the shape profile of each diagnosis (docs/diagnosis.md)"]
+fn drag_exponent_covers_the_truth_on_generated_sets() {
+    let out = std::env::temp_dir().join(format!("gearbif-campaign-drag-{}", std::process::id()));
+    let spec = CampaignSpec {
+        effects: vec!["power_law_drag".into()],
+        levels: vec![2.0],
+        seeds: (1..=4).collect(),
+        null_seeds: Vec::new(),
+        set: SetSize::ci(),
+        tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
+        profile_shapes: true,
+        rk4_step_s: 2.5e-4,
+        keep_sets: false,
+    };
+    let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    let cov: Vec<_> = doc
+        .cases
+        .iter()
+        .flat_map(|c| c.coverage.iter().map(move |e| (c.seed, e)))
+        .filter(|(_, e)| e.effect == "power_law_drag")
+        .collect();
+    let lines: Vec<String> = cov
+        .iter()
+        .map(|(s, e)| format!("seed {s}: {:?} (truth {})", e.reported, e.truth))
+        .collect();
+    let named = doc.cases.iter().filter(|c| c.named_right).count();
+    assert!(named >= 3, "named right in {named} of 4: {lines:#?}");
+    assert!(
+        cov.iter().all(|(_, e)| e.within_2sigma.is_some()),
+        "{lines:#?}"
+    );
+    let n = cov.len();
+    let k = cov
+        .iter()
+        .filter(|(_, e)| e.within_2sigma == Some(true))
+        .count();
+    let bound = max_consistent_failures(n, 0.10, 0.01);
+    assert!(
+        n - k <= bound,
+        "{k} of {n} within ±2σ (bound {bound}): {lines:#?}"
+    );
     eprintln!("{}", lines.join("\n"));
 }

@@ -478,26 +478,29 @@ fn fit<'py>(py: Python<'py>, set_dir: PathBuf, tol: Option<f64>) -> PyResult<Bou
 /// Diagnoses a recording set: fits the base model, locates the mismatch and names the missing
 /// physics from the catalogue.
 ///
-/// diagnose(set_dir, *, heldout=True, out_dir=None, tol=None)
+/// diagnose(set_dir, *, heldout=True, out_dir=None, tol=None, profile_shapes=False)
 ///
 /// heldout: compute the leave-one-run-out short-horizon predictions (slower). out_dir: also write
 /// report.json there. tol: relative tolerance of the simulations, in (0, 1) (None: the library's
-/// default, 1e-8). Returns the report as a dict (schema gearbif.diagnosis/1, docs/formats.md):
+/// default, 1e-8). profile_shapes: profile the final model's shape parameters for their minimum
+/// and σ (3–9 times the CPU when a family with a shape is named; docs/diagnosis.md). Returns the report as a dict (schema gearbif.diagnosis/1, docs/formats.md):
 /// verdict, findings, baseline, …. Raises RecordingError for a malformed set,
 /// InvalidParameterError for a tolerance outside (0, 1).
 #[pyfunction]
-#[pyo3(signature = (set_dir, *, heldout=true, out_dir=None, tol=None))]
+#[pyo3(signature = (set_dir, *, heldout=true, out_dir=None, tol=None, profile_shapes=false))]
 fn diagnose<'py>(
     py: Python<'py>,
     set_dir: PathBuf,
     heldout: bool,
     out_dir: Option<PathBuf>,
     tol: Option<f64>,
+    profile_shapes: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let defaults = DiagnoseOptions::default();
     let opts = DiagnoseOptions {
         heldout_predictions: heldout,
         tol: tol.unwrap_or(defaults.tol),
+        profile_shapes,
         ..defaults
     };
     let d = py

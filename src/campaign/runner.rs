@@ -42,6 +42,10 @@ pub struct CampaignSpec {
     /// written before this field existed reads as the default.
     #[serde(default = "default_tol")]
     pub tol: f64,
+    /// Profile the final models' shape parameters ([`DiagnoseOptions::profile_shapes`]); a
+    /// spec.json written before this field existed reads as `false`.
+    #[serde(default)]
+    pub profile_shapes: bool,
 }
 
 /// [`DiagnoseOptions::tol`] of the default options.
@@ -152,6 +156,7 @@ pub fn run_case(
     let t0 = Instant::now();
     let opts = DiagnoseOptions {
         tol: spec.tol,
+        profile_shapes: spec.profile_shapes,
         ..DiagnoseOptions::default()
     };
     let diag = diagnose(&set, &opts, &crate::progress::Silent);
@@ -238,11 +243,15 @@ pub fn run_campaign(
             line: (e.line() > 0).then_some(e.line()),
             what: format!("not a campaign spec ({e})"),
         })?;
-        if old.set != spec.set || old.rk4_step_s != spec.rk4_step_s || old.tol != spec.tol {
+        if old.set != spec.set
+            || old.rk4_step_s != spec.rk4_step_s
+            || old.tol != spec.tol
+            || old.profile_shapes != spec.profile_shapes
+        {
             return Err(Error::checkpoint(
                 out,
-                "the folder holds a campaign with another set size, step or tolerance; choose \
-                 another --out",
+                "the folder holds a campaign with another set size, step, tolerance or shape \
+                 profiling; choose another --out",
             ));
         }
     }

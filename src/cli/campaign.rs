@@ -67,6 +67,9 @@ pub struct Args {
     /// ten times tighter).
     #[arg(long, default_value_t = DiagnoseOptions::default().tol)]
     tol: f64,
+    /// Profile the final models' shape parameters (`gearbif diagnose --profile-shapes`).
+    #[arg(long)]
+    profile_shapes: bool,
     /// Keep the generated recording sets under OUT/sets/.
     #[arg(long)]
     keep_sets: bool,
@@ -103,6 +106,7 @@ fn spec_of(a: &Args) -> Result<CampaignSpec> {
         rk4_step_s: a.step,
         keep_sets: a.keep_sets,
         tol: super::common::tolerance("tol", a.tol)?,
+        profile_shapes: a.profile_shapes,
     };
     spec.validate()?;
     Ok(spec)

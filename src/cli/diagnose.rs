@@ -29,6 +29,11 @@ pub struct Args {
     /// predictions and the stick windows; the ring-down fits are integrated ten times tighter.
     #[arg(long, default_value_t = DiagnoseOptions::default().tol)]
     tol: f64,
+    /// Profile the shape parameters of the final model (drag exponent, load weight, Stribeck
+    /// width and shape) for their minimum and an honest σ: 3–9 times the CPU when such a family
+    /// is named (docs/diagnosis.md, "Shape parameters").
+    #[arg(long)]
+    profile_shapes: bool,
 }
 
 /// CPU time (user + system) of this process, s, from /proc/self/stat (Linux; `None` elsewhere).
@@ -48,6 +53,7 @@ pub fn run(a: Args) -> Result<()> {
     let opts = DiagnoseOptions {
         heldout_predictions: !a.no_heldout,
         tol: super::common::tolerance("tol", a.tol)?,
+        profile_shapes: a.profile_shapes,
         ..DiagnoseOptions::default()
     };
     let set = read_set(&a.set)?;

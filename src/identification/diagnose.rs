@@ -12,7 +12,7 @@
 //! 6. **report** ([`report`]): findings, rejected candidates, predictions for the figures.
 
 use super::breakaway;
-use super::findings::{judged_finding, rejected, rivals};
+use super::findings::{judged_finding, profiled_size, rejected, rivals};
 use super::judge::{rms_per_run, rms_rad, Folds};
 use super::mismatch::{locate, MismatchOptions};
 use super::model::{Coefficients, Geometry};
@@ -71,6 +71,15 @@ pub struct DiagnoseOptions {
     /// to minutes of decay), not a short window, so it is integrated tighter. Default 0.1 (1e-9 at
     /// the default `tol`, as the documented results). Must lie in (0, 1].
     pub ringdown_tol_ratio: f64,
+    /// Profile the shape parameters of the final model (drag exponent, load weight, Stribeck
+    /// width and shape; [`super::select::polish_profiled`]): each held on a ladder over its range
+    /// with the others refitted to convergence, the refit restarted from the profile's minimum,
+    /// and the headline σ of a family with a shape taken from the profile's 1σ interval. Off by
+    /// default: it costs 3–9 times the CPU of a diagnosis that names such a family (about 20 s
+    /// CPU per held value; docs/diagnosis.md, "Shape parameters"); without it the shapes keep
+    /// the refit's covariance σ, which is too small for them (docs/diagnosis.md, Known
+    /// weaknesses).
+    pub profile_shapes: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -90,6 +99,7 @@ impl Default for DiagnoseOptions {
             max_dictionary: 3,
             tol: 1e-8,
             ringdown_tol_ratio: 0.1,
+            profile_shapes: false,
         }
     }
 }
@@ -284,6 +294,7 @@ pub fn fit_base(
             fit_latency: false,
             eta_static_excess: 0.0,
             tol: opts.tol,
+            held_shapes: Vec::new(),
         };
         let chosen = choose_windows(&prep.runs, opts.shooting.max_windows);
         wins = mask_windows(&model, &weak.coef, &chosen);
@@ -365,11 +376,17 @@ pub fn diagnose(
         let (t, fin) = select(&sctx, b.clone(), progress);
         tried = t;
         stage(progress, "final model refitted to convergence");
-        let fin = super::select::polish(&sctx, &fin);
+        let (fin, profiles) = if opts.profile_shapes {
+            super::select::polish_profiled(&sctx, &fin)
+        } else {
+            (super::select::polish(&sctx, &fin), Vec::new())
+        };
         let mut before = b;
         for t in tried.iter().filter(|t| t.accepted) {
             let rv = rivals(t, &tried);
-            if let Some(f) = judged_finding(t, before, &base.wins, runs, folds.k, &rv, &fin) {
+            if let Some(mut f) = judged_finding(t, before, &base.wins, runs, folds.k, &rv, &fin) {
+                let e = &t.candidate.effect;
+                f.size = profiled_size(e, &fin, &profiles, f.size.take(), &mut f.params);
                 findings.push(f);
             }
             before = t.state.as_ref().expect("accepted state");
@@ -571,6 +588,7 @@ fn report(
         fit_latency: false,
         eta_static_excess: 0.0,
         tol: opts.tol,
+        held_shapes: Vec::new(),
     };
     let base_pred: Vec<Prediction> = par_map(nr, |r| {
         predict(

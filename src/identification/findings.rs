@@ -5,10 +5,11 @@ use super::catalog::{effect_params, Effect};
 use super::judge::{rms_rad, Comparison};
 use super::model::{Shape, DRAG_REFERENCE_SPEED};
 use super::preprocess::CleanRun;
+use super::profile::ShapeProfile;
 use super::regression::{DriftParam, Term};
 use super::report::{EffectSize, Finding};
 use super::select::{ModelState, Tried};
-use super::shooting::Win;
+use super::shooting::{SimFit, Win};
 use serde_json::json;
 use std::collections::BTreeMap;
 
@@ -201,6 +202,67 @@ pub fn load_fraction(st: &ModelState) -> Option<(f64, f64)> {
         }
     }
     Some((n / d, var.max(0.0).sqrt()))
+}
+
+/// The headline `size` of `effect` in the final model `fin` with its σ taken from the profiles of
+/// the effect's shape parameters ([`super::profile`]): the headline evaluated at θ of each end of
+/// each profile's 1σ interval (the other parameters refitted there), and σ the largest distance of
+/// these from the headline, when larger than the covariance's σ (a symmetric σ that covers the
+/// skewed side; the interval itself goes to `params` as `size_profile_lo`/`size_profile_hi`, with
+/// each shape's interval as `<shape>_profile_lo`/`_hi` and `_open_lo`/`_open_hi` = 1 where it
+/// reaches the end of the shape's range, and the covariance's σ as `size_sigma_covariance`).
+pub fn profiled_size(
+    effect: &Effect,
+    fin: &ModelState,
+    profiles: &[ShapeProfile],
+    size: Option<EffectSize>,
+    params: &mut BTreeMap<String, f64>,
+) -> Option<EffectSize> {
+    let mut size = size?;
+    let mine: Vec<&ShapeProfile> = profiles
+        .iter()
+        .filter(|p| effect.terms.contains(&Term::Shape(p.shape)))
+        .collect();
+    if mine.is_empty() {
+        return Some(size);
+    }
+    let (mut lo, mut hi) = (size.value, size.value);
+    for p in &mine {
+        let n = p.shape.name();
+        params.insert(format!("{n}_profile_lo"), p.interval.0);
+        params.insert(format!("{n}_profile_hi"), p.interval.1);
+        params.insert(
+            format!("{n}_profile_open_lo"),
+            f64::from(u8::from(p.open.0)),
+        );
+        params.insert(
+            format!("{n}_profile_open_hi"),
+            f64::from(u8::from(p.open.1)),
+        );
+        for th in &p.ends {
+            if th.len() != fin.fit.theta.len() {
+                continue;
+            }
+            let at = ModelState {
+                fit: SimFit {
+                    theta: th.clone(),
+                    ..fin.fit.clone()
+                },
+                ..fin.clone()
+            };
+            if let Some(h) = headline_size(effect, &params_of(effect, &at)) {
+                if h.value.is_finite() {
+                    lo = lo.min(h.value);
+                    hi = hi.max(h.value);
+                }
+            }
+        }
+    }
+    params.insert("size_profile_lo".into(), lo);
+    params.insert("size_profile_hi".into(), hi);
+    params.insert("size_sigma_covariance".into(), size.sigma);
+    size.sigma = size.sigma.max(size.value - lo).max(hi - size.value);
+    Some(size)
 }
 
 /// The judgement's numbers as evidence.

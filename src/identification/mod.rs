@@ -8,6 +8,7 @@
 //!
 //! - [`spec`]: a model as terms and coefficients, mapped to the simulated gear ([`model`]).
 //! - [`predict`]: short-horizon predictions over windows.
+//! - [`profile`]: profiles of the families' shape parameters for the final model's sizes.
 //! - [`synth`]: synthetic recording sets from a truth model with a chosen effect.
 
 pub mod breakaway;
@@ -21,6 +22,7 @@ pub mod model;
 pub mod nominal;
 pub mod predict;
 pub mod preprocess;
+pub mod profile;
 pub mod propose;
 pub mod regression;
 pub mod release;

@@ -19,11 +19,11 @@
 //! leave-fold-out refits ([`SimFit::step_without`]).
 
 use super::lm::{cluster_sandwich, covariance_floor, gauss_newton_cov, least_squares_tol, LsqFit};
-use super::model::{AugmentedGear, Coefficients, Geometry};
+use super::model::{AugmentedGear, Coefficients, Geometry, Shape};
 use super::predict::{fit_window_state, prediction_windows, window_residuals, window_system};
 use super::preprocess::CleanRun;
 use super::regression::Term;
-use super::spec::{coefficients_for_run, simulable};
+use super::spec::{coefficients_for_run, set_shape, simulable};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Mutex;
 
@@ -95,6 +95,9 @@ pub struct SimModel<'a> {
     pub eta_static_excess: f64,
     /// Relative tolerance of the window simulations ([`super::diagnose::DiagnoseOptions::tol`]).
     pub tol: f64,
+    /// Shape parameters held at these values outside θ (a profile over a family's shape,
+    /// [`super::profile`]; empty: every shape of the model is an entry of θ).
+    pub held_shapes: Vec<(Shape, f64)>,
 }
 
 impl SimModel<'_> {
@@ -110,6 +113,9 @@ impl SimModel<'_> {
     pub fn coefficients(&self, theta: &[f64], run: usize) -> Coefficients {
         let mut c = coefficients_for_run(&self.terms, &theta[..self.terms.len()], self.runs, run);
         c.eta_static_excess += self.eta_static_excess;
+        for &(s, v) in &self.held_shapes {
+            set_shape(&mut c, s, v);
+        }
         c
     }
     /// The window's system at θ.

@@ -30,6 +30,17 @@ pub fn column_term(t: Term, shapes: &[(Shape, f64)]) -> Term {
     .unwrap_or(t)
 }
 
+/// Sets the shape parameter `s` of the coefficients `c` to `v` (the value a [`Term::Shape`] entry
+/// of θ sets; used for a shape held outside θ, e.g. on a profile over it).
+pub fn set_shape(c: &mut Coefficients, s: Shape, v: f64) {
+    match s {
+        Shape::DragExponent => c.drag_exponent = Some(v),
+        Shape::LoadWeight => c.load_weight = v,
+        Shape::StribeckWidth => c.stribeck_width = v,
+        Shape::StribeckPower => c.stribeck_power = Some(v),
+    }
+}
+
 /// `terms` with values `coef` (shape parameters as their own entries) with every shape held
 /// fixed: the shape entries dropped and baked into their family's term ([`column_term`]).
 pub fn fix_shapes(terms: &[Term], coef: &[f64]) -> (Vec<Term>, Vec<f64>) {
@@ -140,7 +151,7 @@ pub fn coefficients(terms: &[Term], coef: &[f64]) -> Coefficients {
                 c.quad = v;
                 c.drag_exponent.get_or_insert(f64::from(p) / 10.0);
             }
-            Term::Shape(Shape::DragExponent) => c.drag_exponent = Some(v),
+            Term::Shape(s) => set_shape(&mut c, s, v),
             Term::Corot => c.corot = v,
             Term::LoadFric => c.eta_load = v,
             Term::RadialLoadFric => {
@@ -152,15 +163,12 @@ pub fn coefficients(terms: &[Term], coef: &[f64]) -> Coefficients {
                 c.load_radial = radial;
                 c.load_weight = f64::from(r) / 10.0;
             }
-            Term::Shape(Shape::LoadWeight) => c.load_weight = v,
             Term::StaticExcess => c.eta_static_excess = v,
             Term::StribeckGrid(w, d) => {
                 c.eta_static_excess = v;
                 c.stribeck_width = f64::from(w) / 100.0;
                 c.stribeck_power = Some(f64::from(d) / 10.0);
             }
-            Term::Shape(Shape::StribeckWidth) => c.stribeck_width = v,
-            Term::Shape(Shape::StribeckPower) => c.stribeck_power = Some(v),
             Term::Compliance => compliance = v,
             Term::DrivenOffset => offset = v,
             Term::DrivenOffsetRate => offset_rate = v,
