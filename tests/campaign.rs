@@ -534,6 +534,28 @@ fn remainder_is_located_out_of_family_and_absent_on_a_control() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A campaign of one effect at level 2 on `ci` sets (6 ring-downs of 3 s, 3 driven runs of 12
+/// turns), seeds 1..=`seeds`, no controls, the diagnosis's default tolerance; `profile_shapes`
+/// as [`CampaignSpec::profile_shapes`]. The folder is removed afterwards.
+fn level2_ci_campaign(effect: &str, seeds: u64, profile_shapes: bool) -> CampaignDoc {
+    let out =
+        std::env::temp_dir().join(format!("gearbif-campaign-{effect}-{}", std::process::id()));
+    let spec = CampaignSpec {
+        effects: vec![effect.into()],
+        levels: vec![2.0],
+        seeds: (1..=seeds).collect(),
+        null_seeds: Vec::new(),
+        set: SetSize::ci(),
+        tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
+        profile_shapes,
+        rk4_step_s: 2.5e-4,
+        keep_sets: false,
+    };
+    let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    doc
+}
+
 /// A viscous damping that depends on the drive frequency, from the campaign generator (not the
 /// catalog's form: ζ(1 + k(f − 1 Hz)) in the driven runs, the ring-downs at ζ, k = 0.6/Hz; CI
 /// sets of 6 ring-downs of 3 s and 3 driven runs of 12 turns at 0.5, 1.5, 2.5 Hz), over 4 seeds:
@@ -543,20 +565,7 @@ fn remainder_is_located_out_of_family_and_absent_on_a_control() {
 /// and named g instead (the Python generator's `freq_zeta`).
 #[test]
 fn frequency_dependent_damping_is_a_condition_dependence_of_zeta() {
-    let out = std::env::temp_dir().join(format!("gearbif-campaign-fd-{}", std::process::id()));
-    let spec = CampaignSpec {
-        effects: vec!["frequency_damping".into()],
-        levels: vec![2.0],
-        seeds: (1..=4).collect(),
-        null_seeds: Vec::new(),
-        set: SetSize::ci(),
-        tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
-        profile_shapes: false,
-        rk4_step_s: 2.5e-4,
-        keep_sets: false,
-    };
-    let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
-    std::fs::remove_dir_all(&out).ok();
+    let doc = level2_ci_campaign("frequency_damping", 4, false);
     assert_eq!(doc.cases.len(), 4);
     let per_run = |f: &&gearbif::campaign::metrics::FoundEffect| {
         f.effect == "condition_dependence" || f.effect == "parameter_drift"
@@ -699,20 +708,7 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
 #[test]
 #[ignore = "about 18 min CPU: the shape profile of each diagnosis (docs/diagnosis.md)"]
 fn drag_exponent_covers_the_truth_on_generated_sets() {
-    let out = std::env::temp_dir().join(format!("gearbif-campaign-drag-{}", std::process::id()));
-    let spec = CampaignSpec {
-        effects: vec!["power_law_drag".into()],
-        levels: vec![2.0],
-        seeds: (1..=4).collect(),
-        null_seeds: Vec::new(),
-        set: SetSize::ci(),
-        tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
-        profile_shapes: true,
-        rk4_step_s: 2.5e-4,
-        keep_sets: false,
-    };
-    let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
-    std::fs::remove_dir_all(&out).ok();
+    let doc = level2_ci_campaign("power_law_drag", 4, true);
     let cov: Vec<_> = doc
         .cases
         .iter()

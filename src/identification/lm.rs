@@ -290,7 +290,7 @@ pub fn least_squares_tol<F: Fn(&[f64]) -> Option<Vec<f64>>>(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     #[test]
@@ -327,8 +327,8 @@ mod tests {
     }
 
     /// Deterministic N(0, 1)-like numbers: sums of 12 uniforms of a linear congruential
-    /// generator, minus 6.
-    fn normals(n: usize, seed: u64) -> Vec<f64> {
+    /// generator, minus 6 (also the noise of the shooting module's tests).
+    pub(crate) fn normals(n: usize, seed: u64) -> Vec<f64> {
         let mut s = seed;
         (0..n)
             .map(|_| {

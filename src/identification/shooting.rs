@@ -681,24 +681,7 @@ pub fn par_map<T: Send, F: Fn(usize) -> T + Sync + Send>(n: usize, f: F) -> Vec<
 mod tests {
     use super::*;
 
-    /// Deterministic N(0, 1)-like noise: a sum of 12 uniform numbers of a linear congruential
-    /// generator, minus 6.
-    fn noise(n: usize, seed: u64) -> Vec<f64> {
-        let mut s = seed;
-        (0..n)
-            .map(|_| {
-                (0..12)
-                    .map(|_| {
-                        s = s
-                            .wrapping_mul(6364136223846793005)
-                            .wrapping_add(1442695040888963407);
-                        (s >> 11) as f64 / (1u64 << 53) as f64
-                    })
-                    .sum::<f64>()
-                    - 6.0
-            })
-            .collect()
-    }
+    use crate::identification::lm::tests::normals as noise;
 
     #[test]
     fn gross_outliers_are_spikes_not_a_smooth_misfit() {
