@@ -143,6 +143,19 @@ fn every_effect_generates_a_readable_set() {
     assert!(effect("no_such_effect").is_err());
 }
 
+/// The tiny sets of the CI campaigns: 4 ring-downs of 2 s and 2 driven runs of 8 turns (else as
+/// `ci`).
+fn tiny_set() -> SetSize {
+    SetSize {
+        name: "test".into(),
+        ringdowns: 4,
+        driven: 2,
+        turns: 8.0,
+        ringdown_s: 2.0,
+        ..SetSize::ci()
+    }
+}
+
 /// The CI campaign, run once for the tests below: tiny sets (4 ring-downs of 2 s, 2 driven runs of
 /// 8 turns); 20 seeds of the plain control; 8 seeds each of a static torque with a sin 2β part
 /// (A₁ = 12 s⁻², twice its reference size) and of a sensor latency (12 ms, twice its reference),
@@ -151,14 +164,7 @@ fn every_effect_generates_a_readable_set() {
 fn ci_campaign() -> &'static CampaignDoc {
     static DOC: OnceLock<CampaignDoc> = OnceLock::new();
     DOC.get_or_init(|| {
-        let set = SetSize {
-            name: "test".into(),
-            ringdowns: 4,
-            driven: 2,
-            turns: 8.0,
-            ringdown_s: 2.0,
-            ..SetSize::ci()
-        };
+        let set = tiny_set();
         let out = std::env::temp_dir().join(format!("gearbif-campaign-ci-{}", std::process::id()));
         let spec = CampaignSpec {
             effects: ["none", "static_torque_2h", "latency"]
@@ -238,14 +244,7 @@ fn ci_campaign_remainder_rate_on_white_noise() {
 /// verdicts must be `none`.
 #[test]
 fn remainder_floor_holds_under_coloured_noise() {
-    let set = SetSize {
-        name: "test".into(),
-        ringdowns: 4,
-        driven: 2,
-        turns: 8.0,
-        ringdown_s: 2.0,
-        ..SetSize::ci()
-    };
+    let set = tiny_set();
     let out = std::env::temp_dir().join(format!("gearbif-campaign-ar1-{}", std::process::id()));
     let spec = CampaignSpec {
         effects: ["none_ar1", "none_ar1_strong"]
