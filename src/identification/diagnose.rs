@@ -538,44 +538,12 @@ fn report(
 ) -> Result<Diagnosis> {
     let runs = &prep.runs;
     let nr = runs.len();
-    let setup = &set.gear;
-    let w = &base.weak;
-    let err = |k: usize| w.cov[(k, k)].max(0.0).sqrt();
-    let mut params = base_params(
-        (w.coef[0], err(0)),
-        (w.coef[1], err(1)),
-        (w.coef[2], err(2)),
-        (w.coef[3], err(3)),
-        setup.coupling(),
-        setup.coupling_rel_tol(),
-    );
+    let params = baseline_params(set, &base);
     let base_theta = base
         .state
         .as_ref()
         .map(|s| s.fit.theta.clone())
-        .unwrap_or(w.coef.clone());
-    if let Some(sb) = &base.state {
-        for k in ["g", "delta", "zeta", "eta"] {
-            for suffix in ["", "_err"] {
-                if let Some(v) = params.get(&format!("{k}{suffix}")).copied() {
-                    params.insert(format!("{k}_weak_form{suffix}"), v);
-                }
-            }
-        }
-        let f = &sb.fit;
-        params.extend(base_params(
-            (f.theta[0], f.err[0]),
-            (f.theta[1], f.err[1]),
-            (f.theta[2], f.err[2]),
-            (f.theta[3], f.err[3]),
-            setup.coupling(),
-            setup.coupling_rel_tol(),
-        ));
-        params.insert("simulation_refit_windows".into(), f.used.len() as f64);
-    }
-    params.insert("eq_chi2_per_dof".to_string(), w.chi2_dof);
-    params.insert("n_rows".to_string(), w.n as f64);
-    params.insert("n_eff".to_string(), w.n_eff);
+        .unwrap_or(base.weak.coef.clone());
     stage(
         progress,
         "short-horizon predictions of every run (base and final model)",
@@ -653,32 +621,7 @@ fn report(
             })
             .collect(),
     };
-    let final_map: BTreeMap<String, serde_json::Value> = final_state
-        .as_ref()
-        .map(|st| {
-            super::findings::coefficient_map(st)
-                .into_iter()
-                .map(|(k, v)| (k, json!([v.0, v.1])))
-                .collect()
-        })
-        .unwrap_or_default();
-    let fits = json!({
-        "ringdowns": prep.ringdowns,
-        "kappa_alpha0": prep.kappa,
-        "noise_rad": runs.iter().map(|r| r.sigma_beta).collect::<Vec<_>>(),
-        "outliers_rejected": runs.iter().map(|r| r.outliers).collect::<Vec<_>>(),
-        "augmented_coefficients": final_map,
-        "latency_s": latency,
-        "rejected_candidates": rejected(tried),
-        "judge": {
-            "folds": if base.wins.is_empty() { 0 } else { opts.folds },
-            "windows": base.wins.len(),
-            "base_heldout_rms_rad": base.state.as_ref().map(|s| rms_rad(&s.held.chi2, &base.wins, runs)),
-            "base_fit_rms_rad": base.state.as_ref().map(|s| rms_rad(&s.held.chi2_fit, &base.wins, runs)),
-            "rule": "held-out prediction by k-fold over runs; paired window χ² gain, cluster-robust z by run; z ≥ max(3, Φ⁻¹(1 − 0.01/m)), m candidates in the round",
-        },
-        "outlier_handling": "rejection: leave-one-out local cubic prediction, 6 robust σ; Huber weights (2.5 σ) in the regression; frames beyond 5σ masked in the windows",
-    });
+    let fits = fits_document(opts, &prep, &base, final_state.as_ref(), latency, tried);
     // fingerprints: base equation-error residuals (the final model's on the same rows)
     let fingerprint = fingerprints(&base, final_state.as_ref(), runs, &opts.weak, latency);
     Ok(Diagnosis {
@@ -701,6 +644,85 @@ fn report(
         base_pred,
         aug_pred,
         fingerprint,
+    })
+}
+
+/// The base model's parameters for the report: the weak-form fit's (g, Δ, ζ, η with their σ and
+/// what they imply against the set-up's nominal coupling), replaced by the refit by simulation's
+/// when there is one (the weak-form values kept under `*_weak_form`), and the weak form's χ²/dof
+/// and row counts.
+fn baseline_params(set: &RecordingSet, base: &BaseModel) -> BTreeMap<String, f64> {
+    let setup = &set.gear;
+    let w = &base.weak;
+    let err = |k: usize| w.cov[(k, k)].max(0.0).sqrt();
+    let mut params = base_params(
+        (w.coef[0], err(0)),
+        (w.coef[1], err(1)),
+        (w.coef[2], err(2)),
+        (w.coef[3], err(3)),
+        setup.coupling(),
+        setup.coupling_rel_tol(),
+    );
+    if let Some(sb) = &base.state {
+        for k in ["g", "delta", "zeta", "eta"] {
+            for suffix in ["", "_err"] {
+                if let Some(v) = params.get(&format!("{k}{suffix}")).copied() {
+                    params.insert(format!("{k}_weak_form{suffix}"), v);
+                }
+            }
+        }
+        let f = &sb.fit;
+        params.extend(base_params(
+            (f.theta[0], f.err[0]),
+            (f.theta[1], f.err[1]),
+            (f.theta[2], f.err[2]),
+            (f.theta[3], f.err[3]),
+            setup.coupling(),
+            setup.coupling_rel_tol(),
+        ));
+        params.insert("simulation_refit_windows".into(), f.used.len() as f64);
+    }
+    params.insert("eq_chi2_per_dof".to_string(), w.chi2_dof);
+    params.insert("n_rows".to_string(), w.n as f64);
+    params.insert("n_eff".to_string(), w.n_eff);
+    params
+}
+
+/// The report's `fits` document: ring-down and κ(α0) fits, the cleaning's noise and outliers,
+/// the final model's coefficients, the rejected candidates and the judge's settings.
+fn fits_document(
+    opts: &DiagnoseOptions,
+    prep: &Prepared,
+    base: &BaseModel,
+    final_state: Option<&ModelState>,
+    latency: f64,
+    tried: &[Tried],
+) -> serde_json::Value {
+    let runs = &prep.runs;
+    let final_map: BTreeMap<String, serde_json::Value> = final_state
+        .map(|st| {
+            super::findings::coefficient_map(st)
+                .into_iter()
+                .map(|(k, v)| (k, json!([v.0, v.1])))
+                .collect()
+        })
+        .unwrap_or_default();
+    json!({
+        "ringdowns": prep.ringdowns,
+        "kappa_alpha0": prep.kappa,
+        "noise_rad": runs.iter().map(|r| r.sigma_beta).collect::<Vec<_>>(),
+        "outliers_rejected": runs.iter().map(|r| r.outliers).collect::<Vec<_>>(),
+        "augmented_coefficients": final_map,
+        "latency_s": latency,
+        "rejected_candidates": rejected(tried),
+        "judge": {
+            "folds": if base.wins.is_empty() { 0 } else { opts.folds },
+            "windows": base.wins.len(),
+            "base_heldout_rms_rad": base.state.as_ref().map(|s| rms_rad(&s.held.chi2, &base.wins, runs)),
+            "base_fit_rms_rad": base.state.as_ref().map(|s| rms_rad(&s.held.chi2_fit, &base.wins, runs)),
+            "rule": "held-out prediction by k-fold over runs; paired window χ² gain, cluster-robust z by run; z ≥ max(3, Φ⁻¹(1 − 0.01/m)), m candidates in the round",
+        },
+        "outlier_handling": "rejection: leave-one-out local cubic prediction, 6 robust σ; Huber weights (2.5 σ) in the regression; frames beyond 5σ masked in the windows",
     })
 }
 
