@@ -490,6 +490,33 @@ impl Clock {
     }
 }
 
+/// The samples of `r` in stick phases: runs of at least `rest_run` samples whose velocity is
+/// below `rest_sigmas` times its noise (v_gain·σ_β), widened by `stick_margin` on each side.
+fn stick_phases(r: &CleanRun, opts: &WeakOptions) -> Vec<bool> {
+    let n = r.t.len();
+    let v_thr = opts.rest_sigmas * r.v_gain * r.sigma_beta;
+    let rest: Vec<bool> = r.v.iter().map(|v| v.abs() < v_thr).collect();
+    let mut stuck = vec![false; n];
+    let mut i0 = 0;
+    while i0 < n {
+        if !rest[i0] {
+            i0 += 1;
+            continue;
+        }
+        let mut i1 = i0;
+        while i1 < n && rest[i1] {
+            i1 += 1;
+        }
+        if i1 - i0 >= opts.rest_run.max(1) {
+            let lo = i0.saturating_sub(opts.stick_margin);
+            let hi = (i1 + opts.stick_margin).min(n);
+            stuck[lo..hi].iter_mut().for_each(|s| *s = true);
+        }
+        i0 = i1;
+    }
+    stuck
+}
+
 /// The previous sample inside a window: (t, φ, v, term values).
 type Prev = (f64, f64, f64, Vec<(f64, bool)>);
 
@@ -532,27 +559,7 @@ pub fn build(
             turns: r.alpha_rate.abs() * (t - t_first) / std::f64::consts::TAU,
         };
         let h = opts.half_width * r.dt;
-        let v_thr = opts.rest_sigmas * r.v_gain * r.sigma_beta;
-        let rest: Vec<bool> = r.v.iter().map(|v| v.abs() < v_thr).collect();
-        // stick phases: runs of ≥ rest_run samples at rest, widened by stick_margin
-        let mut stuck = vec![false; n];
-        let mut i0 = 0;
-        while i0 < n {
-            if !rest[i0] {
-                i0 += 1;
-                continue;
-            }
-            let mut i1 = i0;
-            while i1 < n && rest[i1] {
-                i1 += 1;
-            }
-            if i1 - i0 >= opts.rest_run.max(1) {
-                let lo = i0.saturating_sub(opts.stick_margin);
-                let hi = (i1 + opts.stick_margin).min(n);
-                stuck[lo..hi].iter_mut().for_each(|s| *s = true);
-            }
-            i0 = i1;
-        }
+        let stuck = stick_phases(r, opts);
         let alpha: Vec<f64> = r.alpha.iter().map(|a| a - r.alpha_rate * latency).collect();
         let mut lo = 0usize;
         let mut c = 0usize;
