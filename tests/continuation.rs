@@ -9,6 +9,7 @@ use gearbif::model::{Gear, GearParam, Parameter, Parametrised};
 use gearbif::orbits::{quasi_static_sweep, OrbitSpec, ShootingOptions};
 use gearbif::Error;
 use std::f64::consts::{FRAC_PI_2, TAU};
+use std::sync::OnceLock;
 
 fn lock_branch_theta0() -> Branch {
     let gear = Gear::paper(0.0, 5.0).unwrap();
@@ -232,36 +233,9 @@ fn theta25_transitions_confirmed_by_up_and_down_sweeps() {
 
 #[test]
 fn theta25_switch_to_asymmetric_branch_and_find_its_flip() {
-    let b = sym_branch_theta25(1e-11);
-    let sb = b
-        .specials_of(SpecialKind::SymmetryBreaking)
-        .find(|s| s.param > 2.4)
-        .unwrap()
-        .clone();
-    let sw = switch_branch(&b, &sb, -1e-3, &ShootingOptions::default()).unwrap();
-    assert_eq!(sw.spec, OrbitSpec::stroboscopic(1, 1));
-    assert!(sw.separation > 1e-3);
-    assert!(sw.orbit.floquet.stable);
-    let opts = ContinuationOptions {
-        ds: -0.005,
-        ds_max: 0.02,
-        param_min: 1.8,
-        param_max: 3.0,
-        max_steps: 400,
-        ..Default::default()
-    };
-    let a = Continuation::from_orbit(sw.system, GearParam::F, &sw.orbit, opts)
-        .unwrap()
-        .run(None)
-        .unwrap();
+    let a = default_asymmetric_branch();
+    check_theta25_asymmetric_branch(a, "default method");
     let flips: Vec<_> = a.specials_of(SpecialKind::Flip).collect();
-    assert_eq!(flips.len(), 1, "{:?}", a.specials);
-    assert!(
-        (flips[0].param - 1.8549349).abs() < 1e-5,
-        "{}",
-        flips[0].param
-    );
-    assert!(flips[0].precision < 1e-7);
     // the branch passes stick onset and end: nonsmooth points with (crossings, sticks) changes
     let ns: Vec<_> = a.specials_of(SpecialKind::Nonsmooth).collect();
     assert!(!ns.is_empty());
@@ -271,7 +245,7 @@ fn theta25_switch_to_asymmetric_branch_and_find_its_flip() {
         assert!(s.precision < 1e-7);
     }
     // period doubling: switch at the flip onto P_T², a period-2 orbit
-    let pd = switch_branch(&a, flips[0], -1e-3, &ShootingOptions::default()).unwrap();
+    let pd = switch_branch(a, flips[0], -1e-3, &ShootingOptions::default()).unwrap();
     assert_eq!(pd.spec, OrbitSpec::stroboscopic(2, 2));
     // it is not a fixed point of P_T
     let (r1, _) = gearbif::orbits::residual(
@@ -299,6 +273,9 @@ where
         .unwrap()
         .clone();
     let sw = switch_branch_with(&method, &b, &sb, -1e-3, &ShootingOptions::default()).unwrap();
+    assert_eq!(sw.spec, OrbitSpec::stroboscopic(1, 1));
+    assert!(sw.separation > 1e-3);
+    assert!(sw.orbit.floquet.stable);
     let opts = ContinuationOptions {
         ds: -0.005,
         ds_max: 0.02,
@@ -320,6 +297,16 @@ where
     .unwrap()
 }
 
+/// [`theta25_asymmetric_branch`] with the default method (the DOP853), computed once for the two
+/// tests that use it.
+fn default_asymmetric_branch() -> &'static Branch {
+    static A: OnceLock<Branch> = OnceLock::new();
+    A.get_or_init(|| {
+        use gearbif::integrator::DEFAULT_METHOD;
+        theta25_asymmetric_branch(DEFAULT_METHOD, DEFAULT_METHOD)
+    })
+}
+
 /// The checks of `theta25_switch_to_asymmetric_branch_and_find_its_flip` on that branch.
 fn check_theta25_asymmetric_branch(a: &Branch, label: &str) {
     for s in &a.specials {
@@ -336,9 +323,9 @@ fn check_theta25_asymmetric_branch(a: &Branch, label: &str) {
 }
 
 #[test]
-fn theta25_asymmetric_branch_with_the_dop853_finds_the_same_points() {
-    // The whole chain (symmetric branch, switch, asymmetric branch) with the DOP853 and with the
-    // DP5: the orbit first sticks at F ≈ 2.37033877 (ω = 0 touched where static friction holds,
+fn theta25_asymmetric_branch_with_the_dp5_finds_the_same_points() {
+    // The whole chain (symmetric branch, switch, asymmetric branch) with the default DOP853 (shared
+    // with the test above) and with the DP5 as a second method: the orbit first sticks at F ≈ 2.37033877 (ω = 0 touched where static friction holds,
     // a corner of the branch). With a sign test at 16 points per step the DOP853 bracketed a
     // nonsmooth point only to ≥ 1e-7; an exact search of the whole step found spurious re-sticks
     // right after tangential releases (15 nonsmooth points, two bracketed to 5.7e-5 and 2.8e-3).
@@ -346,10 +333,10 @@ fn theta25_asymmetric_branch_with_the_dop853_finds_the_same_points() {
     // three nonsmooth points and flip within their brackets (measured, DOP853 / DP5:
     // 2.3703387830 / 2.3703387657, 2.3641732853 / 2.3641732821, 2.3429963756 / 2.3429963706,
     // flip 1.8549348707 / 1.8549348727).
-    use gearbif::integrator::{EventDriven, EventDriven853};
-    let a = theta25_asymmetric_branch(EventDriven853, EventDriven853);
-    check_theta25_asymmetric_branch(&a, "DOP853");
+    use gearbif::integrator::EventDriven;
+    let a = default_asymmetric_branch();
     let b = theta25_asymmetric_branch(EventDriven, EventDriven);
+    check_theta25_asymmetric_branch(&b, "DP5");
     let pa: Vec<_> = a
         .specials
         .iter()
