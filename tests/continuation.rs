@@ -351,8 +351,10 @@ fn theta25_asymmetric_branch_with_the_dp5_finds_the_same_points() {
     for ((ka, xa, ea), (kb, xb, eb)) in pa.iter().zip(&pb) {
         assert_eq!(ka, kb);
         // both located to their brackets; the two integrators' orbits differ by their errors
+        // (measured: the stick onset 1.73e-8 apart with brackets 4.3e-9 + 9.8e-9, the others
+        // within their brackets)
         assert!(
-            (xa - xb).abs() < ea + eb + 1e-7,
+            (xa - xb).abs() < ea + eb + 1e-8,
             "{ka:?}: {xa} ± {ea:e} vs {xb} ± {eb:e}"
         );
     }
