@@ -20,6 +20,7 @@ use super::model::Shape;
 use super::propose::{DRAG_EXPONENT_GRID, LOAD_WEIGHT_GRID, STRIBECK_WIDTH_GRID};
 use super::regression::Term;
 use super::shooting::{SimFit, SimModel};
+use crate::numerics::Bisection;
 
 /// The profile of one shape parameter.
 #[derive(Debug, Clone, PartialEq)]
@@ -319,7 +320,7 @@ where
             None => break None,
         }
     };
-    let Some(mut far) = far else {
+    let Some(far) = far else {
         // within 1σ up to the end of the range on this side
         let p = w
             .pts
@@ -328,21 +329,19 @@ where
             .expect("points");
         return (p.0, true, p.2.clone());
     };
-    let mut near = w
+    let near = w
         .pts
         .iter()
         .filter(|p| (p.0 - v_hat) * dir >= 0.0 && (p.0 - far) * dir < 0.0 && p.1 < target)
         .max_by(|a, b| ((a.0 - v_hat) * dir).total_cmp(&((b.0 - v_hat) * dir)))
         .map(|p| p.0)
         .unwrap_or(v_hat);
+    let mut b = Bisection::new(near, far);
     for _ in 0..END_STEPS {
-        let mid = 0.5 * (near + far);
-        if w.at(mid) >= target {
-            far = mid;
-        } else {
-            near = mid;
-        }
+        let Some(mid) = b.next_point() else { break };
+        b.update(mid, w.at(mid) >= target);
     }
+    let (near, far) = (b.lo(), b.hi());
     let get = |w: &Walker<F>, v: f64| {
         w.pts
             .iter()
