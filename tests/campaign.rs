@@ -143,17 +143,39 @@ fn every_effect_generates_a_readable_set() {
     assert!(effect("no_such_effect").is_err());
 }
 
-/// The tiny sets of the CI campaigns: 4 ring-downs of 2 s and 2 driven runs of 8 turns (else as
-/// `ci`).
-fn tiny_set() -> SetSize {
-    SetSize {
+/// A campaign on the CI's tiny sets (4 ring-downs of 2 s and 2 driven runs of 8 turns, else as
+/// `ci`) at level `level`, the diagnosis's default options; the folder (named by `tag`) is
+/// removed afterwards.
+fn tiny_campaign(
+    tag: &str,
+    effects: &[&str],
+    level: f64,
+    seeds: u64,
+    null_seeds: u64,
+) -> CampaignDoc {
+    let set = SetSize {
         name: "test".into(),
         ringdowns: 4,
         driven: 2,
         turns: 8.0,
         ringdown_s: 2.0,
         ..SetSize::ci()
-    }
+    };
+    let out = std::env::temp_dir().join(format!("gearbif-campaign-{tag}-{}", std::process::id()));
+    let spec = CampaignSpec {
+        effects: effects.iter().map(|s| s.to_string()).collect(),
+        levels: vec![level],
+        seeds: (1..=seeds).collect(),
+        null_seeds: (1..=null_seeds).collect(),
+        set,
+        rk4_step_s: 2.5e-4,
+        keep_sets: false,
+        tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
+        profile_shapes: false,
+    };
+    let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
+    std::fs::remove_dir_all(&out).ok();
+    doc
 }
 
 /// The CI campaign, run once for the tests below: tiny sets (4 ring-downs of 2 s, 2 driven runs of
@@ -163,27 +185,7 @@ fn tiny_set() -> SetSize {
 /// gives the cost).
 fn ci_campaign() -> &'static CampaignDoc {
     static DOC: OnceLock<CampaignDoc> = OnceLock::new();
-    DOC.get_or_init(|| {
-        let set = tiny_set();
-        let out = std::env::temp_dir().join(format!("gearbif-campaign-ci-{}", std::process::id()));
-        let spec = CampaignSpec {
-            effects: ["none", "static_torque_2h", "latency"]
-                .iter()
-                .map(|s| s.to_string())
-                .collect(),
-            levels: vec![2.0],
-            seeds: (1..=8).collect(),
-            null_seeds: (1..=20).collect(),
-            set,
-            rk4_step_s: 2.5e-4,
-            keep_sets: false,
-            tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
-            profile_shapes: false,
-        };
-        let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
-        std::fs::remove_dir_all(&out).ok();
-        doc
-    })
+    DOC.get_or_init(|| tiny_campaign("ci", &["none", "static_torque_2h", "latency"], 2.0, 8, 20))
 }
 
 fn summary() -> &'static Summary {
@@ -244,24 +246,7 @@ fn ci_campaign_remainder_rate_on_white_noise() {
 /// verdicts must be `none`.
 #[test]
 fn remainder_floor_holds_under_coloured_noise() {
-    let set = tiny_set();
-    let out = std::env::temp_dir().join(format!("gearbif-campaign-ar1-{}", std::process::id()));
-    let spec = CampaignSpec {
-        effects: ["none_ar1", "none_ar1_strong"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect(),
-        levels: vec![1.0],
-        seeds: vec![1],
-        null_seeds: (1..=5).collect(),
-        set,
-        rk4_step_s: 2.5e-4,
-        keep_sets: false,
-        tol: gearbif::identification::diagnose::DiagnoseOptions::default().tol,
-        profile_shapes: false,
-    };
-    let doc = run_campaign(&spec, &out, &gearbif::progress::Silent).unwrap();
-    std::fs::remove_dir_all(&out).ok();
+    let doc = tiny_campaign("ar1", &["none_ar1", "none_ar1_strong"], 1.0, 1, 5);
     assert_eq!(doc.cases.len(), 10);
     for c in &doc.cases {
         assert_eq!(c.verdict, "none", "{} seed {}", c.effect, c.seed);
