@@ -256,6 +256,26 @@ pub fn least_squares_tol<F: Fn(&[f64]) -> Option<Vec<f64>>>(
     tol: Option<(f64, f64)>,
     forward: bool,
 ) -> Option<LsqFit> {
+    let jac = |p: &[f64], r: &[f64]| fd_jacobian(f, p, r, steps, forward);
+    least_squares_with_jacobian(f, &jac, p0, patience, tol)
+}
+
+/// Minimises Σ r(p)² from `p0` with the Jacobian `jac(p, r(p))` of the caller (e.g. the
+/// variable-projection Jacobian of the refit by simulation,
+/// [`super::shooting`]); `patience` and `tol` as [`least_squares_tol`]. The residuals and the
+/// Jacobian are evaluated once more at the solution (a residual function with state, such as
+/// warm starts, ends on the solution), and the covariance is s²(JᵀJ)⁻¹ of that Jacobian.
+pub fn least_squares_with_jacobian<F, J>(
+    f: &F,
+    jac: &J,
+    p0: &[f64],
+    patience: usize,
+    tol: Option<(f64, f64)>,
+) -> Option<LsqFit>
+where
+    F: Fn(&[f64]) -> Option<Vec<f64>>,
+    J: Fn(&[f64], &[f64]) -> Option<DMatrix<f64>>,
+{
     let n = p0.len();
     let mut opts = LmOptions {
         max_evaluations: patience.max(1) * (n + 1),
@@ -265,17 +285,14 @@ pub fn least_squares_tol<F: Fn(&[f64]) -> Option<Vec<f64>>>(
         opts.ftol = ftol;
         opts.xtol = xtol;
     }
-    let jac = |p: &[f64], r: &[f64]| fd_jacobian(f, p, r, steps, forward);
     let sol = minimize(f, jac, p0, &opts).ok()?;
     let (m, p) = (sol.resid.len(), sol.x);
     if m <= n {
         return None;
     }
-    // the residuals once more at the solution: a residual function with state (warm starts)
-    // ends on the solution
     let resid = f(&p)?;
     let rss: f64 = resid.iter().map(|r| r * r).sum();
-    let j = fd_jacobian(f, &p, &resid, steps, forward)?;
+    let j = jac(&p, &resid)?;
     let s2 = rss / (m - n) as f64;
     // an infinite variance stays infinite for an exact fit (s² = 0)
     let cov = gauss_newton_cov(&j).map(|v| if v.is_infinite() { v } else { v * s2 });

@@ -6,9 +6,11 @@
 //! the short prediction windows of [`super::predict`] (≤ 30 samples, ≤ 0.4 s: short enough for
 //! chaos not to matter) and the model is simulated with the exact Filippov integrator over each
 //! window. The window initial states (β, β̇) are nuisance parameters, profiled out (variable
-//! projection: for every trial parameter vector θ each window's state is refitted, warm-started);
-//! θ is fitted to the residuals (β_sim − β_meas)/σ_camera by Levenberg–Marquardt with a central
-//! finite-difference Jacobian of the profiled residuals. The covariance of θ is the
+//! projection: for every trial parameter vector θ each window's state is refitted, warm-started
+//! from the optimiser's current point, to a Gauss–Newton decrement below 10⁻⁸); θ is fitted to the
+//! residuals (β_sim − β_meas)/σ_camera by Levenberg–Marquardt with the variable-projection
+//! Jacobian of the profiled residuals ([`varpro_jacobian`]: central differences with the states
+//! held, the state directions projected out). The covariance of θ is the
 //! window-clustered sandwich built on that Jacobian, never below the white-noise s²(JᵀJ)⁻¹
 //! ([`window_covariance`]): the windows are the independent units, and the scatter of their
 //! scores carries the correlation of a window's residuals and a misfit of the model, which
@@ -18,7 +20,9 @@
 //! the sensor latency. The Jacobian at the solution is kept: the judge uses it for the one-step
 //! leave-fold-out refits ([`SimFit::step_without`]).
 
-use super::lm::{cluster_sandwich, covariance_floor, gauss_newton_cov, least_squares_tol, LsqFit};
+use super::lm::{
+    cluster_sandwich, covariance_floor, gauss_newton_cov, least_squares_with_jacobian, LsqFit,
+};
 use super::model::{AugmentedGear, Coefficients, Geometry, Shape};
 use super::predict::{fit_window_state, prediction_windows, window_residuals, window_system};
 use super::preprocess::CleanRun;
@@ -482,9 +486,13 @@ fn fit_windows(
     if used.is_empty() {
         return None;
     }
-    let warm = Mutex::new(states);
+    let warm = Mutex::new(Projected {
+        theta: Vec::new(),
+        states: states.clone(),
+        best: (f64::INFINITY, states),
+    });
     let residuals = |theta: &[f64]| -> Option<Vec<f64>> {
-        let guesses = warm.lock().ok()?.clone();
+        let guesses = warm.lock().ok()?.best.1.clone();
         let per: Vec<Option<(Vec<f64>, [f64; 2])>> = par_map(used.len(), |k| {
             let w = &wins[used[k].0];
             let r = &model.runs[w.run];
@@ -507,8 +515,28 @@ fn fit_windows(
             out.extend(res);
             new_states[k] = x0;
         }
-        *warm.lock().ok()? = new_states;
+        let chi2: f64 = out.iter().map(|v| v * v).sum();
+        let mut g = warm.lock().ok()?;
+        if chi2 <= g.best.0 {
+            g.best = (chi2, new_states.clone());
+        }
+        g.theta = theta.to_vec();
+        g.states = new_states;
         Some(out)
+    };
+    let jacobian = |theta: &[f64], _r: &[f64]| -> Option<DMatrix<f64>> {
+        let at_theta = {
+            let g = warm.lock().ok()?;
+            (g.theta == theta).then(|| g.states.clone())
+        };
+        let states = match at_theta {
+            Some(s) => s,
+            None => {
+                residuals(theta)?;
+                warm.lock().ok()?.states.clone()
+            }
+        };
+        varpro_jacobian(model, theta, wins, &used, &states, row)
     };
     let r0 = residuals(theta0)?;
     let sigma_rms = |res: &[f64]| -> f64 {
@@ -525,17 +553,12 @@ fn fit_windows(
         }
         (ss / n.max(1) as f64).sqrt()
     };
-    let nt = model.terms.len();
-    let steps: Vec<f64> = (0..theta0.len())
-        .map(|k| if k >= nt { 1e-3 } else { 1e-4 })
-        .collect();
-    let sol = least_squares_tol(
+    let sol = least_squares_with_jacobian(
         &residuals,
+        &jacobian,
         theta0,
-        &steps,
         opts.patience,
         Some((1e-6, 1e-5)),
-        true,
     )?;
     let samples: usize = used.iter().map(|&(wi, _)| wins[wi].kept()).sum();
     let (cov, inflation) = window_covariance(&sol, &used, wins, samples);
@@ -543,7 +566,7 @@ fn fit_windows(
         .map(|k| cov[(k, k)].max(0.0).sqrt())
         .collect();
     let (rms_rad, rms_start_rad) = (sigma_rms(&sol.resid), sigma_rms(&r0));
-    let states = warm.into_inner().ok()?;
+    let states = warm.into_inner().ok()?.states;
     Some(SimFit {
         theta: sol.p.clone(),
         err,
@@ -558,6 +581,110 @@ fn fit_windows(
         inflation,
         converged: sol.converged,
     })
+}
+
+/// The window states projected at the last θ whose residuals were evaluated (the warm starts of
+/// the next projection, and the states at which [`varpro_jacobian`] differentiates).
+struct Projected {
+    theta: Vec<f64>,
+    states: Vec<[f64; 2]>,
+    /// The states at the smallest χ² evaluated so far (the optimiser's current point: the warm
+    /// start of the next projection, so that a rejected trial's states never seed it).
+    best: (f64, Vec<[f64; 2]>),
+}
+
+/// Relative finite-difference step of a term coefficient in [`varpro_jacobian`] (of
+/// max(|θ_k|, 1)); the latency's step is [`LATENCY_STEP`].
+const COEF_STEP: f64 = 1e-4;
+/// Finite-difference step of the latency, s.
+const LATENCY_STEP: f64 = 1e-5;
+/// Finite-difference steps of a window's initial state (β: rad, β̇: rad/s).
+const STATE_STEP: [f64; 2] = [1e-6, 1e-5];
+
+/// The Jacobian of the profiled residuals at θ by variable projection (Kaufman's form of the
+/// Golub–Pereyra derivative): for every used window w, with its state x_w held at the projected
+/// one,
+///
+/// J_w = (I − Q_w Q_wᵀ) ∂r_w/∂θ,  Q_w an orthonormal basis of the columns of ∂r_w/∂x_w,
+///
+/// both derivatives by central differences of simulations from the same state (steps
+/// [`COEF_STEP`], [`LATENCY_STEP`], [`STATE_STEP`]). At a projected state (∂r_w/∂x_wᵀ r_w = 0)
+/// this is the derivative of the profiled residuals to first order, and it does not depend on how
+/// far each projection was iterated: differencing the projected residuals themselves (each trial
+/// θ re-projecting the states from the previous trial's) adds the projections' stopping errors
+/// divided by the step, which on a drag family made the exponent's column 30 % too long and its
+/// σ 25 times too small. A state direction the window does not see (a window at rest throughout:
+/// β̇₀ has no effect) is left out of Q_w. `None` when a simulation fails.
+fn varpro_jacobian(
+    model: &SimModel,
+    theta: &[f64],
+    wins: &[Win],
+    used: &[(usize, usize)],
+    states: &[[f64; 2]],
+    rows: usize,
+) -> Option<DMatrix<f64>> {
+    let n = theta.len();
+    let nt = model.terms.len();
+    let blocks: Vec<Option<DMatrix<f64>>> = par_map(used.len(), |k| {
+        let w = &wins[used[k].0];
+        let r = &model.runs[w.run];
+        let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
+        let s = r.sigma_camera.max(1e-12);
+        let sim = |th: &[f64], x: [f64; 2]| {
+            window_residuals(&model.system(th, w), t, b, &w.keep, s, x, model.tol)
+        };
+        let x = states[k];
+        let nw = w.keep.len();
+        let mut jw = DMatrix::zeros(nw, n);
+        let mut th = theta.to_vec();
+        for c in 0..n {
+            let h = if c >= nt {
+                LATENCY_STEP
+            } else {
+                COEF_STEP * theta[c].abs().max(1.0)
+            };
+            th[c] = theta[c] + h;
+            let rp = sim(&th, x)?;
+            th[c] = theta[c] - h;
+            let rm = sim(&th, x)?;
+            th[c] = theta[c];
+            for i in 0..nw {
+                jw[(i, c)] = (rp[i] - rm[i]) / (2.0 * h);
+            }
+        }
+        let mut basis: Vec<DVector<f64>> = Vec::with_capacity(2);
+        for (i, &h) in STATE_STEP.iter().enumerate() {
+            let (mut xp, mut xm) = (x, x);
+            xp[i] += h;
+            xm[i] -= h;
+            let (rp, rm) = (sim(theta, xp)?, sim(theta, xm)?);
+            let mut q = DVector::from_iterator(nw, (0..nw).map(|a| (rp[a] - rm[a]) / (2.0 * h)));
+            let norm0 = q.norm();
+            for e in &basis {
+                let d = e.dot(&q);
+                q -= e * d;
+            }
+            let norm = q.norm();
+            if norm > 1e-8 * norm0 && norm > 0.0 {
+                basis.push(q / norm);
+            }
+        }
+        for c in 0..n {
+            let mut col = jw.column(c).clone_owned();
+            for e in &basis {
+                let d = e.dot(&col);
+                col -= e * d;
+            }
+            jw.set_column(c, &col);
+        }
+        Some(jw)
+    });
+    let mut j = DMatrix::zeros(rows, n);
+    for (k, blk) in blocks.into_iter().enumerate() {
+        let blk = blk?;
+        j.view_mut((used[k].1, 0), (blk.nrows(), n)).copy_from(&blk);
+    }
+    Some(j)
 }
 
 /// The covariance of θ of a refit: the window-clustered sandwich ([`cluster_sandwich`], CR2)
@@ -603,9 +730,12 @@ fn window_covariance(
 }
 
 /// Refits a window's state from the warm start `x` by Gauss–Newton steps (forward-difference
-/// Jacobian, 2×2 normal equations): the projection step of variable projection, a few sims
-/// instead of a full optimiser run. Falls back to [`fit_window_state`] when a step fails.
-/// Returns (residuals, state).
+/// Jacobian, 2×2 normal equations; a step that does not lower the χ² is halved, up to
+/// [`PROJECTION_HALVINGS`] times): the projection step of variable projection, a few simulations
+/// instead of a full optimiser run. It stops when the Gauss–Newton decrement gᵀ(JᵀJ)⁻¹g (the χ²
+/// a full step would still gain) is below [`PROJECTION_DECREMENT`], or after
+/// [`PROJECTION_STEPS`] steps. Falls back to [`fit_window_state`] when no step can be taken at
+/// the start. Returns (residuals, state).
 fn project_state(
     sys: &AugmentedGear,
     t: &[f64],
@@ -621,14 +751,14 @@ fn project_state(
         let mut x = x;
         let mut r = resid(x)?;
         let mut e = rss(&r);
-        for _ in 0..4 {
-            let h = [1e-7 * (1.0 + x[0].abs()), 1e-6 * (1.0 + x[1].abs())];
-            let r0 = resid([x[0] + h[0], x[1]])?;
-            let r1 = resid([x[0], x[1] + h[1]])?;
+        for step in 0..PROJECTION_STEPS {
+            let h = PROJECTION_FD_STEP;
+            let (r0p, r0m) = (resid([x[0] + h[0], x[1]])?, resid([x[0] - h[0], x[1]])?);
+            let (r1p, r1m) = (resid([x[0], x[1] + h[1]])?, resid([x[0], x[1] - h[1]])?);
             let (mut a00, mut a01, mut a11, mut g0, mut g1) = (0.0, 0.0, 0.0, 0.0, 0.0);
             for k in 0..r.len() {
-                let j0 = (r0[k] - r[k]) / h[0];
-                let j1 = (r1[k] - r[k]) / h[1];
+                let j0 = (r0p[k] - r0m[k]) / (2.0 * h[0]);
+                let j1 = (r1p[k] - r1m[k]) / (2.0 * h[1]);
                 a00 += j0 * j0;
                 a01 += j0 * j1;
                 a11 += j1 * j1;
@@ -636,24 +766,37 @@ fn project_state(
                 g1 += j1 * r[k];
             }
             let det = a00 * a11 - a01 * a01;
-            if !(det.is_finite() && det > 1e-14 * a00 * a11) {
+            let dx = if det.is_finite() && det > 1e-14 * a00 * a11 {
+                [-(a11 * g0 - a01 * g1) / det, -(a00 * g1 - a01 * g0) / det]
+            } else if a00 > 0.0 && a00.is_finite() {
+                // β̇₀ unseen (a window at rest throughout): a step in β₀ alone
+                [-g0 / a00, 0.0]
+            } else if step == 0 {
                 return None;
-            }
-            let dx = [-(a11 * g0 - a01 * g1) / det, -(a00 * g1 - a01 * g0) / det];
-            let xn = [x[0] + dx[0], x[1] + dx[1]];
-            let rn = resid(xn)?;
-            let en = rss(&rn);
-            if en > e {
+            } else {
                 break;
+            };
+            let decrement = -(g0 * dx[0] + g1 * dx[1]);
+            if decrement <= PROJECTION_DECREMENT {
+                return Some((r, x));
             }
-            let small =
-                dx[0].abs() < 1e-10 * (1.0 + x[0].abs()) && dx[1].abs() < 1e-9 * (1.0 + x[1].abs());
-            let converged = e - en <= 1e-10 * e.max(1e-300);
-            x = xn;
-            r = rn;
-            e = en;
-            if small || converged {
-                break;
+            match halved_step(&resid, &rss, x, dx, e) {
+                Some((xn, rn, en)) => {
+                    (x, r, e) = (xn, rn, en);
+                }
+                None if step == 0 => return None,
+                None => {
+                    // a kink of χ²(x) (a stick phase starting or ending inside the window): the
+                    // trust-region fit from here, kept when it is lower
+                    if decrement > 1e-6 {
+                        if let Some(f) = fit_window_state(sys, t, b, keep, sigma, x, false, tol) {
+                            if f.rss < e {
+                                return Some((f.resid, [f.p[0], f.p[1]]));
+                            }
+                        }
+                    }
+                    break;
+                }
             }
         }
         Some((r, x))
@@ -662,6 +805,41 @@ fn project_state(
         let f = fit_window_state(sys, t, b, keep, sigma, x, true, tol)?;
         Some((f.resid, [f.p[0], f.p[1]]))
     })
+}
+
+/// Most Gauss–Newton steps of a window's state projection ([`project_state`]).
+const PROJECTION_STEPS: usize = 8;
+/// Central-difference steps of the projection's Jacobian (β₀: rad, β̇₀: rad/s): far above the
+/// integrator's error (10⁻⁸ rad at the default tolerance) and far below the camera noise.
+const PROJECTION_FD_STEP: [f64; 2] = [1e-5, 1e-4];
+/// Most halvings of a projection step that does not lower the χ².
+const PROJECTION_HALVINGS: usize = 4;
+/// The Gauss–Newton decrement (χ² units) below which a projection has converged: the χ² it could
+/// still gain is far below the changes the refit resolves (its ftol of 10⁻⁶ relative is ~10⁻³ on
+/// a refit of a few thousand frames).
+const PROJECTION_DECREMENT: f64 = 1e-8;
+
+/// The step `dx` from `x`, halved until the χ² does not rise (at most [`PROJECTION_HALVINGS`]
+/// times): (state, residuals, χ²), or `None` when no such step lowers it.
+fn halved_step(
+    resid: &impl Fn([f64; 2]) -> Option<Vec<f64>>,
+    rss: &impl Fn(&[f64]) -> f64,
+    x: [f64; 2],
+    dx: [f64; 2],
+    e: f64,
+) -> Option<([f64; 2], Vec<f64>, f64)> {
+    let mut f = 1.0;
+    for _ in 0..=PROJECTION_HALVINGS {
+        let xn = [x[0] + f * dx[0], x[1] + f * dx[1]];
+        if let Some(rn) = resid(xn) {
+            let en = rss(&rn);
+            if en <= e {
+                return Some((xn, rn, en));
+            }
+        }
+        f *= 0.5;
+    }
+    None
 }
 
 /// `f(0..n)`, in parallel with the `parallel` feature.
