@@ -288,134 +288,103 @@ pub fn build_case(
     }
     let stream = EFFECTS.iter().position(|e| e.id == spec.id).unwrap_or(0) as u64;
     let mut rng = Rng::new(seed, stream * 1000 + (level * 100.0).round() as u64);
-    let (mut truth, stated, [m1, m2, r]) = draw_lab(&mut rng);
-    let mut meas = Measurement::default();
-    let mut set_size = size.clone();
+    let (truth, stated, lab) = draw_lab(&mut rng);
+    let mut d = Draft {
+        truth,
+        meas: Measurement::default(),
+        set_size: size.clone(),
+        truths: Vec::new(),
+    };
     let s = spec.reference * level;
-    let mut truths = Vec::new();
-    match spec.id {
+    apply_effect(spec.id, level, s, &stated, lab, &mut rng, &mut d)?;
+    let set = generate(&d.truth, &d.meas, &d.set_size, stated, rk4, &mut rng)?;
+    Ok(GeneratedCase {
+        set,
+        truth: d.truth,
+        size: s,
+        truths: d.truths,
+    })
+}
+
+/// A case being built: the truth model, the measurement and the set size an effect changes,
+/// and the headline sizes it adds.
+struct Draft {
+    truth: TruthModel,
+    meas: Measurement,
+    set_size: SetSize,
+    truths: Vec<TruthSize>,
+}
+
+impl Draft {
+    /// Adds a headline size of the finding `effect`.
+    fn headline(&mut self, effect: &str, value: f64, unit: &str) {
+        self.truths.push(TruthSize {
+            effect: effect.into(),
+            value,
+            unit: unit.into(),
+        });
+    }
+}
+
+/// Applies the effect `id` at size `s` (`level` × its reference size) to the drawn lab: the
+/// stated set-up `stated` and the true magnet moments and distance `[m₁, m₂, r]`, and `rng`
+/// for the effects with random phases (drawn after the lab, before the set).
+fn apply_effect(
+    id: &str,
+    level: f64,
+    s: f64,
+    stated: &GearSetup,
+    [m1, m2, r]: [f64; 3],
+    rng: &mut Rng,
+    d: &mut Draft,
+) -> Result<()> {
+    match id {
         "none" => {}
-        "none_ar1" => meas.ar1 = 0.7,
-        "none_ar1_weak" => meas.ar1 = 0.3,
-        "none_ar1_strong" => meas.ar1 = 0.9,
-        "none_jitter" => meas.jitter_s = 0.5e-3,
+        "none_ar1" => d.meas.ar1 = 0.7,
+        "none_ar1_weak" => d.meas.ar1 = 0.3,
+        "none_ar1_strong" => d.meas.ar1 = 0.9,
+        "none_jitter" => d.meas.jitter_s = 0.5e-3,
         "none_coarse" => {
-            set_size.samples_per_turn = 20;
-            set_size.fps = 40.0;
+            d.set_size.samples_per_turn = 20;
+            d.set_size.fps = 40.0;
         }
         "nonparallel_same_delta" => {
-            let d = truth.delta();
-            truth.theta += 8f64.to_radians();
-            truth.phi = phi_for_delta(truth.theta, d)?;
+            let delta = d.truth.delta();
+            d.truth.theta += 8f64.to_radians();
+            d.truth.phi = phi_for_delta(d.truth.theta, delta)?;
         }
         "shaft_angles_off" => {
-            truth.theta -= s.to_radians();
-            truth.phi -= s.to_radians();
-            truths.push(TruthSize {
-                effect: "coupling_geometry".into(),
-                value: truth.delta(),
-                unit: "1".into(),
-            });
+            d.truth.theta -= s.to_radians();
+            d.truth.phi -= s.to_radians();
+            let delta = d.truth.delta();
+            d.headline("coupling_geometry", delta, "1");
         }
-        "static_torque_2h" | "torque_and_latency" => {
-            let a1 = if spec.id == "static_torque_2h" {
-                s
-            } else {
-                6.0 * level
-            };
-            truth.harmonics = vec![
-                (1, a1, rng.range(0.0, std::f64::consts::TAU)),
-                (2, 0.5 * a1, rng.range(0.0, std::f64::consts::TAU)),
-            ];
-            truths.push(TruthSize {
-                effect: "static_torque".into(),
-                value: a1,
-                unit: "s^-2".into(),
-            });
-            if spec.id == "torque_and_latency" {
-                meas.latency_s = 0.006 * level;
-                truths.push(TruthSize {
-                    effect: "sensor_latency".into(),
-                    value: meas.latency_s,
-                    unit: "s".into(),
-                });
-            }
+        "static_torque_2h" => static_torque(s, rng, d),
+        "torque_and_latency" => {
+            static_torque(6.0 * level, rng, d);
+            latency(0.006 * level, d);
         }
         "power_law_drag" => {
-            truth.power_drag = Some(PowerDrag {
+            d.truth.power_drag = Some(PowerDrag {
                 coef: s,
                 exponent: 1.5,
             });
-            truths.push(TruthSize {
-                effect: "power_law_drag".into(),
-                value: 1.5,
-                unit: "1".into(),
-            });
+            d.headline("power_law_drag", 1.5, "1");
         }
         "vector_load_friction" | "tilted_load_friction" => {
-            let tilted = spec.id == "tilted_load_friction";
-            truth.load = Some(VectorLoad {
-                fraction: s.min(1.0),
-                weight_over_force: weight_over_force(stated.shaft_mass.unwrap_or(0.32), m1, m2, r),
-                tilt: if tilted { 30f64.to_radians() } else { 0.0 },
-            });
-            if !tilted {
-                truths.push(TruthSize {
-                    effect: "load_dependent_friction".into(),
-                    value: s.min(1.0),
-                    unit: "1".into(),
-                });
-            }
+            let weight = weight_over_force(stated.shaft_mass.unwrap_or(0.32), m1, m2, r);
+            load_friction(s, weight, id == "tilted_load_friction", d);
         }
-        "stribeck" | "lorentz_stribeck" => {
-            truth.stribeck = Some(Stribeck {
-                excess: s * truth.eta,
-                width: 0.5,
-                shape: if spec.id == "stribeck" {
-                    StribeckShape::Gaussian
-                } else {
-                    StribeckShape::Lorentzian
-                },
-            });
-            if spec.id == "stribeck" {
-                truths.push(TruthSize {
-                    effect: "static_friction".into(),
-                    value: s,
-                    unit: "1".into(),
-                });
-            }
-        }
-        "tanh_drag" => truth.tanh_drag = Some(TanhDrag { coef: s, v0: 2.0 }),
-        "latency" => {
-            meas.latency_s = s;
-            truths.push(TruthSize {
-                effect: "sensor_latency".into(),
-                value: s,
-                unit: "s".into(),
-            });
-        }
+        "stribeck" => stribeck(s, StribeckShape::Gaussian, d),
+        "lorentz_stribeck" => stribeck(s, StribeckShape::Lorentzian, d),
+        "tanh_drag" => d.truth.tanh_drag = Some(TanhDrag { coef: s, v0: 2.0 }),
+        "latency" => latency(s, d),
         "compliance" => {
-            truth.compliance = s.to_radians();
-            truths.push(TruthSize {
-                effect: "input_compliance".into(),
-                value: s,
-                unit: "deg".into(),
-            });
+            d.truth.compliance = s.to_radians();
+            d.headline("input_compliance", s, "deg");
         }
-        "angle_modulated_friction" => truth.angle_modulation = s,
-        "frequency_damping" => {
-            truth.zeta_per_hz = s;
-            let span = if set_size.driven > 1 {
-                set_size.f_max - set_size.f_min
-            } else {
-                0.0
-            };
-            truths.push(TruthSize {
-                effect: "condition_dependence".into(),
-                value: truth.zeta * s * span,
-                unit: "s^-1".into(),
-            });
-        }
+        "angle_modulated_friction" => d.truth.angle_modulation = s,
+        "frequency_damping" => frequency_damping(s, d),
         other => {
             return Err(Error::unknown_name(
                 "effect with a generator",
@@ -424,13 +393,64 @@ pub fn build_case(
             ))
         }
     }
-    let set = generate(&truth, &meas, &set_size, stated, rk4, &mut rng)?;
-    Ok(GeneratedCase {
-        set,
-        truth,
-        size: s,
-        truths,
-    })
+    Ok(())
+}
+
+/// Static torque A₁ sin(β − φ₁) + A₂ sin(2β − φ₂) with A₁ = `a1`, A₂ = A₁/2 and the phases
+/// drawn uniformly from `rng` (φ₁ first); headline A₁.
+fn static_torque(a1: f64, rng: &mut Rng, d: &mut Draft) {
+    d.truth.harmonics = vec![
+        (1, a1, rng.range(0.0, std::f64::consts::TAU)),
+        (2, 0.5 * a1, rng.range(0.0, std::f64::consts::TAU)),
+    ];
+    d.headline("static_torque", a1, "s^-2");
+}
+
+/// β taken `latency_s` seconds before its time stamp; headline the latency.
+fn latency(latency_s: f64, d: &mut Draft) {
+    d.meas.latency_s = latency_s;
+    d.headline("sensor_latency", latency_s, "s");
+}
+
+/// Friction η[(1 − λ) + λ |P(W + F)|/|W|] with λ = `s` capped at 1 and |W|/F₀ = `weight`
+/// ([`weight_over_force`]); `tilted`: the set-up tilted by 30° about the output shaft, a load
+/// geometry outside the family, with no headline (else headline λ).
+fn load_friction(s: f64, weight: f64, tilted: bool, d: &mut Draft) {
+    d.truth.load = Some(VectorLoad {
+        fraction: s.min(1.0),
+        weight_over_force: weight,
+        tilt: if tilted { 30f64.to_radians() } else { 0.0 },
+    });
+    if !tilted {
+        d.headline("load_dependent_friction", s.min(1.0), "1");
+    }
+}
+
+/// Friction η + Δη_s h(β̇/w) with Δη_s = `s`·η, w = 0.5 rad/s and the decay h of `shape`; the
+/// Gaussian (the family's own shape) has the headline Δη_s/η, the Lorentzian none.
+fn stribeck(s: f64, shape: StribeckShape, d: &mut Draft) {
+    let gaussian = shape == StribeckShape::Gaussian;
+    d.truth.stribeck = Some(Stribeck {
+        excess: s * d.truth.eta,
+        width: 0.5,
+        shape,
+    });
+    if gaussian {
+        d.headline("static_friction", s, "1");
+    }
+}
+
+/// Viscous damping ζ(1 + k(f − 1 Hz)) in a driven run at f, k = `s`; headline the change of ζ
+/// over the driven runs' frequencies, ζ k (f_max − f_min) (0 with one driven run).
+fn frequency_damping(s: f64, d: &mut Draft) {
+    d.truth.zeta_per_hz = s;
+    let span = if d.set_size.driven > 1 {
+        d.set_size.f_max - d.set_size.f_min
+    } else {
+        0.0
+    };
+    let value = d.truth.zeta * s * span;
+    d.headline("condition_dependence", value, "s^-1");
 }
 
 #[cfg(test)]

@@ -112,74 +112,9 @@ pub fn run(a: Args) -> Result<()> {
         Some(s) => parse_x0(s)?,
         None => [0.5, 2.0],
     };
-    positive("periods", a.periods)?;
-    within("periods", a.periods, 0.0, 1e3, "must be in (0, 1e3]")?;
-    for &e in &a.reg_eps {
-        within(
-            "epsilon",
-            e,
-            f64::MIN_POSITIVE,
-            1.0,
-            "must be in (0, 1] rad/s",
-        )?;
-    }
-    tolerance("reference-tol", a.reference_tol)?;
-    within("min-time", a.min_time, 0.0, 60.0, "must be in [0, 60] s")?;
-    for &t in a.event_tols.iter().chain(&a.reg_tols).chain(&a.dop853_tols) {
-        tolerance("tol", t)?;
-    }
-    for &n in &a.fixed_steps {
-        count("fixed-steps", n, 1, limits::TURNS_MAX)?;
-    }
-    if let Some(p) = &a.csv {
-        output_file("--csv", p, false)?;
-    }
-    if let Some(p) = &a.figure {
-        output_file("--figure", p, true)?;
-    }
-    let fixed: Vec<FixedStep> = a
-        .fixed_steps
-        .iter()
-        .map(|&n| FixedStep {
-            steps_per_period: n,
-        })
-        .collect();
-    let mut cands: Vec<Candidate<'_, Gear>> = Vec::new();
-    for &t in &a.event_tols {
-        cands.push(Candidate::new(&EventDriven, t, "event-driven DP5"));
-    }
-    for &t in &a.dop853_tols {
-        cands.push(Candidate::new(&EventDriven853, t, "event-driven DOP853"));
-    }
-    for m in &fixed {
-        cands.push(Candidate::new(
-            m as &dyn FlowMethod<Gear>,
-            0.0,
-            "fixed-step RK4",
-        ));
-    }
-    #[cfg(feature = "diffsol-check")]
-    let reg: Vec<(crate::integrator::Regularised, f64)> = a
-        .reg_eps
-        .iter()
-        .flat_map(|&e| {
-            a.reg_tols
-                .iter()
-                .map(move |&t| (crate::integrator::Regularised::new(e), t))
-        })
-        .collect();
-    #[cfg(feature = "diffsol-check")]
-    for (m, t) in &reg {
-        cands.push(Candidate::new(
-            m as &dyn FlowMethod<Gear>,
-            *t,
-            format!("regularised diffsol ESDIRK34, ε = {:e}", m.epsilon),
-        ));
-    }
-    #[cfg(not(feature = "diffsol-check"))]
-    if !a.reg_tols.is_empty() {
-        eprintln!("note: built without `diffsol-check`: the regularised method is skipped");
-    }
+    check_args(&a)?;
+    let methods = Methods::new(&a);
+    let cands = methods.candidates(&a);
     let setup = WorkPrecisionSetup {
         x0,
         periods: a.periods,
@@ -209,6 +144,111 @@ pub fn run(a: Args) -> Result<()> {
         rhs_only_time_s: rhs_t,
         rhs_only_evals: n_rhs,
     };
+    write_files(&a, &report)?;
+    Output { json: a.json }.emit_tagged("gearbif.bench_integrators/1", &report, || {
+        text_table(&report)
+    })
+}
+
+/// Checks the numeric options (duration, ε, tolerances, minimum time, step counts) and that the
+/// `--csv` and `--figure` files can be written, before anything is timed.
+fn check_args(a: &Args) -> Result<()> {
+    positive("periods", a.periods)?;
+    within("periods", a.periods, 0.0, 1e3, "must be in (0, 1e3]")?;
+    for &e in &a.reg_eps {
+        within(
+            "epsilon",
+            e,
+            f64::MIN_POSITIVE,
+            1.0,
+            "must be in (0, 1] rad/s",
+        )?;
+    }
+    tolerance("reference-tol", a.reference_tol)?;
+    within("min-time", a.min_time, 0.0, 60.0, "must be in [0, 60] s")?;
+    for &t in a.event_tols.iter().chain(&a.reg_tols).chain(&a.dop853_tols) {
+        tolerance("tol", t)?;
+    }
+    for &n in &a.fixed_steps {
+        count("fixed-steps", n, 1, limits::TURNS_MAX)?;
+    }
+    if let Some(p) = &a.csv {
+        output_file("--csv", p, false)?;
+    }
+    if let Some(p) = &a.figure {
+        output_file("--figure", p, true)?;
+    }
+    Ok(())
+}
+
+/// The configured methods that the candidates borrow: the fixed-step RK4 for each step count
+/// and (with `diffsol-check`) the regularised method for each (ε, tolerance).
+struct Methods {
+    fixed: Vec<FixedStep>,
+    #[cfg(feature = "diffsol-check")]
+    reg: Vec<(crate::integrator::Regularised, f64)>,
+}
+
+impl Methods {
+    /// The methods of the options.
+    fn new(a: &Args) -> Self {
+        Self {
+            fixed: a
+                .fixed_steps
+                .iter()
+                .map(|&n| FixedStep {
+                    steps_per_period: n,
+                })
+                .collect(),
+            #[cfg(feature = "diffsol-check")]
+            reg: a
+                .reg_eps
+                .iter()
+                .flat_map(|&e| {
+                    a.reg_tols
+                        .iter()
+                        .map(move |&t| (crate::integrator::Regularised::new(e), t))
+                })
+                .collect(),
+        }
+    }
+
+    /// The candidates in the order of the diagram: the event-driven DP5 and DOP853 at their
+    /// tolerances, the fixed-step RK4, the regularised method (a note on stderr if it was
+    /// asked for but not built).
+    fn candidates(&self, a: &Args) -> Vec<Candidate<'_, Gear>> {
+        let mut cands: Vec<Candidate<'_, Gear>> = Vec::new();
+        for &t in &a.event_tols {
+            cands.push(Candidate::new(&EventDriven, t, "event-driven DP5"));
+        }
+        for &t in &a.dop853_tols {
+            cands.push(Candidate::new(&EventDriven853, t, "event-driven DOP853"));
+        }
+        for m in &self.fixed {
+            cands.push(Candidate::new(
+                m as &dyn FlowMethod<Gear>,
+                0.0,
+                "fixed-step RK4",
+            ));
+        }
+        #[cfg(feature = "diffsol-check")]
+        for (m, t) in &self.reg {
+            cands.push(Candidate::new(
+                m as &dyn FlowMethod<Gear>,
+                *t,
+                format!("regularised diffsol ESDIRK34, ε = {:e}", m.epsilon),
+            ));
+        }
+        #[cfg(not(feature = "diffsol-check"))]
+        if !a.reg_tols.is_empty() {
+            eprintln!("note: built without `diffsol-check`: the regularised method is skipped");
+        }
+        cands
+    }
+}
+
+/// Writes the `--csv` points and the `--figure` (log10 error over log10 wall time), if asked.
+fn write_files(a: &Args, report: &Report) -> Result<()> {
     if let Some(path) = &a.csv {
         crate::io::write_atomic(path, to_csv(&report.points).as_bytes())?;
     }
@@ -226,46 +266,51 @@ pub fn run(a: Args) -> Result<()> {
         );
         crate::plotting::save(&crate::bench::figure(&report.points, &title), path)?;
     }
-    Output { json: a.json }.emit_tagged("gearbif.bench_integrators/1", &report, || {
-        let mut s = String::new();
+    Ok(())
+}
+
+/// The text output: the case, one row per point (error, Jacobian error, RHS evaluations,
+/// steps, time and time per period), and the time of the right-hand side alone.
+fn text_table(report: &Report) -> String {
+    let x0 = report.x0;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Θ = {:.2}°, f = {} Hz, x0 = ({}, {}), {} period(s), strobe: {}, Jacobian: {}, \
+         reference tol {:e}",
+        report.theta_deg,
+        report.f_hz,
+        x0[0],
+        x0[1],
+        report.periods,
+        report.strobe,
+        report.jacobian,
+        report.reference_tol
+    );
+    let _ = writeln!(
+        s,
+        "{:<44} {:>9} {:>10} {:>10} {:>9} {:>8} {:>12} {:>12}",
+        "method", "tol", "error", "jac_err", "rhs", "steps", "time [µs]", "µs/period"
+    );
+    for p in &report.points {
         let _ = writeln!(
             s,
-            "Θ = {:.2}°, f = {} Hz, x0 = ({}, {}), {} period(s), strobe: {}, Jacobian: {}, \
-             reference tol {:e}",
-            report.theta_deg,
-            report.f_hz,
-            x0[0],
-            x0[1],
-            report.periods,
-            report.strobe,
-            report.jacobian,
-            report.reference_tol
+            "{:<44} {:>9.0e} {:>10.2e} {:>10} {:>9} {:>8} {:>12.1} {:>12.2}",
+            p.method.chars().take(44).collect::<String>(),
+            p.tol,
+            p.error,
+            p.jac_error.map(|e| format!("{e:.2e}")).unwrap_or_default(),
+            p.rhs_evals,
+            p.steps,
+            p.time_s * 1e6,
+            p.time_s * 1e6 / report.periods
         );
-        let _ = writeln!(
-            s,
-            "{:<44} {:>9} {:>10} {:>10} {:>9} {:>8} {:>12} {:>12}",
-            "method", "tol", "error", "jac_err", "rhs", "steps", "time [µs]", "µs/period"
-        );
-        for p in &report.points {
-            let _ = writeln!(
-                s,
-                "{:<44} {:>9.0e} {:>10.2e} {:>10} {:>9} {:>8} {:>12.1} {:>12.2}",
-                p.method.chars().take(44).collect::<String>(),
-                p.tol,
-                p.error,
-                p.jac_error.map(|e| format!("{e:.2e}")).unwrap_or_default(),
-                p.rhs_evals,
-                p.steps,
-                p.time_s * 1e6,
-                p.time_s * 1e6 / report.periods
-            );
-        }
-        let _ = writeln!(
-            s,
-            "RHS alone: {} evaluations in {:.1} µs",
-            report.rhs_only_evals,
-            report.rhs_only_time_s * 1e6
-        );
-        s
-    })
+    }
+    let _ = writeln!(
+        s,
+        "RHS alone: {} evaluations in {:.1} µs",
+        report.rhs_only_evals,
+        report.rhs_only_time_s * 1e6
+    );
+    s
 }

@@ -174,191 +174,245 @@ pub fn make(
 ) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
     match name {
-        Name::Fig5 => {
-            for (f, stem) in [(1.65, "fig5a"), (1.48, "fig5b"), (1.33, "fig5c")] {
-                let (g, x0) = paper_gear(p, 31.0, f)?;
-                let r = window(&g, x0, 90)?;
-                let s = r.samples.clone().unwrap_or_default();
-                let title = format!(
-                    "Θ = 31°, {f} Hz: flowchart {} (RMS_fit {:.2}°, THD {:.3}), rigorous {}",
-                    r.paper.class.label(),
-                    r.paper.rms_fit_deg,
-                    r.paper.thd,
-                    r.rigorous.as_ref().map(|c| c.label.as_str()).unwrap_or("")
-                );
-                let y = "δ = β − α [deg] (physical convention)";
-                save_both(&fit_plot(&title, y, &s, &r.paper.fit), dir, stem, &mut out)?;
-            }
-        }
-        Name::Fig6 => {
-            let mut panels: Vec<(String, Vec<WindowSample>)> = Vec::new();
-            for f in [1.00, 1.07, 1.33, 1.48, 1.63, 1.65, 1.68] {
-                let (g, x0) = paper_gear(p, 31.0, f)?;
-                let r = window(&g, x0, 90)?;
-                let lab = r
-                    .rigorous
-                    .as_ref()
-                    .map(|c| c.label.clone())
-                    .unwrap_or_default();
-                panels.push((
-                    format!("{f:.2} Hz: {} / {lab}", r.paper.class.label()),
-                    r.samples.unwrap_or_default(),
-                ));
-            }
-            save_both(&PolarDelta { panels }, dir, "fig6", &mut out)?;
-        }
-        Name::Fig7 | Name::Fig8 => {
-            let spec = if name == Name::Fig7 {
-                let mut s = SweepSpec::paper_fig7(
-                    Axis::range(SweepParam::ThetaDeg, 0.0, 55.0, 5.0)?,
-                    Axis::range(SweepParam::F, 0.5, 3.0, 0.1)?,
-                );
-                s.gear = *p;
-                s
-            } else {
-                let mut s = SweepSpec::paper_fig8()?;
-                s.gear = *p;
-                if full {
-                    // the paper's grid with the settings measured in docs/atlas.md (≈ 4 min):
-                    // tolerance 1e-6, early settling at 1e-6, the paper's classification only
-                    s.classify.tol = 1e-6;
-                    s.classify.settle_tol = Some(1e-6);
-                    s.classify.rigorous = false;
-                } else {
-                    s.rows = Axis::range(SweepParam::ThetaDeg, -90.0, 90.0, 10.0)?;
-                    s.cols = Axis::log(SweepParam::F, 0.1, 100.0, 80)?;
-                    s.classify.settle_turns = 300;
-                }
-                s
-            };
-            let (stem, rigorous_stem) = match (name, full) {
-                (Name::Fig7, _) => ("fig7", "fig7-rigorous"),
-                (_, true) => ("fig8-full", "fig8-full-rigorous"),
-                _ => ("fig8", "fig8-rigorous"),
-            };
-            let res = match SweepRunner::new(spec)
-                .checkpoint(dir.join(format!("{stem}-checkpoint")))
-                .observer(progress)
-                .run()?
-            {
-                SweepOutcome::Complete(r) => r,
-                SweepOutcome::Stopped { .. } => return Err(Error::Stopped { what: "the sweep" }),
-            };
-            res.write(dir.join(format!("{stem}-data")))?;
-            let mut fig = RmsMap::from_sweep(&res);
-            if full && matches!(name, Name::Fig8) {
-                // at the paper's resolution the cells are too small for class markers: the
-                // classes are in the data folder
-                fig.markers = Markers::None;
-                fig.title = format!("{stem}: RMS_δ (classes in {stem}-data/points.csv)");
-                save_both(&fig, dir, stem, &mut out)?;
-                return Ok(out);
-            }
-            fig.title = format!("{stem}: RMS_δ, paper classes (○ chaos, × T/2, — T)");
-            save_both(&fig, dir, stem, &mut out)?;
-            fig.markers = Markers::Rigorous;
-            fig.title =
-                format!("{stem}: RMS_δ, rigorous classes (○ chaos/QP, × sym., — asym., □ ?)");
-            save_both(&fig, dir, rigorous_stem, &mut out)?;
-        }
-        Name::Fig9 => {
-            let fs: Vec<f64> = (0..=30).map(|i| 1.5 + 0.05 * i as f64).collect();
-            let o = ClassifyOptions {
-                settle_turns: 1000,
-                analysis_turns: 20,
-                ..ClassifyOptions::default()
-            };
-            let pp = p.with_parallel_shafts_deg(25.0);
-            let h = hysteresis(pp, &fs, 0.0, 180.0, Convention::Paper, &o, progress)?;
-            crate::io::write_json_atomic(dir.join("fig9-data.json"), &h)?;
-            let inv = updown_plot(
-                &h,
-                "Θ = 25°: inverse total harmonic distortion of δ",
-                "1/THD_F (dimensionless)",
-                |r| {
-                    Some(
-                        r.thd
-                            .map(|t| if t > 0.0 { 1.0 / t } else { f64::INFINITY })
-                            .unwrap_or(0.0),
-                    )
-                    .filter(|v| v.is_finite())
-                },
-            );
-            save_both(&inv, dir, "fig9-thd-inv", &mut out)?;
-            let fund = updown_plot(
-                &h,
-                "Θ = 25°: δ_fund, amplitude of δ at the drive frequency",
-                "δ_fund [deg]",
-                |r| Some(r.delta_fund_deg),
-            );
-            save_both(&fund, dir, "fig9-fund", &mut out)?;
-            let avg = updown_plot(
-                &h,
-                "Θ = 25°: δ_avg, mean angle difference over a drive period",
-                &format!("δ_avg: {PAPER_FIGURE_DELTA_LABEL}"),
-                |r| Some(paper_figure_delta_deg(r.delta_avg_deg)),
-            );
-            save_both(&avg, dir, "fig9-avg", &mut out)?;
-            for (f, stem) in [(2.1, "fig9-inset-2.1-down"), (2.7, "fig9-inset-2.7-down")] {
-                if let Some(r) = h.down.iter().find(|r| (r.f_hz - f).abs() < 1e-9) {
-                    let l = inset(&pp, r, 0.0, &format!("Θ = 25°, {f} Hz, f decreasing"))?;
-                    save_both(&l, dir, stem, &mut out)?;
-                }
-            }
-        }
-        Name::Fig10 => {
-            let fs: Vec<f64> = (1..=45).map(|i| i as f64).collect();
-            let pp = p.with_parallel_shafts_deg(0.0);
-            let h = lock_loss_hysteresis(pp, &fs, 1000, progress)?;
-            crate::io::write_json_atomic(dir.join("fig10-data.json"), &h)?;
-            save_both(&hysteresis_lock_plot(&h, &pp)?, dir, "fig10a", &mut out)?;
-            save_both(&net_rotation_plot(&h), dir, "fig10b", &mut out)?;
-            for (branch, stem, what) in [
-                (&h.up, "fig10-inset-6-up", "f increasing (locked)"),
-                (&h.down, "fig10-inset-6-down", "f decreasing (slip-through)"),
-            ] {
-                if let Some(r) = branch.iter().find(|r| (r.f_hz - 6.0).abs() < 1e-9) {
-                    let l = inset(&pp, r, 0.0, &format!("Θ = 0, 6 Hz, {what}"))?;
-                    save_both(&l, dir, stem, &mut out)?;
-                }
-            }
-        }
-        Name::Orbit | Name::Lyapunov => {
-            let mut orbit = Vec::new();
-            let mut lyap = Vec::new();
-            for i in 0..=90 {
-                let f = 0.9 + 0.01 * i as f64;
-                let (g, x0) = paper_gear(p, 31.0, f)?;
-                let r = window(&g, x0, 90)?;
-                if let Some(z) = &r.section {
-                    let n = z.len();
-                    for v in &z[n.saturating_sub(40)..] {
-                        orbit.push((f, v[0].to_degrees()));
-                    }
-                }
-                if let Some(l) = r.rigorous.as_ref().and_then(|c| c.lyapunov.per_period) {
-                    lyap.push((f, l));
-                }
-                progress.observe(&crate::progress::Event::SweepPoint { row: 0, col: i });
-            }
-            if name == Name::Orbit {
-                let fig = orbit_diagram(
-                    "Θ = 31°, fresh start (paper Fig. 6 protocol)",
-                    &orbit,
-                    false,
-                );
-                save_both(&fig, dir, "orbit", &mut out)?;
-            } else {
-                let fig = lyapunov_plot(
-                    "Θ = 31°, fresh start: largest Lyapunov exponent",
-                    &lyap,
-                    false,
-                );
-                save_both(&fig, dir, "lyapunov", &mut out)?;
-            }
-        }
+        Name::Fig5 => fit_windows(p, dir, &mut out)?,
+        Name::Fig6 => polar_windows(p, dir, &mut out)?,
+        Name::Fig7 | Name::Fig8 => rms_map(name, p, dir, full, progress, &mut out)?,
+        Name::Fig9 => transition_hysteresis(p, dir, progress, &mut out)?,
+        Name::Fig10 => lock_loss(p, dir, progress, &mut out)?,
+        Name::Orbit | Name::Lyapunov => frequency_scan(name, p, dir, progress, &mut out)?,
     }
     Ok(out)
+}
+
+/// Fig. 5: δ over α with the 7-harmonic fit at Θ = 31° for the chaotic, T/2 and T windows
+/// (1.65, 1.48, 1.33 Hz), one file pair each; appends the files written to `out`.
+fn fit_windows(p: &GearParams, dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
+    for (f, stem) in [(1.65, "fig5a"), (1.48, "fig5b"), (1.33, "fig5c")] {
+        let (g, x0) = paper_gear(p, 31.0, f)?;
+        let r = window(&g, x0, 90)?;
+        let s = r.samples.clone().unwrap_or_default();
+        let title = format!(
+            "Θ = 31°, {f} Hz: flowchart {} (RMS_fit {:.2}°, THD {:.3}), rigorous {}",
+            r.paper.class.label(),
+            r.paper.rms_fit_deg,
+            r.paper.thd,
+            r.rigorous.as_ref().map(|c| c.label.as_str()).unwrap_or("")
+        );
+        let y = "δ = β − α [deg] (physical convention)";
+        save_both(&fit_plot(&title, y, &s, &r.paper.fit), dir, stem, out)?;
+    }
+    Ok(())
+}
+
+/// Fig. 6: the polar δ diagrams at Θ = 31° for the paper's seven frequencies, one panel each,
+/// labelled with the flowchart and the rigorous class; appends the files written to `out`.
+fn polar_windows(p: &GearParams, dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
+    let mut panels: Vec<(String, Vec<WindowSample>)> = Vec::new();
+    for f in [1.00, 1.07, 1.33, 1.48, 1.63, 1.65, 1.68] {
+        let (g, x0) = paper_gear(p, 31.0, f)?;
+        let r = window(&g, x0, 90)?;
+        let lab = r
+            .rigorous
+            .as_ref()
+            .map(|c| c.label.clone())
+            .unwrap_or_default();
+        panels.push((
+            format!("{f:.2} Hz: {} / {lab}", r.paper.class.label()),
+            r.samples.unwrap_or_default(),
+        ));
+    }
+    save_both(&PolarDelta { panels }, dir, "fig6", out)
+}
+
+/// Figs. 7b and 8: the RMS_δ map of a sweep (fresh start at every point for Fig. 7, the
+/// semi-static ramp-up for Fig. 8; Fig. 8 coarse unless `full`), with the paper's classes and,
+/// in a second file pair, the rigorous ones (at Fig. 8's full resolution the map alone, the
+/// classes in the data folder); the sweep's data folder beside it. Appends the figure files
+/// written to `out`.
+fn rms_map(
+    name: Name,
+    p: &GearParams,
+    dir: &Path,
+    full: bool,
+    progress: &Progress,
+    out: &mut Vec<PathBuf>,
+) -> Result<()> {
+    let spec = if name == Name::Fig7 {
+        let mut s = SweepSpec::paper_fig7(
+            Axis::range(SweepParam::ThetaDeg, 0.0, 55.0, 5.0)?,
+            Axis::range(SweepParam::F, 0.5, 3.0, 0.1)?,
+        );
+        s.gear = *p;
+        s
+    } else {
+        let mut s = SweepSpec::paper_fig8()?;
+        s.gear = *p;
+        if full {
+            // the paper's grid with the settings measured in docs/atlas.md (≈ 4 min):
+            // tolerance 1e-6, early settling at 1e-6, the paper's classification only
+            s.classify.tol = 1e-6;
+            s.classify.settle_tol = Some(1e-6);
+            s.classify.rigorous = false;
+        } else {
+            s.rows = Axis::range(SweepParam::ThetaDeg, -90.0, 90.0, 10.0)?;
+            s.cols = Axis::log(SweepParam::F, 0.1, 100.0, 80)?;
+            s.classify.settle_turns = 300;
+        }
+        s
+    };
+    let (stem, rigorous_stem) = match (name, full) {
+        (Name::Fig7, _) => ("fig7", "fig7-rigorous"),
+        (_, true) => ("fig8-full", "fig8-full-rigorous"),
+        _ => ("fig8", "fig8-rigorous"),
+    };
+    let res = match SweepRunner::new(spec)
+        .checkpoint(dir.join(format!("{stem}-checkpoint")))
+        .observer(progress)
+        .run()?
+    {
+        SweepOutcome::Complete(r) => r,
+        SweepOutcome::Stopped { .. } => return Err(Error::Stopped { what: "the sweep" }),
+    };
+    res.write(dir.join(format!("{stem}-data")))?;
+    let mut fig = RmsMap::from_sweep(&res);
+    if full && matches!(name, Name::Fig8) {
+        // at the paper's resolution the cells are too small for class markers: the
+        // classes are in the data folder
+        fig.markers = Markers::None;
+        fig.title = format!("{stem}: RMS_δ (classes in {stem}-data/points.csv)");
+        return save_both(&fig, dir, stem, out);
+    }
+    fig.title = format!("{stem}: RMS_δ, paper classes (○ chaos, × T/2, — T)");
+    save_both(&fig, dir, stem, out)?;
+    fig.markers = Markers::Rigorous;
+    fig.title = format!("{stem}: RMS_δ, rigorous classes (○ chaos/QP, × sym., — asym., □ ?)");
+    save_both(&fig, dir, rigorous_stem, out)
+}
+
+/// Fig. 9: the hysteresis of the T/2 ↔ T transition at Θ = 25° (f 1.5–3 Hz up and down):
+/// THD⁻¹, δ_fund and δ_avg over f, and the attractors at 2.1 and 2.7 Hz on the way down as
+/// insets; the data as `fig9-data.json`. Appends the figure files written to `out`.
+fn transition_hysteresis(
+    p: &GearParams,
+    dir: &Path,
+    progress: &Progress,
+    out: &mut Vec<PathBuf>,
+) -> Result<()> {
+    let fs: Vec<f64> = (0..=30).map(|i| 1.5 + 0.05 * i as f64).collect();
+    let o = ClassifyOptions {
+        settle_turns: 1000,
+        analysis_turns: 20,
+        ..ClassifyOptions::default()
+    };
+    let pp = p.with_parallel_shafts_deg(25.0);
+    let h = hysteresis(pp, &fs, 0.0, 180.0, Convention::Paper, &o, progress)?;
+    crate::io::write_json_atomic(dir.join("fig9-data.json"), &h)?;
+    let inv = updown_plot(
+        &h,
+        "Θ = 25°: inverse total harmonic distortion of δ",
+        "1/THD_F (dimensionless)",
+        |r| {
+            Some(
+                r.thd
+                    .map(|t| if t > 0.0 { 1.0 / t } else { f64::INFINITY })
+                    .unwrap_or(0.0),
+            )
+            .filter(|v| v.is_finite())
+        },
+    );
+    save_both(&inv, dir, "fig9-thd-inv", out)?;
+    let fund = updown_plot(
+        &h,
+        "Θ = 25°: δ_fund, amplitude of δ at the drive frequency",
+        "δ_fund [deg]",
+        |r| Some(r.delta_fund_deg),
+    );
+    save_both(&fund, dir, "fig9-fund", out)?;
+    let avg = updown_plot(
+        &h,
+        "Θ = 25°: δ_avg, mean angle difference over a drive period",
+        &format!("δ_avg: {PAPER_FIGURE_DELTA_LABEL}"),
+        |r| Some(paper_figure_delta_deg(r.delta_avg_deg)),
+    );
+    save_both(&avg, dir, "fig9-avg", out)?;
+    for (f, stem) in [(2.1, "fig9-inset-2.1-down"), (2.7, "fig9-inset-2.7-down")] {
+        if let Some(r) = h.down.iter().find(|r| (r.f_hz - f).abs() < 1e-9) {
+            let l = inset(&pp, r, 0.0, &format!("Θ = 25°, {f} Hz, f decreasing"))?;
+            save_both(&l, dir, stem, out)?;
+        }
+    }
+    Ok(())
+}
+
+/// Fig. 10: the lock loss at Θ = 0 (f 1–45 Hz up and down): δ_avg with the analytic branch,
+/// the net rotation of the output, and the attractors at 6 Hz on both branches as insets; the
+/// data as `fig10-data.json`. Appends the figure files written to `out`.
+fn lock_loss(
+    p: &GearParams,
+    dir: &Path,
+    progress: &Progress,
+    out: &mut Vec<PathBuf>,
+) -> Result<()> {
+    let fs: Vec<f64> = (1..=45).map(|i| i as f64).collect();
+    let pp = p.with_parallel_shafts_deg(0.0);
+    let h = lock_loss_hysteresis(pp, &fs, 1000, progress)?;
+    crate::io::write_json_atomic(dir.join("fig10-data.json"), &h)?;
+    save_both(&hysteresis_lock_plot(&h, &pp)?, dir, "fig10a", out)?;
+    save_both(&net_rotation_plot(&h), dir, "fig10b", out)?;
+    for (branch, stem, what) in [
+        (&h.up, "fig10-inset-6-up", "f increasing (locked)"),
+        (&h.down, "fig10-inset-6-down", "f decreasing (slip-through)"),
+    ] {
+        if let Some(r) = branch.iter().find(|r| (r.f_hz - 6.0).abs() < 1e-9) {
+            let l = inset(&pp, r, 0.0, &format!("Θ = 0, 6 Hz, {what}"))?;
+            save_both(&l, dir, stem, out)?;
+        }
+    }
+    Ok(())
+}
+
+/// The orbit diagram or the largest Lyapunov exponent (`name`) against f at Θ = 31° (f 0.9–1.8
+/// Hz, fresh start at each f as in Fig. 6): one window per f gives both, the figure shows the
+/// one asked for. Appends the files written to `out`.
+fn frequency_scan(
+    name: Name,
+    p: &GearParams,
+    dir: &Path,
+    progress: &Progress,
+    out: &mut Vec<PathBuf>,
+) -> Result<()> {
+    let mut orbit = Vec::new();
+    let mut lyap = Vec::new();
+    for i in 0..=90 {
+        let f = 0.9 + 0.01 * i as f64;
+        let (g, x0) = paper_gear(p, 31.0, f)?;
+        let r = window(&g, x0, 90)?;
+        if let Some(z) = &r.section {
+            let n = z.len();
+            for v in &z[n.saturating_sub(40)..] {
+                orbit.push((f, v[0].to_degrees()));
+            }
+        }
+        if let Some(l) = r.rigorous.as_ref().and_then(|c| c.lyapunov.per_period) {
+            lyap.push((f, l));
+        }
+        progress.observe(&crate::progress::Event::SweepPoint { row: 0, col: i });
+    }
+    if name == Name::Orbit {
+        let fig = orbit_diagram(
+            "Θ = 31°, fresh start (paper Fig. 6 protocol)",
+            &orbit,
+            false,
+        );
+        save_both(&fig, dir, "orbit", out)
+    } else {
+        let fig = lyapunov_plot(
+            "Θ = 31°, fresh start: largest Lyapunov exponent",
+            &lyap,
+            false,
+        );
+        save_both(&fig, dir, "lyapunov", out)
+    }
 }
 
 /// Runs `gearbif figure`.

@@ -369,155 +369,214 @@ pub fn effect_params(
     coef: &BTreeMap<String, (f64, f64)>,
     base: (f64, f64, f64),
 ) -> BTreeMap<String, f64> {
-    let (base_zeta, base_eta, g) = base;
+    let (_, base_eta, g) = base;
     let mut p = BTreeMap::new();
     let get = |t: Term| coef.get(&t.name()).copied();
     match effect.id {
         "parameter_drift" | "condition_dependence" => {
-            for t in &effect.terms {
-                if let (Term::Drift(dp, clock), Some((v, s))) = (t, get(*t)) {
-                    let name = dp.name();
-                    let reference = match dp {
-                        DriftParam::Zeta => base_zeta,
-                        DriftParam::Eta => base_eta,
-                        DriftParam::Coupling => g,
-                    };
-                    if *clock == Clock::RunKind {
-                        // s = +½ driven, −½ ring-downs: v is the driven runs' level minus the
-                        // ring-downs'
-                        p.insert(format!("{name}_driven_minus_ringdown"), v);
-                        p.insert(format!("{name}_driven_minus_ringdown_err"), s);
-                        continue;
-                    }
-                    // the column is s·(base term), s from −½ to ½: v is the change over the session
-                    p.insert(format!("{name}_change"), v);
-                    p.insert(format!("{name}_change_err"), s);
-                    if reference != 0.0 {
-                        p.insert(format!("{name}_relative_change"), v / reference);
-                        p.insert(format!("{name}_relative_change_err"), s / reference.abs());
-                    }
-                    p.insert(format!("{name}_start"), reference - 0.5 * v);
-                    p.insert(format!("{name}_end"), reference + 0.5 * v);
-                    p.insert(
-                        "clock_session_time".into(),
-                        f64::from(u8::from(*clock == Clock::SessionTime)),
-                    );
-                    p.insert(
-                        "clock_drive_frequency".into(),
-                        f64::from(u8::from(*clock == Clock::DriveFrequency)),
-                    );
-                    p.insert(
-                        "clock_velocity_range".into(),
-                        f64::from(u8::from(*clock == Clock::VelocityRange)),
-                    );
-                }
-            }
+            drift_params(&effect.terms, &get, base, &mut p)
         }
-        "input_compliance" => {
-            if let Some((v, s)) = get(Term::Compliance) {
-                // coefficient χ g²: the lag at the peak coupling torque (τ_in = g) is χ g
-                p.insert("chi_s2".into(), v / (g * g));
-                p.insert("chi_err_s2".into(), s / (g * g));
-                p.insert("lag_at_peak_torque_deg".into(), (v / g).to_degrees());
-                p.insert(
-                    "lag_at_peak_torque_err_deg".into(),
-                    (s / g.abs()).to_degrees(),
-                );
-                if v > 0.0 {
-                    p.insert("stiffness_over_inertia_s2".into(), g * g / v);
-                }
-            }
-        }
-        "drive_steps" => {
-            if let Some((v, s)) = get(Term::DrivenOffset) {
-                // coefficient −g ε
-                p.insert("offset_deg".into(), (-v / g).to_degrees());
-                p.insert("offset_err_deg".into(), (s / g.abs()).to_degrees());
-            }
-            if let Some((v, s)) = get(Term::DrivenOffsetRate) {
-                p.insert("offset_per_turn_deg".into(), (-v / g).to_degrees());
-                p.insert("offset_per_turn_err_deg".into(), (s / g.abs()).to_degrees());
-            }
-        }
+        "input_compliance" => compliance_params(&get, g, &mut p),
+        "drive_steps" => drive_steps_params(&get, g, &mut p),
         "static_torque" => static_torque_params(&get, &mut p),
-        "coupling_geometry" => {
-            if let (Some((cc, scc)), Some((ss, sss))) = (get(Term::CosACosB), get(Term::SinASinB)) {
-                p.insert("c_cos_alpha_cos_beta".into(), cc);
-                p.insert("c_cos_alpha_cos_beta_err".into(), scc);
-                p.insert("c_sin_alpha_sin_beta".into(), ss);
-                p.insert("c_sin_alpha_sin_beta_err".into(), sss);
-                // an input angle zero offset ε gives c_cc = −g sin ε (with c_sc = −g cos ε)
-                let eps = (-cc).atan2(g);
-                p.insert("alpha_offset_deg".into(), eps.to_degrees());
-                p.insert(
-                    "alpha_offset_err_deg".into(),
-                    (scc / (g * g + cc * cc).sqrt()).to_degrees(),
-                );
-            }
-        }
-        "static_friction" => {
-            if let Some((e, s)) = get(Term::StaticExcess) {
-                p.insert("eta_static_excess".into(), e);
-                p.insert("eta_static_excess_err".into(), s);
-                if base_eta > 0.0 {
-                    p.insert("excess_relative".into(), e / base_eta);
-                    p.insert("excess_relative_err".into(), s / base_eta);
-                }
-            }
-            if let Some((w, s)) = get(Term::Shape(Shape::StribeckWidth)) {
-                p.insert("stribeck_width".into(), w);
-                p.insert("stribeck_width_err".into(), s);
-            }
-            if let Some((d, s)) = get(Term::Shape(Shape::StribeckPower)) {
-                p.insert("stribeck_power".into(), d);
-                p.insert("stribeck_power_err".into(), s);
-            }
-        }
-        "power_law_drag" => {
-            if let (Some((q, s)), Some((pe, pe_err))) =
-                (get(Term::Quad), get(Term::Shape(Shape::DragExponent)))
-            {
-                // −q (|β̇|/V)^p sgn β̇: q is the drag at the reference speed V
-                p.insert("q_at_reference_speed".into(), q);
-                p.insert("q_at_reference_speed_err".into(), s);
-                p.insert("reference_speed".into(), DRAG_REFERENCE_SPEED);
-                p.insert("exponent".into(), pe);
-                p.insert("exponent_err".into(), pe_err);
-                // the quadratic member (p = 2) within 2σ
-                p.insert(
-                    "quadratic_within_2sigma".into(),
-                    f64::from(u8::from((pe - 2.0).abs() <= 2.0 * pe_err)),
-                );
-            }
-        }
+        "coupling_geometry" => coupling_geometry_params(&get, g, &mut p),
+        "static_friction" => static_friction_params(&get, base_eta, &mut p),
+        "power_law_drag" => power_law_drag_params(&get, &mut p),
         "corotating_drag" => {
             if let Some((c, s)) = get(Term::Corot) {
                 p.insert("c".into(), c);
                 p.insert("c_err".into(), s);
             }
         }
-        "load_dependent_friction" => {
-            let load = get(Term::LoadFric).or(get(Term::RadialLoadFric));
-            if let Some((e, s)) = load {
-                p.insert("eta_load".into(), e);
-                p.insert("eta_load_err".into(), s);
-                p.insert(
-                    "radial".into(),
-                    f64::from(u8::from(get(Term::RadialLoadFric).is_some())),
-                );
-                if base_eta > 0.0 {
-                    p.insert("k".into(), e / base_eta);
-                    p.insert("k_err".into(), s / base_eta);
-                }
-            }
-            if let Some((r, s)) = get(Term::Shape(Shape::LoadWeight)) {
-                p.insert("weight_over_force".into(), r);
-                p.insert("weight_over_force_err".into(), s);
-            }
-        }
+        "load_dependent_friction" => load_friction_params(&get, base_eta, &mut p),
         _ => {}
     }
     p
+}
+
+/// A drifting or condition-dependent base parameter, for each [`Term::Drift`] of `terms` with a
+/// coefficient: the driven runs' level minus the ring-downs' ([`Clock::RunKind`]), or the
+/// change v over the session or condition range (the column is s·(base term), s from −½ to ½),
+/// relative to the base value of `base` = (ζ, η, g), the values at the start and the end
+/// (base ∓ v/2), and which clock it runs on.
+fn drift_params(
+    terms: &[Term],
+    get: &dyn Fn(Term) -> Option<(f64, f64)>,
+    base: (f64, f64, f64),
+    p: &mut BTreeMap<String, f64>,
+) {
+    let (base_zeta, base_eta, g) = base;
+    for t in terms {
+        if let (Term::Drift(dp, clock), Some((v, s))) = (t, get(*t)) {
+            let name = dp.name();
+            let reference = match dp {
+                DriftParam::Zeta => base_zeta,
+                DriftParam::Eta => base_eta,
+                DriftParam::Coupling => g,
+            };
+            if *clock == Clock::RunKind {
+                // s = +½ driven, −½ ring-downs: v is the driven runs' level minus the
+                // ring-downs'
+                p.insert(format!("{name}_driven_minus_ringdown"), v);
+                p.insert(format!("{name}_driven_minus_ringdown_err"), s);
+                continue;
+            }
+            // the column is s·(base term), s from −½ to ½: v is the change over the session
+            p.insert(format!("{name}_change"), v);
+            p.insert(format!("{name}_change_err"), s);
+            if reference != 0.0 {
+                p.insert(format!("{name}_relative_change"), v / reference);
+                p.insert(format!("{name}_relative_change_err"), s / reference.abs());
+            }
+            p.insert(format!("{name}_start"), reference - 0.5 * v);
+            p.insert(format!("{name}_end"), reference + 0.5 * v);
+            p.insert(
+                "clock_session_time".into(),
+                f64::from(u8::from(*clock == Clock::SessionTime)),
+            );
+            p.insert(
+                "clock_drive_frequency".into(),
+                f64::from(u8::from(*clock == Clock::DriveFrequency)),
+            );
+            p.insert(
+                "clock_velocity_range".into(),
+                f64::from(u8::from(*clock == Clock::VelocityRange)),
+            );
+        }
+    }
+}
+
+/// Input compliance from the coefficient χg² of [`Term::Compliance`]: χ, the lag χg at the peak
+/// coupling torque (τ_in = g), and the stiffness over inertia g²/(χg²) when positive.
+fn compliance_params(
+    get: &dyn Fn(Term) -> Option<(f64, f64)>,
+    g: f64,
+    p: &mut BTreeMap<String, f64>,
+) {
+    if let Some((v, s)) = get(Term::Compliance) {
+        // coefficient χ g²: the lag at the peak coupling torque (τ_in = g) is χ g
+        p.insert("chi_s2".into(), v / (g * g));
+        p.insert("chi_err_s2".into(), s / (g * g));
+        p.insert("lag_at_peak_torque_deg".into(), (v / g).to_degrees());
+        p.insert(
+            "lag_at_peak_torque_err_deg".into(),
+            (s / g.abs()).to_degrees(),
+        );
+        if v > 0.0 {
+            p.insert("stiffness_over_inertia_s2".into(), g * g / v);
+        }
+    }
+}
+
+/// Drive steps: the constant input angle offset ε of the driven runs from the coefficient −gε
+/// of [`Term::DrivenOffset`], and the offset per input turn from [`Term::DrivenOffsetRate`].
+fn drive_steps_params(
+    get: &dyn Fn(Term) -> Option<(f64, f64)>,
+    g: f64,
+    p: &mut BTreeMap<String, f64>,
+) {
+    if let Some((v, s)) = get(Term::DrivenOffset) {
+        // coefficient −g ε
+        p.insert("offset_deg".into(), (-v / g).to_degrees());
+        p.insert("offset_err_deg".into(), (s / g.abs()).to_degrees());
+    }
+    if let Some((v, s)) = get(Term::DrivenOffsetRate) {
+        p.insert("offset_per_turn_deg".into(), (-v / g).to_degrees());
+        p.insert("offset_per_turn_err_deg".into(), (s / g.abs()).to_degrees());
+    }
+}
+
+/// Coupling geometry: the coefficients of cos α cos β and sin α sin β, and the input angle zero
+/// offset ε they imply (c_cc = −g sin ε with c_sc = −g cos ε: ε = atan2(−c_cc, g)).
+fn coupling_geometry_params(
+    get: &dyn Fn(Term) -> Option<(f64, f64)>,
+    g: f64,
+    p: &mut BTreeMap<String, f64>,
+) {
+    if let (Some((cc, scc)), Some((ss, sss))) = (get(Term::CosACosB), get(Term::SinASinB)) {
+        p.insert("c_cos_alpha_cos_beta".into(), cc);
+        p.insert("c_cos_alpha_cos_beta_err".into(), scc);
+        p.insert("c_sin_alpha_sin_beta".into(), ss);
+        p.insert("c_sin_alpha_sin_beta_err".into(), sss);
+        // an input angle zero offset ε gives c_cc = −g sin ε (with c_sc = −g cos ε)
+        let eps = (-cc).atan2(g);
+        p.insert("alpha_offset_deg".into(), eps.to_degrees());
+        p.insert(
+            "alpha_offset_err_deg".into(),
+            (scc / (g * g + cc * cc).sqrt()).to_degrees(),
+        );
+    }
+}
+
+/// Static friction: the breakaway excess Δη_s (absolute and relative to the base η
+/// `base_eta` when positive) and the Stribeck decay's width w and power δ when fitted.
+fn static_friction_params(
+    get: &dyn Fn(Term) -> Option<(f64, f64)>,
+    base_eta: f64,
+    p: &mut BTreeMap<String, f64>,
+) {
+    if let Some((e, s)) = get(Term::StaticExcess) {
+        p.insert("eta_static_excess".into(), e);
+        p.insert("eta_static_excess_err".into(), s);
+        if base_eta > 0.0 {
+            p.insert("excess_relative".into(), e / base_eta);
+            p.insert("excess_relative_err".into(), s / base_eta);
+        }
+    }
+    if let Some((w, s)) = get(Term::Shape(Shape::StribeckWidth)) {
+        p.insert("stribeck_width".into(), w);
+        p.insert("stribeck_width_err".into(), s);
+    }
+    if let Some((d, s)) = get(Term::Shape(Shape::StribeckPower)) {
+        p.insert("stribeck_power".into(), d);
+        p.insert("stribeck_power_err".into(), s);
+    }
+}
+
+/// Power-law drag −q (|β̇|/V)^p sgn β̇: q at the reference speed V, the exponent p, and whether
+/// the quadratic member (p = 2) is within 2σ.
+fn power_law_drag_params(get: &dyn Fn(Term) -> Option<(f64, f64)>, p: &mut BTreeMap<String, f64>) {
+    if let (Some((q, s)), Some((pe, pe_err))) =
+        (get(Term::Quad), get(Term::Shape(Shape::DragExponent)))
+    {
+        // −q (|β̇|/V)^p sgn β̇: q is the drag at the reference speed V
+        p.insert("q_at_reference_speed".into(), q);
+        p.insert("q_at_reference_speed_err".into(), s);
+        p.insert("reference_speed".into(), DRAG_REFERENCE_SPEED);
+        p.insert("exponent".into(), pe);
+        p.insert("exponent_err".into(), pe_err);
+        // the quadratic member (p = 2) within 2σ
+        p.insert(
+            "quadratic_within_2sigma".into(),
+            f64::from(u8::from((pe - 2.0).abs() <= 2.0 * pe_err)),
+        );
+    }
+}
+
+/// Load-dependent friction: η_L (whole or radial load; k = η_L/η relative to the base η
+/// `base_eta` when positive) and the fitted weight over force ρ.
+fn load_friction_params(
+    get: &dyn Fn(Term) -> Option<(f64, f64)>,
+    base_eta: f64,
+    p: &mut BTreeMap<String, f64>,
+) {
+    let load = get(Term::LoadFric).or(get(Term::RadialLoadFric));
+    if let Some((e, s)) = load {
+        p.insert("eta_load".into(), e);
+        p.insert("eta_load_err".into(), s);
+        p.insert(
+            "radial".into(),
+            f64::from(u8::from(get(Term::RadialLoadFric).is_some())),
+        );
+        if base_eta > 0.0 {
+            p.insert("k".into(), e / base_eta);
+            p.insert("k_err".into(), s / base_eta);
+        }
+    }
+    if let Some((r, s)) = get(Term::Shape(Shape::LoadWeight)) {
+        p.insert("weight_over_force".into(), r);
+        p.insert("weight_over_force_err".into(), s);
+    }
 }
 
 /// Amplitude and phase of each static-torque harmonic present: A sin kβ + B cos kβ =

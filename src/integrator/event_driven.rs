@@ -307,24 +307,15 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         err
     }
 
+    /// Integrates from (t₀, x₀) to t₁: adaptive steps on the slip side of the current mode,
+    /// each that may reach Σ (or holds a sample) resolved on its continuous extension, with the
+    /// event handling at Σ and the stick phases solved directly.
     fn run(mut self, t0: f64, x0: [f64; 2], t1: f64) -> Result<Flow> {
-        let sys = self.sys;
         let tab = Self::TAB;
-        let period = sys.period();
+        let period = self.sys.period();
         let hmax = self.opts.max_step_fraction * period;
-        let mut y = [0.0; N];
-        self.layout.init(x0, &mut y);
-        // skip samples before t0
-        self.next_sample += self.opts.sample_times[self.next_sample..]
-            .iter()
-            .take_while(|&&ts| ts < t0)
-            .count();
+        let (mut y, mut mode) = self.start(t0, x0);
         let mut t = t0;
-        let mut mode = super::initial_mode(sys, t0, x0);
-        if mode == Mode::Stick {
-            y[1] = 0.0;
-            self.stick_saltation(&mut y);
-        }
         let mut h = (period / 100.0)
             .min(hmax)
             .min((t1 - t0).max(f64::MIN_POSITIVE));
@@ -335,10 +326,6 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             last_rejected: false,
         };
         let mut guard = ZenoGuard::new(period);
-        let state_only = Layout {
-            ncols: 0,
-            with_params: false,
-        };
 
         while t < t1 {
             if self.stats.steps + self.stats.rejected > self.opts.max_steps {
@@ -348,22 +335,18 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 });
             }
             if mode == Mode::Stick {
-                match self.stick_phase(t, &mut y, t1, guard.degenerate()) {
-                    None => {
-                        t = t1;
-                        break;
-                    }
-                    Some((tr, s)) => {
-                        guard.record(
-                            tr,
-                            "events repeat without progress (stick/slip chattering at a degenerate point)",
-                        )?;
-                        t = tr;
-                        mode = Mode::from_side(s);
-                        fsal = false;
-                        continue;
-                    }
-                }
+                let Some((tr, s)) = self.stick_phase(t, &mut y, t1, guard.degenerate()) else {
+                    t = t1;
+                    break;
+                };
+                guard.record(
+                    tr,
+                    "events repeat without progress (stick/slip chattering at a degenerate point)",
+                )?;
+                t = tr;
+                mode = Mode::from_side(s);
+                fsal = false;
+                continue;
             }
 
             let s = mode.side();
@@ -371,41 +354,16 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 self.rhs(self.layout(), t, &y, s, &mut k[0]);
                 fsal = true;
             }
-            let hh = h.min(hmax).min(t1 - t);
-            let last = hh >= t1 - t;
-            let tn = if last { t1 } else { t + hh };
+            let tn = step_end(t, h, hmax, t1)?;
             let hs = tn - t;
-            if hs <= 0.0 || !hs.is_finite() {
-                return Err(Error::Integration {
-                    t,
-                    reason: format!("step size underflow (h = {hs:e})"),
-                });
-            }
             let mut yn = [0.0; N];
             let info = self.step(t, hs, &y, s, &mut k, &mut yn);
-            let err = info.err;
-            if !err.is_finite() || !yn[0].is_finite() || !yn[1].is_finite() {
-                if hs < 1e-14 * period {
-                    return Err(Error::Integration {
-                        t,
-                        reason: "non-finite state".into(),
-                    });
+            let hnew = match self.judge(&mut ctl, info.err, &yn, t, hs, period)? {
+                Verdict::Accept(hnew) => hnew,
+                Verdict::Retry(hretry) => {
+                    h = hretry;
+                    continue;
                 }
-                h = hs * 0.1;
-                self.stats.rejected += 1;
-                ctl.last_rejected = true;
-                continue;
-            }
-            let Some(hnew) = self.propose(&mut ctl, err, hs) else {
-                h = hs / (tab.pow_expo(err) / 0.9).min(tab.fac_max);
-                self.stats.rejected += 1;
-                if h < 1e-15 * period.max(t.abs()) {
-                    return Err(Error::Integration {
-                        t,
-                        reason: format!("step size underflow (h = {h:e})"),
-                    });
-                }
-                continue;
             };
             self.stats.steps += 1;
             if !tab.last_stage_is_solution {
@@ -424,66 +382,152 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 .get(self.next_sample)
                 .is_some_and(|&ts| ts <= tn);
             let near_sigma = info.wmin <= tab.node_gap * hs * info.dmax;
-            if !near_sigma && !sample_inside {
-                y = yn;
-                k[0] = k[tab.fsal()];
-                t = tn;
-                h = hnew;
-                continue;
-            }
-            if tab.dense_extra > 0 {
-                self.dense_stages::<2>(state_only, t, hs, &y, s, &mut k);
-            }
-            let state_coeffs = [
-                dense_coeffs(tab, 0, &y, &yn, &k, hs),
-                dense_coeffs(tab, 1, &y, &yn, &k, hs),
-            ];
-            let m = 4 + tab.dense_rows;
-            let dense_state = |i: usize, th: f64| -> f64 { nested(&state_coeffs[i][..m], th) };
-
-            let root = if near_sigma {
-                self.find_crossing(s, &y, &yn, &state_coeffs[1][..m], &dense_state)
-            } else {
-                None
-            };
-            if let Some(thc) = root {
-                let tc = t + thc * hs;
-                // samples strictly before the event from the continuous extension
-                self.samples_dense(t, hs, tc, &dense_state, false);
-                if tab.dense_extra > 0 && self.layout().ncols > 0 {
-                    self.dense_stages::<N>(self.layout(), t, hs, &y, s, &mut k);
+            if near_sigma || sample_inside {
+                let crossing = self.dense_step(t, hs, tn, &y, &yn, s, &mut k, near_sigma);
+                if let Some((tc, mut yc)) = crossing {
+                    guard.record(
+                        tc,
+                        "events repeat without progress (degenerate contact with ω = 0)",
+                    )?;
+                    mode = self.handle_arrival(tc, &mut yc, s, guard.degenerate());
+                    y = yc;
+                    t = tc;
+                    fsal = false;
+                    h = hnew.max(hs * 0.5);
+                    continue;
                 }
-                let mut yc = [0.0; N];
-                yc[0] = dense_state(0, thc);
-                for (i, v) in yc.iter_mut().enumerate().take(self.dim()).skip(2) {
-                    *v = nested(&dense_coeffs(tab, i, &y, &yn, &k, hs)[..m], thc);
-                }
-                yc[1] = 0.0;
-                guard.record(
-                    tc,
-                    "events repeat without progress (degenerate contact with ω = 0)",
-                )?;
-                mode = self.handle_arrival(tc, &mut yc, s, guard.degenerate());
-                y = yc;
-                t = tc;
-                fsal = false;
-                h = hnew.max(hs * 0.5);
-                continue;
             }
 
             // no event: accept the whole step
-            self.samples_dense(t, hs, tn, &dense_state, true);
             y = yn;
             k[0] = k[tab.fsal()];
             t = tn;
             h = hnew;
         }
+        Ok(self.finish(t, y, mode))
+    }
 
+    /// The start at (t₀, x₀): skips the samples before t₀ and returns the augmented state (the
+    /// Jacobian columns from [`Layout::init`]) and the initial mode; a start that sticks has
+    /// ω = 0 and the stick-entry saltation applied.
+    fn start(&mut self, t0: f64, x0: [f64; 2]) -> ([f64; N], Mode) {
+        let mut y = [0.0; N];
+        self.layout.init(x0, &mut y);
+        self.next_sample += self.opts.sample_times[self.next_sample..]
+            .iter()
+            .take_while(|&&ts| ts < t0)
+            .count();
+        let mode = super::initial_mode(self.sys, t0, x0);
+        if mode == Mode::Stick {
+            y[1] = 0.0;
+            self.stick_saltation(&mut y);
+        }
+        (y, mode)
+    }
+
+    /// Accepts or rejects the step of size `hs` from t with error norm `err` and solution `yn`:
+    /// a non-finite result is retried at a tenth of the step, an error norm above 1 at the
+    /// controller's smaller step ([`Self::propose`] gives the next step of an accepted one);
+    /// an error when the step underflows.
+    fn judge(
+        &mut self,
+        ctl: &mut Controller,
+        err: f64,
+        yn: &[f64; N],
+        t: f64,
+        hs: f64,
+        period: f64,
+    ) -> Result<Verdict> {
+        let tab = Self::TAB;
+        if !err.is_finite() || !yn[0].is_finite() || !yn[1].is_finite() {
+            if hs < 1e-14 * period {
+                return Err(Error::Integration {
+                    t,
+                    reason: "non-finite state".into(),
+                });
+            }
+            self.stats.rejected += 1;
+            ctl.last_rejected = true;
+            return Ok(Verdict::Retry(hs * 0.1));
+        }
+        let Some(hnew) = self.propose(ctl, err, hs) else {
+            let h = hs / (tab.pow_expo(err) / 0.9).min(tab.fac_max);
+            self.stats.rejected += 1;
+            if h < 1e-15 * period.max(t.abs()) {
+                return Err(Error::Integration {
+                    t,
+                    reason: format!("step size underflow (h = {h:e})"),
+                });
+            }
+            return Ok(Verdict::Retry(h));
+        };
+        Ok(Verdict::Accept(hnew))
+    }
+
+    /// An accepted step from (t, y) to (tn, yn), hs = tn − t, on side `s` that may reach Σ
+    /// (`near_sigma`) or holds a sample, on its continuous extension: the first point with
+    /// s·ω ≤ 0 ([`Self::find_crossing`]) if `near_sigma`; with one at tc, the samples before tc
+    /// and (tc, y(tc)) with the Jacobian columns interpolated and ω = 0 (the arrival is not yet
+    /// handled); without, the samples in (t, tn] and `None`.
+    #[allow(clippy::too_many_arguments)]
+    fn dense_step(
+        &mut self,
+        t: f64,
+        hs: f64,
+        tn: f64,
+        y: &[f64; N],
+        yn: &[f64; N],
+        s: f64,
+        k: &mut [[f64; N]; SMAX],
+        near_sigma: bool,
+    ) -> Option<(f64, [f64; N])> {
+        let tab = Self::TAB;
+        if tab.dense_extra > 0 {
+            let state_only = Layout {
+                ncols: 0,
+                with_params: false,
+            };
+            self.dense_stages::<2>(state_only, t, hs, y, s, k);
+        }
+        let state_coeffs = [
+            dense_coeffs(tab, 0, y, yn, k, hs),
+            dense_coeffs(tab, 1, y, yn, k, hs),
+        ];
+        let m = 4 + tab.dense_rows;
+        let dense_state = |i: usize, th: f64| -> f64 { nested(&state_coeffs[i][..m], th) };
+
+        let root = if near_sigma {
+            self.find_crossing(s, y, yn, &state_coeffs[1][..m], &dense_state)
+        } else {
+            None
+        };
+        let Some(thc) = root else {
+            self.samples_dense(t, hs, tn, &dense_state, true);
+            return None;
+        };
+        let tc = t + thc * hs;
+        // samples strictly before the event from the continuous extension
+        self.samples_dense(t, hs, tc, &dense_state, false);
+        if tab.dense_extra > 0 && self.layout().ncols > 0 {
+            self.dense_stages::<N>(self.layout(), t, hs, y, s, k);
+        }
+        let mut yc = [0.0; N];
+        yc[0] = dense_state(0, thc);
+        for (i, v) in yc.iter_mut().enumerate().take(self.dim()).skip(2) {
+            *v = nested(&dense_coeffs(tab, i, y, yn, k, hs)[..m], thc);
+        }
+        yc[1] = 0.0;
+        Some((tc, yc))
+    }
+
+    /// The flow at the end (t, y) in `mode`: the samples left while stuck, the Jacobians, the
+    /// events, samples and counts.
+    fn finish(mut self, t: f64, y: [f64; N], mode: Mode) -> Flow {
         if self.next_sample < self.opts.sample_times.len() && mode == Mode::Stick {
             self.samples_constant(t, y[0]);
         }
         let (jac_x, jac_p) = self.layout.jacobians(&y);
-        Ok(Flow {
+        Flow {
             t,
             x: [y[0], y[1]],
             mode,
@@ -492,7 +536,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             events: self.events,
             samples: self.samples,
             stats: self.stats,
-        })
+        }
     }
 
     /// Step-size proposal after an error norm `err` for step `hs` (PI control as in Hairer's
@@ -698,6 +742,31 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             y[z_omega(c)] -= jump * dt;
         }
     }
+}
+
+/// The end of the next step from t: t + h with h at most `hmax`, or t₁ when that reaches it;
+/// an error when the step underflows.
+#[inline]
+fn step_end(t: f64, h: f64, hmax: f64, t1: f64) -> Result<f64> {
+    let hh = h.min(hmax).min(t1 - t);
+    let last = hh >= t1 - t;
+    let tn = if last { t1 } else { t + hh };
+    let hs = tn - t;
+    if hs <= 0.0 || !hs.is_finite() {
+        return Err(Error::Integration {
+            t,
+            reason: format!("step size underflow (h = {hs:e})"),
+        });
+    }
+    Ok(tn)
+}
+
+/// Whether a step is accepted, with the next step size, or retried with a smaller one.
+enum Verdict {
+    /// Accepted; the next step size.
+    Accept(f64),
+    /// Rejected; the step size to retry with.
+    Retry(f64),
 }
 
 /// What one step reports besides its solution.
