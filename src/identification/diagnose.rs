@@ -77,8 +77,9 @@ pub struct DiagnoseOptions {
     /// and the headline σ of a family with a shape taken from the profile's 1σ interval. Off by
     /// default: it costs 3–9 times the CPU of a diagnosis that names such a family (about 20 s
     /// CPU per held value; docs/diagnosis.md, "Shape parameters"); without it the shapes keep
-    /// the refit's covariance σ, which is too small for them (docs/diagnosis.md, Known
-    /// weaknesses).
+    /// the refit's covariance σ, which agrees with the profile's curvature where the profile is
+    /// near quadratic (docs/diagnosis.md, "The Jacobian"); the profile is the check where it is
+    /// not (an interval that reaches the end of the shape's range).
     pub profile_shapes: bool,
 }
 

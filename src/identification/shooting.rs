@@ -128,6 +128,17 @@ impl SimModel<'_> {
         let c = self.coefficients(theta, w.run);
         window_system(r, &c, &self.geo, self.latency_of(theta), w.lo, w.hi)
     }
+    /// θ with every shape parameter clamped into its family's range ([`Shape::range`]), the value
+    /// the model evaluates: an optimiser may step beyond the range, where the residuals no longer
+    /// depend on the shape (its σ is then infinite), and the reported value must be the one used.
+    pub fn clamp_shapes(&self, theta: &mut [f64]) {
+        for (t, v) in self.terms.iter().zip(theta.iter_mut()) {
+            if let Term::Shape(s) = t {
+                let (lo, hi) = s.range();
+                *v = v.clamp(lo, hi);
+            }
+        }
+    }
     /// θ from term coefficients and the latency.
     pub fn theta(&self, coef: &[f64], latency: f64) -> Vec<f64> {
         let mut t = coef.to_vec();
@@ -560,6 +571,8 @@ fn fit_windows(
         opts.patience,
         Some((1e-6, 1e-5)),
     )?;
+    let mut sol = sol;
+    model.clamp_shapes(&mut sol.p);
     let samples: usize = used.iter().map(|&(wi, _)| wins[wi].kept()).sum();
     let (cov, inflation) = window_covariance(&sol, &used, wins, samples);
     let err: Vec<f64> = (0..theta0.len())
