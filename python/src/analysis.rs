@@ -482,8 +482,9 @@ fn fit<'py>(py: Python<'py>, set_dir: PathBuf, tol: Option<f64>) -> PyResult<Bou
 ///
 /// heldout: compute the leave-one-run-out short-horizon predictions (slower). out_dir: also write
 /// report.json there. tol: relative tolerance of the simulations, in (0, 1) (None: the library's
-/// default, 1e-8). profile_shapes: profile the final model's shape parameters for their minimum
-/// and σ (3–9 times the CPU when a family with a shape is named; docs/diagnosis.md). Returns the report as a dict (schema gearbif.diagnosis/1, docs/formats.md):
+/// default, 1e-8). profile_shapes: profile the final model's shape parameters, a check of a
+/// shape whose profile is far from quadratic (3–9 times the CPU when a family with a shape is
+/// named; docs/diagnosis.md). Returns the report as a dict (schema gearbif.diagnosis/1, docs/formats.md):
 /// verdict, findings, baseline, …. Raises RecordingError for a malformed set,
 /// InvalidParameterError for a tolerance outside (0, 1).
 #[pyfunction]

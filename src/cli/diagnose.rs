@@ -30,8 +30,8 @@ pub struct Args {
     #[arg(long, default_value_t = DiagnoseOptions::default().tol)]
     tol: f64,
     /// Profile the shape parameters of the final model (drag exponent, load weight, Stribeck
-    /// width and shape) for their minimum and an honest σ: 3–9 times the CPU when such a family
-    /// is named (docs/diagnosis.md, "Shape parameters").
+    /// width and shape): a check of a shape whose profile is far from quadratic, 3–9 times the
+    /// CPU when such a family is named (docs/diagnosis.md, "Shape parameters").
     #[arg(long)]
     profile_shapes: bool,
 }
