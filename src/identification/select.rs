@@ -208,9 +208,12 @@ pub fn polish_profiled(ctx: &SelectCtx, st: &ModelState) -> (ModelState, Vec<Sha
         .iter()
         .map(|&(w, _)| ctx.wins[w].clone())
         .collect();
+    // windows left out at a held value's start are tried again at its solution: without, a held
+    // value far from the fit loses the windows its start cannot follow, and its χ² (summed over
+    // all the windows, the lost ones by a fresh state fit) comes out too high
     let opts = ShootingOptions {
         patience: CONVERGED_PATIENCE,
-        reselect: false,
+        reselect: true,
         ..*ctx.shooting
     };
     let model = fin.model(ctx.runs, ctx.geo, ctx.tol);
