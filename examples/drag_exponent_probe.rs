@@ -38,16 +38,7 @@ fn main() {
     let st = base.state.as_ref().unwrap();
     let mut terms = BASE_TERMS.to_vec();
     terms.extend([Term::Quad, Term::Shape(Shape::DragExponent)]);
-    let model = SimModel {
-        runs: &prep.runs,
-        geo: base.geo,
-        terms,
-        latency: 0.0,
-        fit_latency: false,
-        eta_static_excess: 0.0,
-        tol: opts.tol,
-        held_shapes: Vec::new(),
-    };
+    let model = SimModel::of_terms(&prep.runs, base.geo, terms, opts.tol);
     let sopts = ShootingOptions {
         patience: CONVERGED_PATIENCE,
         reselect: true,

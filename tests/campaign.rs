@@ -750,16 +750,7 @@ fn a_shape_sigma_matches_the_curvature_of_its_profile() {
     let (prep, base) = prepared_base(&c.set, &opts);
     let mut terms = BASE_TERMS.to_vec();
     terms.extend([Term::Quad, Term::Shape(Shape::DragExponent)]);
-    let model = SimModel {
-        runs: &prep.runs,
-        geo: base.geo,
-        terms,
-        latency: 0.0,
-        fit_latency: false,
-        eta_static_excess: 0.0,
-        tol: opts.tol,
-        held_shapes: Vec::new(),
-    };
+    let model = SimModel::of_terms(&prep.runs, base.geo, terms, opts.tol);
     let mut theta0 = base.state.as_ref().unwrap().fit.theta[..4].to_vec();
     theta0.extend([3.2, 2.0]);
     let sopts = ShootingOptions {

@@ -104,6 +104,23 @@ pub struct SimModel<'a> {
     pub held_shapes: Vec<(Shape, f64)>,
 }
 
+impl<'a> SimModel<'a> {
+    /// The model of `terms` on `runs` with no latency, no breakaway excess and no held shape,
+    /// simulated at the relative tolerance `tol`: the plain model a refit starts from.
+    pub fn of_terms(runs: &'a [CleanRun], geo: Geometry, terms: Vec<Term>, tol: f64) -> Self {
+        Self {
+            runs,
+            geo,
+            terms,
+            latency: 0.0,
+            fit_latency: false,
+            eta_static_excess: 0.0,
+            tol,
+            held_shapes: Vec::new(),
+        }
+    }
+}
+
 impl SimModel<'_> {
     /// Latency at θ.
     pub fn latency_of(&self, theta: &[f64]) -> f64 {
