@@ -133,9 +133,13 @@ impl Window<'_> {
 
     fn simulate(&self, sys: &AugmentedGear, p: &[f64], events: bool) -> Option<(Vec<f64>, bool)> {
         let t = self.t;
-        let opts = FlowOptions::with_tol(self.tol)
+        // the step budget of every window simulation: a trial model whose motion chatters
+        // (a drag exponent at the end of its range with a large coefficient) would otherwise
+        // hold the profile for minutes (a `stribeck` campaign set: over 10 min in this stage)
+        let mut opts = FlowOptions::with_tol(self.tol)
             .samples(t.to_vec())
             .record_events(events);
+        opts.max_steps = super::predict::WINDOW_MAX_STEPS;
         let f = EventDriven
             .flow(sys, t[0], [p[0], p[1]], t[t.len() - 1], &opts)
             .ok()?;
