@@ -20,9 +20,7 @@
 //! the sensor latency. The Jacobian at the solution is kept: the judge uses it for the one-step
 //! leave-fold-out refits ([`SimFit::step_without`]).
 
-use super::lm::{
-    cluster_sandwich, covariance_floor, gauss_newton_cov, least_squares_with_jacobian, LsqFit,
-};
+use super::lm::{cluster_sandwich, covariance_floor, least_squares_with_jacobian, LsqFit};
 use super::model::{AugmentedGear, Coefficients, Geometry, Shape};
 use super::predict::{fit_window_state, prediction_windows, window_residuals, window_system};
 use super::preprocess::CleanRun;
@@ -746,13 +744,10 @@ fn window_covariance(
         .collect();
     let p = sol.p.len();
     let dof = (samples as f64 - 2.0 * used.len() as f64 - p as f64).max(1.0);
-    let white = gauss_newton_cov(&sol.jac).map(|v| {
-        if v.is_infinite() {
-            v
-        } else {
-            v * sol.rss / dof
-        }
-    });
+    // the fit's s²(JᵀJ)⁻¹ (s² = RSS/(rows − parameters)) rescaled to s² = RSS/dof: no second
+    // factorisation of J (an infinite variance stays infinite)
+    let rows = sol.resid.len().saturating_sub(p).max(1) as f64;
+    let white = sol.cov.map(|v| v * rows / dof);
     match cluster_sandwich(&sol.jac, &sol.resid, &clusters) {
         Some(robust) => covariance_floor(&robust, &white),
         None => (white, 1.0),
