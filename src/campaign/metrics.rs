@@ -70,6 +70,10 @@ pub struct CaseResult {
     /// (report key `remaining.noise`; absent when the floor is white noise).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise_at_rest: Option<[f64; 2]>,
+    /// The speed-dependent noise measured in motion: σ_t² (s², a timing jitter's variance) and
+    /// its σ (report key `remaining.noise.speed_noise`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub timing_jitter: Option<[f64; 2]>,
     /// The error, if the diagnosis failed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,

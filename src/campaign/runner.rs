@@ -176,6 +176,10 @@ pub fn run_case(
         .and_then(|r| r.noise.as_ref())
         .filter(|n| n.method == "rest" && !n.correlation.is_empty())
         .map(|n| [n.sigma_rad, n.correlation[0]]);
+    let timing_jitter = rem
+        .and_then(|r| r.noise.as_ref())
+        .and_then(|n| n.speed_noise.as_ref())
+        .map(|s| [s.timing_var_s2, s.timing_var_sigma_s2]);
     let (verdict, findings, error) = match diag {
         Ok(d) => (
             d.report.verdict.clone(),
@@ -207,6 +211,7 @@ pub fn run_case(
         remaining_above_noise,
         remaining_z,
         noise_at_rest,
+        timing_jitter,
         error,
     })
 }

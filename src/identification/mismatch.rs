@@ -5,9 +5,11 @@
 
 use super::model::AugmentedGear;
 use super::predict::fit_window_state;
-use super::preprocess::{rest_autocovariance, CleanRun, RestAutocov, RestPiece};
+use super::preprocess::{
+    rest_autocovariance, speed_noise, CleanRun, RestAutocov, RestPiece, SpeedPiece,
+};
 use super::regression::{delta_bic, fit, Design, LinFit, Term};
-use super::report::{Mismatch, NoiseFloor, Remainder, RemainderBin};
+use super::report::{Mismatch, NoiseFloor, Remainder, RemainderBin, SpeedNoiseFloor};
 use super::ringdown::KappaFit;
 use super::shooting::{par_map, SimModel, Win};
 use crate::integrator::{EventDriven853, FlowMethod, FlowOptions};
@@ -372,6 +374,9 @@ pub struct WindowGeometry {
     /// Samples from the window's first (masked ones included, and up to a window length past
     /// its end) at which the model's trajectory from the window's state is stuck.
     pub stuck: Vec<bool>,
+    /// The model's β and β̇ from the window's state at every sample of the window (masked ones
+    /// included).
+    pub sim: Vec<(f64, f64)>,
 }
 
 /// β and β̇ of `sys` from `x0` at the first of `t` (the diagnosis's window integrator and budget).
@@ -460,6 +465,7 @@ pub fn window_geometry(
                 .collect(),
             hat,
             stuck,
+            sim: s0,
         })
     })
 }
@@ -545,10 +551,29 @@ fn floor_coefficients(
 }
 
 /// The camera-noise floor of the judging windows: per window its expected χ² under the noise
-/// measured at rest ([`rest_autocovariance`]), the same for every leave-one-piece-out estimate
-/// (the jackknife of the floor), and the report's description. Without two pieces at rest, the
-/// floor of white noise at the cleaning's σ, d_w = frames − 2, with a note.
+/// measured at rest ([`rest_autocovariance`]) plus, when it is significant, the speed-dependent
+/// white noise measured in motion ([`speed_floor`]); the jackknife of the floor (one set of
+/// floors per leave-one-unit-out estimate, for each independent measurement); and the report's
+/// description. Without two pieces at rest, the rest part is white noise at the cleaning's σ,
+/// d_w = frames − 2, with a note.
 pub fn noise_floor(
+    runs: &[CleanRun],
+    wins: &[Win],
+    geom: &[Option<WindowGeometry>],
+) -> (Vec<f64>, Vec<Vec<Vec<f64>>>, NoiseFloor) {
+    let (mut floors, jack, mut nf) = rest_floor(runs, wins, geom);
+    let mut sets = vec![jack];
+    if let Some((add, speed_jack, report)) = speed_floor(runs, wins, geom, &floors) {
+        floors.iter_mut().zip(&add).for_each(|(f, a)| *f += a);
+        sets.push(speed_jack);
+        nf.speed_noise = Some(report);
+    }
+    (floors, sets, nf)
+}
+
+/// The rest part of [`noise_floor`]: floors, their jackknife over the pieces at rest, the
+/// description.
+fn rest_floor(
     runs: &[CleanRun],
     wins: &[Win],
     geom: &[Option<WindowGeometry>],
@@ -596,6 +621,84 @@ pub fn noise_floor(
     (floors, jack, describe(&ac, cam, lags, &ratio))
 }
 
+/// The speed-dependent part of the window floors: the white noise of variance σ_t² β̇² measured
+/// in motion ([`speed_noise`]: the judging windows are the pieces, the final model's simulated
+/// window the reference), added to Γ_w as diag(σ_t² β̇_i²) with β̇ the model's, so that
+/// f_w gains σ_t² Σ_i (1 − H_ii) β̇_i² / σ²_camera over the kept frames (the trace of
+/// (I − H_w) diag(σ_t² β̇²)). Added only when σ_t² ≥ [`REMAINDER_Z`] times its jackknife σ.
+/// Returns the added floors, the floors of every leave-one-window-out σ_t² (the rest floors
+/// `rest` plus that part), and the report's entry; `None` when it cannot be measured.
+fn speed_floor(
+    runs: &[CleanRun],
+    wins: &[Win],
+    geom: &[Option<WindowGeometry>],
+    rest: &[f64],
+) -> Option<(Vec<f64>, Vec<Vec<f64>>, SpeedNoiseFloor)> {
+    let pieces: Vec<SpeedPiece> = wins
+        .iter()
+        .zip(geom)
+        .filter_map(|(w, g)| {
+            let g = g.as_ref()?;
+            let r = &runs[w.run];
+            (g.sim.len() == w.hi - w.lo).then(|| SpeedPiece {
+                t: r.t[w.lo..w.hi].to_vec(),
+                beta: r.beta[w.lo..w.hi].to_vec(),
+                keep: w.keep.clone(),
+                reference: g.sim.iter().map(|s| s.0).collect(),
+                speed: g.sim.iter().map(|s| s.1).collect(),
+            })
+        })
+        .collect();
+    let sn = speed_noise(&pieces)?;
+    let sigma = sn.timing_var_sigma();
+    let z = sn.timing_var / sigma;
+    let used = z.is_finite() && z >= REMAINDER_Z;
+    // per window Σ_kept (1 − H_ii) β̇_i² / σ²_camera
+    let unit: Vec<f64> = wins
+        .iter()
+        .zip(geom)
+        .map(|(w, g)| {
+            let Some(g) = g else { return 0.0 };
+            let s2 = runs[w.run].sigma_camera.max(1e-12).powi(2);
+            let kept = (0..w.keep.len()).filter(|&q| w.keep[q]);
+            kept.enumerate()
+                .map(|(i, q)| (1.0 - g.hat[(i, i)]) * g.sim.get(q).map_or(0.0, |s| s.1 * s.1))
+                .sum::<f64>()
+                / s2
+        })
+        .collect();
+    let scale = if used { 1.0 } else { 0.0 };
+    let add: Vec<f64> = unit.iter().map(|u| scale * sn.timing_var * u).collect();
+    let jack: Vec<Vec<f64>> = sn
+        .jackknife
+        .iter()
+        .map(|s| {
+            rest.iter()
+                .zip(&unit)
+                .map(|(f, u)| f + scale * s * u)
+                .collect()
+        })
+        .collect();
+    let jitter = sn.timing_var.max(0.0).sqrt();
+    let report = SpeedNoiseFloor {
+        timing_var_s2: sn.timing_var,
+        timing_var_sigma_s2: sigma,
+        timing_jitter_s: jitter,
+        timing_jitter_s_err: if jitter > 0.0 {
+            sigma / (2.0 * jitter)
+        } else {
+            sigma.sqrt()
+        },
+        z,
+        added: used,
+        floor_added: add.iter().sum::<f64>() / rest.iter().sum::<f64>().max(1e-300),
+        white_sigma_rad: sn.white_var.max(0.0).sqrt(),
+        samples: sn.samples,
+        windows: sn.pieces,
+    };
+    Some((add, jack, report))
+}
+
 /// The report's description of the noise measured at rest.
 fn describe(ac: &RestAutocov, cam: f64, lags: usize, ratio: &dyn Fn(&[f64]) -> f64) -> NoiseFloor {
     let shown = lags.min(ac.gamma.len()).max(1);
@@ -617,11 +720,21 @@ fn describe(ac: &RestAutocov, cam: f64, lags: usize, ratio: &dyn Fn(&[f64]) -> f
              final model's stick phases in the judging windows); window floors tr((I − H)Γ)/σ²",
             ac.frames, ac.pieces
         ),
+        speed_noise: None,
     }
 }
 
-/// Relative jackknife σ of the floor summed over the windows `idx`.
-fn floor_rel_sigma(floors: &[f64], jack: &[Vec<f64>], idx: &[usize]) -> f64 {
+/// Relative jackknife σ of the floor summed over the windows `idx`: the σ of each independent
+/// measurement in `sets` (its leave-one-unit-out floors) added in quadrature.
+fn floor_rel_sigma(floors: &[f64], sets: &[Vec<Vec<f64>>], idx: &[usize]) -> f64 {
+    sets.iter()
+        .map(|jack| jack_rel_sigma(floors, jack, idx).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Relative jackknife σ of the floor summed over the windows `idx`, one measurement.
+fn jack_rel_sigma(floors: &[f64], jack: &[Vec<f64>], idx: &[usize]) -> f64 {
     if jack.len() < 2 {
         return 0.0;
     }

@@ -100,6 +100,36 @@ pub struct NoiseFloor {
     pub floor_over_frames_minus_2_sigma: f64,
     /// How the floor was obtained.
     pub note: String,
+    /// The white noise that grows with the speed, measured in motion (absent in reports of
+    /// earlier versions and when it cannot be measured).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed_noise: Option<SpeedNoiseFloor>,
+}
+
+/// A white noise of variance σ_t² β̇² measured in motion (`identification::preprocess::speed_noise`):
+/// a timing jitter of σ_t, or any error growing as |β̇|; invisible at rest.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct SpeedNoiseFloor {
+    /// σ_t², s² (an estimate: may be negative).
+    pub timing_var_s2: f64,
+    /// Its jackknife 1σ over the judging windows.
+    pub timing_var_sigma_s2: f64,
+    /// σ_t = √max(σ_t², 0), s.
+    pub timing_jitter_s: f64,
+    /// Its 1σ (σ(σ_t²)/2σ_t; √σ(σ_t²) at 0).
+    pub timing_jitter_s_err: f64,
+    /// z = σ_t²/σ(σ_t²).
+    pub z: f64,
+    /// Whether it was added to the floor (z ≥ the remainder's threshold).
+    pub added: bool,
+    /// The part added to the floor, over the floor at rest (both summed over the windows).
+    pub floor_added: f64,
+    /// The speed-free white σ of the same fit, rad.
+    pub white_sigma_rad: f64,
+    /// Samples used.
+    pub samples: usize,
+    /// Windows used (the jackknife's units).
+    pub windows: usize,
 }
 
 /// One bin of the remainder.
@@ -283,8 +313,33 @@ pub fn markdown(r: &Report, title: &str) -> String {
     s
 }
 
-/// The camera-noise floor's paragraph of report.md.
+/// The camera-noise floor's paragraph of report.md, with the speed-dependent noise's line.
 fn noise_markdown(n: &NoiseFloor) -> String {
+    let mut s = rest_noise_markdown(n);
+    if let Some(sp) = &n.speed_noise {
+        s.push_str(&format!(
+            "Noise growing with the speed (white, variance σ_t² β̇²: a timing jitter of σ_t, or \
+             any error ∝ |β̇|), measured in motion on {} windows: σ_t = {:.3} ± {:.3} ms \
+             (σ_t² at z = {:.1}); {}.\n\n",
+            sp.windows,
+            1e3 * sp.timing_jitter_s,
+            1e3 * sp.timing_jitter_s_err,
+            sp.z,
+            if sp.added {
+                format!(
+                    "added to the floor (+{:.1} % of the floor at rest)",
+                    100.0 * sp.floor_added
+                )
+            } else {
+                "not significant, not added to the floor".to_string()
+            }
+        ));
+    }
+    s
+}
+
+/// The rest part of [`noise_markdown`].
+fn rest_noise_markdown(n: &NoiseFloor) -> String {
     if n.method != "rest" {
         return format!(
             "Camera-noise floor: white noise at the cleaning's σ = {:.3}° ({}).\n\n",
