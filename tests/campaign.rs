@@ -254,6 +254,21 @@ fn remainder_floor_holds_under_coloured_noise() {
     assert_remainder_rate(&doc.cases, &["none_ar1", "none_ar1_strong"]);
 }
 
+/// The remainder's noise floor under a timing jitter of the frames (control `none_jitter`, 0.5 ms,
+/// 5 seeds on the CI campaign's tiny sets): β̇·δt is a white noise that grows with the speed and
+/// is absent at rest; a floor measured only at rest called a remainder above noise in 20 of 20
+/// `ci` sets (docs/diagnosis.md, "What remains and where"). The floor's speed part measures it in
+/// motion: at most `max_consistent_failures(5, 0.00135, 0.01)` = 1 above noise, verdicts `none`.
+#[test]
+fn remainder_floor_holds_under_timing_jitter() {
+    let doc = tiny_campaign("jitter", &["none_jitter"], 1.0, 1, 5);
+    assert_eq!(doc.cases.len(), 5);
+    for c in &doc.cases {
+        assert_eq!(c.verdict, "none", "{} seed {}", c.effect, c.seed);
+    }
+    assert_remainder_rate(&doc.cases, &["none_jitter"]);
+}
+
 /// Goal: effects of a clear size are named right in ≥ 90 % of the sets. Misses beyond
 /// `max_consistent_failures(8, 0.10, 0.01)` (= 3 of 8) refute it at the 1 % level.
 #[test]
