@@ -91,6 +91,13 @@ pub fn gauss_newton_cov(j: &DMatrix<f64>) -> DMatrix<f64> {
     }
 }
 
+/// s²(JᵀJ)⁻¹ with s² = `rss`/(rows − columns) ([`gauss_newton_cov`]); an infinite variance stays
+/// infinite for an exact fit (s² = 0).
+pub fn scaled_cov(j: &DMatrix<f64>, rss: f64) -> DMatrix<f64> {
+    let s2 = rss / j.nrows().saturating_sub(j.ncols()).max(1) as f64;
+    gauss_newton_cov(j).map(|v| if v.is_infinite() { v } else { v * s2 })
+}
+
 /// The cluster-robust (sandwich) covariance of a least-squares fit whose residuals come in
 /// clusters of rows that may be correlated within a cluster but not between clusters (CR2 of
 /// Bell & McCaffrey, with centred scores):
@@ -293,9 +300,7 @@ where
     let resid = f(&p)?;
     let rss: f64 = resid.iter().map(|r| r * r).sum();
     let j = jac(&p, &resid)?;
-    let s2 = rss / (m - n) as f64;
-    // an infinite variance stays infinite for an exact fit (s² = 0)
-    let cov = gauss_newton_cov(&j).map(|v| if v.is_infinite() { v } else { v * s2 });
+    let cov = scaled_cov(&j, rss);
     Some(LsqFit {
         p,
         resid,

@@ -20,7 +20,9 @@
 //! the sensor latency. The Jacobian at the solution is kept: the judge uses it for the one-step
 //! leave-fold-out refits ([`SimFit::step_without`]).
 
-use super::lm::{cluster_sandwich, covariance_floor, least_squares_with_jacobian, LsqFit};
+use super::lm::{
+    cluster_sandwich, covariance_floor, least_squares_with_jacobian, scaled_cov, LsqFit,
+};
 use super::model::{AugmentedGear, Coefficients, Geometry, Shape};
 use super::predict::{fit_window_state, prediction_windows, window_residuals, window_system};
 use super::preprocess::CleanRun;
@@ -153,6 +155,18 @@ impl SimModel<'_> {
                 *v = v.clamp(lo, hi);
             }
         }
+    }
+    /// Whether a shape parameter of θ lies within its finite-difference step ([`COEF_STEP`]) of
+    /// an end of its range ([`Shape::range`]).
+    pub fn near_shape_bound(&self, theta: &[f64]) -> bool {
+        self.terms.iter().zip(theta).any(|(t, &v)| match t {
+            Term::Shape(s) => {
+                let (lo, hi) = s.range();
+                let h = COEF_STEP * v.abs().max(1.0);
+                v + h > hi || v - h < lo
+            }
+            _ => false,
+        })
     }
     /// θ from term coefficients and the latency.
     pub fn theta(&self, coef: &[f64], latency: f64) -> Vec<f64> {
@@ -562,7 +576,7 @@ fn fit_windows(
                 warm.lock().ok()?.states.clone()
             }
         };
-        varpro_jacobian(model, theta, wins, &used, &states, row)
+        varpro_jacobian(model, theta, wins, &used, &states, row, false)
     };
     let r0 = residuals(theta0)?;
     let sigma_rms = |res: &[f64]| -> f64 {
@@ -588,6 +602,16 @@ fn fit_windows(
     )?;
     let mut sol = sol;
     model.clamp_shapes(&mut sol.p);
+    if model.near_shape_bound(&sol.p) {
+        // at the end of a shape's range the central column is half the slope (or none, beyond
+        // it), and the covariance would hold the shape fixed there: the column is taken one-sided
+        // towards the inside, so the σ of the shape and of what trades off with it carry the
+        // valley along it
+        residuals(&sol.p)?;
+        let states = warm.lock().ok()?.states.clone();
+        sol.jac = varpro_jacobian(model, &sol.p, wins, &used, &states, row, true)?;
+        sol.cov = scaled_cov(&sol.jac, sol.rss);
+    }
     let samples: usize = used.iter().map(|&(wi, _)| wins[wi].kept()).sum();
     let (cov, inflation) = window_covariance(&sol, &used, wins, samples);
     let err: Vec<f64> = (0..theta0.len())
@@ -650,6 +674,7 @@ fn varpro_jacobian(
     used: &[(usize, usize)],
     states: &[[f64; 2]],
     rows: usize,
+    inward: bool,
 ) -> Option<DMatrix<f64>> {
     let n = theta.len();
     let nt = model.terms.len();
@@ -664,6 +689,8 @@ fn varpro_jacobian(
         let x = states[k];
         let nw = w.keep.len();
         let mut jw = DMatrix::zeros(nw, n);
+        // the residuals at θ itself, for the one-sided differences at a range's end
+        let r0 = if inward { Some(sim(theta, x)?) } else { None };
         let mut th = theta.to_vec();
         for c in 0..n {
             let h = if c >= nt {
@@ -671,13 +698,28 @@ fn varpro_jacobian(
             } else {
                 COEF_STEP * theta[c].abs().max(1.0)
             };
-            th[c] = theta[c] + h;
-            let rp = sim(&th, x)?;
-            th[c] = theta[c] - h;
-            let rm = sim(&th, x)?;
+            let (up, down) = match model.terms.get(c) {
+                Some(Term::Shape(sh)) if inward => {
+                    let (lo, hi) = sh.range();
+                    (theta[c] + h <= hi, theta[c] - h >= lo)
+                }
+                _ => (true, true),
+            };
+            let (rp, hp) = if up {
+                th[c] = theta[c] + h;
+                (sim(&th, x)?, h)
+            } else {
+                (r0.clone()?, 0.0)
+            };
+            let (rm, hm) = if down {
+                th[c] = theta[c] - h;
+                (sim(&th, x)?, h)
+            } else {
+                (r0.clone()?, 0.0)
+            };
             th[c] = theta[c];
             for i in 0..nw {
-                jw[(i, c)] = (rp[i] - rm[i]) / (2.0 * h);
+                jw[(i, c)] = (rp[i] - rm[i]) / (hp + hm).max(f64::MIN_POSITIVE);
             }
         }
         let mut basis: Vec<DVector<f64>> = Vec::with_capacity(2);
