@@ -377,11 +377,20 @@ pub fn diagnose(
         let (t, fin) = select(&sctx, b.clone(), progress);
         tried = t;
         stage(progress, "final model refitted to convergence");
-        let (fin, profiles) = if opts.profile_shapes {
-            super::select::polish_profiled(&sctx, &fin)
-        } else {
-            (super::select::polish(&sctx, &fin), Vec::new())
-        };
+        let (fin, profiles) = polish_final(&sctx, &fin, opts.profile_shapes);
+        stage(
+            progress,
+            "static friction (stick phases), judged on held-out runs",
+        );
+        let sf = static_friction(
+            &sctx,
+            (fin, profiles, opts.profile_shapes),
+            &mut tried,
+            &mut mismatch,
+            progress,
+        );
+        let (fin, profiles, final_held) = (sf.fin, sf.profiles, sf.held);
+        excess = sf.excess;
         let mut before = b;
         for t in tried.iter().filter(|t| t.accepted) {
             let rv = rivals(t, &tried);
@@ -392,32 +401,7 @@ pub fn diagnose(
             }
             before = t.state.as_ref().expect("accepted state");
         }
-        stage(
-            progress,
-            "static friction (stick phases), judged on held-out runs",
-        );
-        let stribeck_found = findings.iter().any(|f| f.effect == "static_friction");
-        let judged = if stribeck_found {
-            None
-        } else {
-            breakaway::judge(runs, &fin, &base.geo, &base.wins, &folds, opts.tol)
-        };
-        let mut final_held = fin.held.clone();
-        if let Some((f, cmp, stands, ex, held)) = judged {
-            if stands {
-                final_held = held;
-                mismatch.push(Mismatch {
-                    where_: "stick phases: the output stays at rest beyond the sliding friction \
-                             (release later, with an acceleration jump)"
-                        .into(),
-                    evidence: f.evidence.clone(),
-                });
-                excess = ex;
-                findings.push(f);
-            } else {
-                tried_static_friction_rejected(&mut mismatch, &f, cmp.z);
-            }
-        }
+        findings.extend(sf.at_rest);
         remaining(&mut mismatch, &fin, &base.wins, runs, &prep.files);
         // the floor's window geometry and stick phases under the final model (with the
         // breakaway excess when it stands)
@@ -505,6 +489,132 @@ fn remaining(
             evidence: bad,
         });
     }
+}
+
+/// The final model refitted to convergence, its shapes profiled when `profiled`
+/// ([`super::select::polish_profiled`], else [`super::select::polish`]).
+fn polish_final(
+    ctx: &SelectCtx,
+    st: &ModelState,
+    profiled: bool,
+) -> (ModelState, Vec<super::profile::ShapeProfile>) {
+    if profiled {
+        super::select::polish_profiled(ctx, st)
+    } else {
+        (super::select::polish(ctx, st), Vec::new())
+    }
+}
+
+/// What the static-friction stage hands on: the final model (with the Stribeck member when it
+/// was accepted), its shape profiles, its held-out errors (with the excess at rest when that
+/// finding stands), the excess at rest (s⁻², 0 without it) and the finding at rest.
+struct StaticFrictionStage {
+    fin: ModelState,
+    profiles: Vec<super::profile::ShapeProfile>,
+    held: super::judge::HeldOut,
+    excess: f64,
+    at_rest: Option<Finding>,
+}
+
+/// Stage 5b: static friction, which the weak form cannot propose (it skips stick phases). The
+/// stick-phase profile at rest proposes it ([`breakaway::judge`], judged); then the Stribeck
+/// member with a width is refitted by simulation from its excess ([`breakaway::width_member`])
+/// and, when it stands, replaces the excess at rest: the final model is refitted with it (its
+/// shapes freed) and it is reported like the rounds' findings (appended to `tried`). Otherwise
+/// the excess at rest is reported when it stands. Every member tried is in `tried` or
+/// `mismatch` with its numbers. Skipped when the rounds accepted a Stribeck member.
+fn static_friction(
+    ctx: &SelectCtx,
+    (fin, profiles, profiled): (ModelState, Vec<super::profile::ShapeProfile>, bool),
+    tried: &mut Vec<Tried>,
+    mismatch: &mut Vec<Mismatch>,
+    progress: &dyn Observer,
+) -> StaticFrictionStage {
+    let mut out = StaticFrictionStage {
+        held: fin.held.clone(),
+        fin,
+        profiles,
+        excess: 0.0,
+        at_rest: None,
+    };
+    if tried
+        .iter()
+        .any(|t| t.accepted && t.candidate.effect.id == "static_friction")
+    {
+        return out;
+    }
+    let Some((f, cmp, stands, ex, held)) =
+        breakaway::judge(ctx.runs, &out.fin, ctx.geo, ctx.wins, ctx.folds, ctx.tol)
+    else {
+        return out;
+    };
+    stage(
+        progress,
+        &format!(
+            "  excess at rest: s = {:.3}, held-out z = {:.2} (threshold {:.2}); the Stribeck \
+             member with a width refitted from it",
+            f.params.get("excess_relative").copied().unwrap_or(f64::NAN),
+            cmp.z,
+            super::judge::z_threshold(breakaway::SLOT_MEMBERS)
+        ),
+    );
+    let round = tried.iter().map(|t| t.round).max().unwrap_or(0) + 1;
+    let width = breakaway::width_member(ctx, &out.fin, ex, round);
+    if let Some((w, _)) = &width {
+        stage(
+            progress,
+            &format!(
+                "  Stribeck member (w, δ start {}): screening z = {}, held-out z = {}, Wald z of \
+                 its excess = {}",
+                w.candidate.weak_coef[out.fin.terms.len() + 1..]
+                    .iter()
+                    .map(|v| format!("{v}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                w.screen
+                    .map(|c| format!("{:.2}", c.z))
+                    .unwrap_or("–".into()),
+                w.cmp.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
+                w.added_z.map(|z| format!("{z:.2}")).unwrap_or("–".into()),
+            ),
+        );
+    }
+    let stick_phases = |f: &Finding| Mismatch {
+        where_: "stick phases: the output stays at rest beyond the sliding friction \
+                 (release later, with an acceleration jump)"
+            .into(),
+        evidence: f.evidence.clone(),
+    };
+    let (width, alternate) = match width {
+        Some((w, alt)) => (Some(w), alt),
+        None => (None, None),
+    };
+    match width {
+        Some(w) if w.accepted => {
+            mismatch.push(stick_phases(&f));
+            let st = w.state.as_ref().expect("accepted state");
+            let (fin, profiles) =
+                breakaway::final_member(ctx, &out.fin, st, alternate.as_ref(), |s| {
+                    polish_final(ctx, s, profiled)
+                });
+            out.held = fin.held.clone();
+            out.fin = fin;
+            out.profiles = profiles;
+            tried.push(w);
+        }
+        other => {
+            tried.extend(other);
+            if stands {
+                mismatch.push(stick_phases(&f));
+                out.held = held;
+                out.excess = ex;
+                out.at_rest = Some(f);
+            } else {
+                tried_static_friction_rejected(mismatch, &f, cmp.z);
+            }
+        }
+    }
+    out
 }
 
 fn tried_static_friction_rejected(mismatch: &mut Vec<Mismatch>, f: &Finding, z: f64) {

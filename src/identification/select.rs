@@ -344,7 +344,7 @@ pub const SCREEN_Z: f64 = 1.0;
 /// Screening: `cand` refitted and judged on every second judging window. A candidate whose
 /// full-set z reaches the threshold (≥ 3) has an expected half-set z of ≥ 3/√2 ≈ 2.1, far above
 /// [`SCREEN_Z`].
-fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Comparison> {
+pub fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Comparison> {
     let idx: Vec<usize> = (0..ctx.wins.len()).step_by(2).collect();
     let sub: Vec<Win> = idx.iter().map(|&k| ctx.wins[k].clone()).collect();
     let st = evaluate_on(ctx, &sub, cur, cand)?;
