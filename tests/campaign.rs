@@ -604,7 +604,9 @@ fn frequency_dependent_damping_is_a_condition_dependence_of_zeta() {
 /// Ignored: it fails today. Measured 2026-11-25 with the variable-projection Jacobian (15 s wall
 /// for the 3 refits, release build): seeds 1 and 3 cover the truth (Δη_s/η 0.953 ± 0.027 and
 /// 1.009 ± 0.045, w 0.525 ± 0.066 and 0.467 ± 0.052), seed 2 stops with δ at the end of its range
-/// (4, σ infinite) and Δη_s/η 1.100 ± 0.0095, w 0.352 ± 0.005: 10σ and 28σ off. Before that
+/// (4 ± 0.11 with the column one-sided there; σ infinite before) and Δη_s/η 1.096 ± 0.015, w
+/// 0.352 ± 0.011: 6σ and 14σ off. This is one start; the diagnosis refits the member from two
+/// (`breakaway::final_member`, tested end to end below). Before that
 /// Jacobian, seed 1 stopped at its start and seeds 2 and 3 left δ near 1 with σ(δ) ≤ 0.015 (0 of
 /// 3 covered). See docs/diagnosis.md, Known weaknesses.
 #[test]
@@ -691,6 +693,40 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
     }
     assert!(covered >= 2 && worst <= 4.0, "{}", lines.join("\n"));
     eprintln!("{}", lines.join("\n"));
+}
+
+/// The Stribeck excess, diagnosed end to end on recordings of the campaign generator (friction
+/// η + Δη_s exp(−(β̇/w)²), Δη_s = η, w = 0.5 rad/s: level 2 of `stribeck`, `ci` sets of 6
+/// ring-downs of 3 s and 3 driven runs of 12 turns) over 3 seeds with the diagnosis's default
+/// options: every set is named `static_friction` with a size (not a lower bound) within 20 % of
+/// the truth Δη_s/η = 1. The weak form does not propose the Stribeck member on these sets; the
+/// stick-phase profile at rest does, and the member with a width is then refitted by simulation
+/// (`breakaway::width_member`). Before, the finding was the profile at rest (the member's w → 0
+/// limit), which reads the braking of slow sliding as a larger excess at rest: 1.5 ± 0.0001–0.009
+/// on these seeds, the end of its range (docs/diagnosis.md, "Static friction"). The 20 % is the
+/// accuracy measured on the campaign (0.79–1.04 on 5 seeds); its σ still cover the truth only
+/// in part (Known weaknesses).
+#[test]
+fn stribeck_member_sizes_the_excess_on_generated_sets() {
+    let doc = level2_ci_campaign("stribeck", 3);
+    assert_eq!(doc.cases.len(), 3);
+    for c in &doc.cases {
+        let e = c
+            .coverage
+            .iter()
+            .find(|e| e.effect == "static_friction")
+            .unwrap_or_else(|| panic!("seed {}: verdict {}", c.seed, c.verdict));
+        let (v, s) = e
+            .reported
+            .unwrap_or_else(|| panic!("seed {}: no size ({:?})", c.seed, e.note));
+        assert!(
+            c.named_right && (v - e.truth).abs() <= 0.2 * e.truth,
+            "seed {}: verdict {}, excess {v} ± {s} (truth {})",
+            c.seed,
+            c.verdict,
+            e.truth
+        );
+    }
 }
 
 /// The drag family's exponent, diagnosed end to end on recordings of the campaign generator
