@@ -413,6 +413,18 @@ pub fn rivals(t: &Tried, tried: &[Tried]) -> Vec<String> {
         .collect()
 }
 
+/// Whether the dictionary term `t` (held-out gain `gain`) gained more than the candidate accepted
+/// in its round, a catalog effect ([`super::select`]'s choice between the two).
+fn gave_way(t: &Tried, gain: f64, tried: &[Tried]) -> bool {
+    t.candidate.effect.id == "unexplained"
+        && tried.iter().any(|o| {
+            o.round == t.round
+                && o.accepted
+                && o.candidate.effect.id != "unexplained"
+                && o.cmp.is_some_and(|c| c.gain < gain)
+        })
+}
+
 /// The rejected candidates with their numbers (for `fits.rejected_candidates`).
 pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
     tried
@@ -453,6 +465,10 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                     Some(_) if t.member_z.is_some_and(|z| z < t.z_crit) => format!(
                         "a smaller member of the family predicts as well (held-out z of this \
                          member against it {:.2} < {:.2})", t.member_z.unwrap_or(0.0), t.z_crit),
+                    Some(m) if gave_way(t, m.gain, tried) => "significant and gained more, but a \
+                        dictionary term gives way to a catalog effect of the round that it does not \
+                        predict significantly better than (the accepted one)"
+                        .to_string(),
                     Some(_) => "significant, but another candidate of the round gained more"
                         .to_string(),
                 },

@@ -37,8 +37,9 @@
 //!   its shaft angles off, 27 of it in one driven run); an effect whose fitted size is consistent
 //!   with zero cannot be what improved the prediction.
 //! - **Greedy over rounds.** Each round evaluates all remaining candidates (each on top of the
-//!   accepted ones), accepts the one with the largest held-out gain Σ d_w among the significant,
-//!   and repeats; the order in which candidates are listed never decides.
+//!   accepted ones), accepts the one with the largest held-out gain Σ d_w among the significant
+//!   (a dictionary term gives way to a catalog effect it does not predict significantly better:
+//!   [`super::select`]), and repeats; the order in which candidates are listed never decides.
 
 use super::preprocess::CleanRun;
 use super::shooting::{par_map, SimFit, SimModel, Win};

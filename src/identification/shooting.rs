@@ -39,7 +39,8 @@ pub struct ShootingOptions {
     /// Outer Levenberg–Marquardt patience (evaluations ≈ patience × (parameters + 1)).
     pub patience: usize,
     /// Try the windows left out at the start again at the solution and refit with those the
-    /// fitted model follows ([`refit`]); for the reported fits.
+    /// fitted model follows ([`refit`]); for the reported fits and the judge's refits of the
+    /// candidates ([`super::select`] sets it there whatever the default).
     pub reselect: bool,
 }
 
