@@ -124,12 +124,14 @@ fn start_theta(cur: &ModelState, cand: &Candidate) -> Vec<f64> {
     th
 }
 
-/// Refits `cur` + `cand` on the windows `wins` and gives its held-out errors on them.
+/// Refits `cur` + `cand` on the windows `wins` (those its start cannot follow tried again at
+/// the solution when `reselect`) and gives its held-out errors on them.
 fn evaluate_on(
     ctx: &SelectCtx,
     wins: &[Win],
     cur: &ModelState,
     cand: &Candidate,
+    reselect: bool,
 ) -> Option<ModelState> {
     let mut terms = cur.terms.clone();
     terms.extend(judged_terms(cur, cand).0);
@@ -149,13 +151,8 @@ fn evaluate_on(
         tol: ctx.tol,
         held_shapes: Vec::new(),
     };
-    // the windows the start cannot follow are tried again at the solution: a large effect that
-    // the current model misses leaves most driven windows unfollowable from the weak-form start,
-    // and a candidate refitted on the rest (ring-downs, where a latency only shifts the window's
-    // state) was judged on a refit that had not seen its evidence (docs/diagnosis.md, "Known
-    // weaknesses": a 12 ms latency with a Wald z of 0 from 2 driven windows of 97)
     let opts = ShootingOptions {
-        reselect: true,
+        reselect,
         ..*ctx.shooting
     };
     let fit = refit(&model, &theta0, wins, &opts)?;
@@ -171,9 +168,21 @@ fn evaluate_on(
     })
 }
 
-/// Refits `cur` + `cand` on all judging windows and gives its held-out errors.
+/// Refits `cur` + `cand` on all judging windows and gives its held-out errors. When its start
+/// follows fewer than half of the judging windows, the refit is repeated with the windows it
+/// cannot follow tried again at the solution ([`ShootingOptions::reselect`]): a large effect
+/// that the current model misses leaves most driven windows unfollowable from the weak-form
+/// start, and a candidate refitted on the rest (ring-downs, where a latency only shifts the
+/// window's state) was judged on a refit that had not seen its evidence (docs/diagnosis.md,
+/// "Known weaknesses": a 12 ms latency with a Wald z of 0 from 2 driven windows of 97). Not
+/// always, and not in the screening ([`screen`]): re-selecting every candidate's windows raised
+/// the CPU of a diagnosis by 45–85 % where the start follows nearly all of them.
 pub fn evaluate(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<ModelState> {
-    evaluate_on(ctx, ctx.wins, cur, cand)
+    let st = evaluate_on(ctx, ctx.wins, cur, cand, false);
+    match st {
+        Some(s) if 2 * s.fit.used.len() >= ctx.wins.len() => Some(s),
+        other => evaluate_on(ctx, ctx.wins, cur, cand, true).or(other),
+    }
 }
 
 /// The final model refitted to convergence (the judge's refits stop after a few
@@ -356,7 +365,7 @@ pub const SCREEN_Z: f64 = 1.0;
 pub fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Comparison> {
     let idx: Vec<usize> = (0..ctx.wins.len()).step_by(2).collect();
     let sub: Vec<Win> = idx.iter().map(|&k| ctx.wins[k].clone()).collect();
-    let st = evaluate_on(ctx, &sub, cur, cand)?;
+    let st = evaluate_on(ctx, &sub, cur, cand, false)?;
     let cur_sub = HeldOut {
         chi2: idx.iter().map(|&k| cur.held.chi2[k]).collect(),
         chi2_fit: idx.iter().map(|&k| cur.held.chi2_fit[k]).collect(),
