@@ -125,13 +125,14 @@ fn start_theta(cur: &ModelState, cand: &Candidate) -> Vec<f64> {
 }
 
 /// Refits `cur` + `cand` on the windows `wins` (those its start cannot follow tried again at
-/// the solution when `reselect`) and gives its held-out errors on them.
+/// the solution when it follows fewer than the fraction `reselect_below` of them) and gives its
+/// held-out errors on them.
 fn evaluate_on(
     ctx: &SelectCtx,
     wins: &[Win],
     cur: &ModelState,
     cand: &Candidate,
-    reselect: bool,
+    reselect_below: f64,
 ) -> Option<ModelState> {
     let mut terms = cur.terms.clone();
     terms.extend(judged_terms(cur, cand).0);
@@ -152,7 +153,7 @@ fn evaluate_on(
         held_shapes: Vec::new(),
     };
     let opts = ShootingOptions {
-        reselect,
+        reselect_below,
         ..*ctx.shooting
     };
     let fit = refit(&model, &theta0, wins, &opts)?;
@@ -169,8 +170,8 @@ fn evaluate_on(
 }
 
 /// Refits `cur` + `cand` on all judging windows and gives its held-out errors. When its start
-/// follows fewer than half of the judging windows, the refit is repeated with the windows it
-/// cannot follow tried again at the solution ([`ShootingOptions::reselect`]): a large effect
+/// follows fewer than half of the judging windows, the windows it cannot follow are tried again
+/// at the solution ([`ShootingOptions::reselect_below`]): a large effect
 /// that the current model misses leaves most driven windows unfollowable from the weak-form
 /// start, and a candidate refitted on the rest (ring-downs, where a latency only shifts the
 /// window's state) was judged on a refit that had not seen its evidence (docs/diagnosis.md,
@@ -178,12 +179,12 @@ fn evaluate_on(
 /// always, and not in the screening ([`screen`]): re-selecting every candidate's windows raised
 /// the CPU of a diagnosis by 45–85 % where the start follows nearly all of them.
 pub fn evaluate(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<ModelState> {
-    let st = evaluate_on(ctx, ctx.wins, cur, cand, false);
-    match st {
-        Some(s) if 2 * s.fit.used.len() >= ctx.wins.len() => Some(s),
-        other => evaluate_on(ctx, ctx.wins, cur, cand, true).or(other),
-    }
+    evaluate_on(ctx, ctx.wins, cur, cand, CANDIDATE_RESELECT_BELOW)
 }
+
+/// The fraction of the judging windows below which a candidate's refit re-selects its windows
+/// ([`evaluate`]): fewer than half followed from the start.
+pub const CANDIDATE_RESELECT_BELOW: f64 = 0.5;
 
 /// The final model refitted to convergence (the judge's refits stop after a few
 /// Levenberg–Marquardt steps from their warm starts: enough to judge, not to report), the windows
@@ -365,7 +366,7 @@ pub const SCREEN_Z: f64 = 1.0;
 pub fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Comparison> {
     let idx: Vec<usize> = (0..ctx.wins.len()).step_by(2).collect();
     let sub: Vec<Win> = idx.iter().map(|&k| ctx.wins[k].clone()).collect();
-    let st = evaluate_on(ctx, &sub, cur, cand, false)?;
+    let st = evaluate_on(ctx, &sub, cur, cand, 0.0)?;
     let cur_sub = HeldOut {
         chi2: idx.iter().map(|&k| cur.held.chi2[k]).collect(),
         chi2_fit: idx.iter().map(|&k| cur.held.chi2_fit[k]).collect(),

@@ -42,6 +42,10 @@ pub struct ShootingOptions {
     /// fitted model follows ([`refit`]); for the reported fits and the judge's refits of the
     /// candidates ([`super::select`] sets it there whatever the default).
     pub reselect: bool,
+    /// Re-select once (one round of `reselect`) when the fit from the start used fewer than this
+    /// fraction of the windows (0: never; [`super::select::evaluate`] sets 0.5 for the
+    /// candidates' refits).
+    pub reselect_below: f64,
 }
 
 /// The patience of a refit that must be converged, not only improved: the current model every
@@ -58,6 +62,7 @@ impl Default for ShootingOptions {
             max_windows: 240,
             patience: 1,
             reselect: false,
+            reselect_below: 0.0,
         }
     }
 }
@@ -451,7 +456,17 @@ pub fn refit(
     let mut states = followed_windows(model, theta0, wins, &all);
     let mut fit = fit_windows(model, theta0, wins, &states, opts)?;
     let rms_start_rad = fit.rms_start_rad;
-    for _ in 0..if opts.reselect { MAX_RESELECT } else { 0 } {
+    // the judge's candidates (`reselect_below`) get one round: enough to bring back the windows
+    // a large missed effect made unfollowable from the start, at a fraction of the cost
+    let few = (fit.used.len() as f64) < opts.reselect_below * wins.len() as f64;
+    let rounds = if opts.reselect {
+        MAX_RESELECT
+    } else if few {
+        1
+    } else {
+        0
+    };
+    for _ in 0..rounds {
         let out: Vec<usize> = all
             .iter()
             .copied()
