@@ -5,6 +5,7 @@
 //! gaps are handled).
 
 use crate::io::recordings::Run;
+use crate::numerics::least_squares::{weighted, DEFAULT_RCOND};
 use nalgebra::DMatrix;
 
 /// A cleaned run.
@@ -527,14 +528,6 @@ fn speed_rows(pieces: &[SpeedPiece]) -> Vec<SpeedRow> {
     rows
 }
 
-/// Solves the 2×2 normal equations [a b; b c] x = [u v]; `None` when singular.
-fn solve2(m: [f64; 5]) -> Option<(f64, f64)> {
-    let [a, b, c, u, v] = m;
-    let det = a * c - b * b;
-    (det.abs() > 1e-12 * (a * c).abs().max(1e-300))
-        .then(|| ((c * u - b * v) / det, (a * v - b * u) / det))
-}
-
 /// A speed-dependent white noise, model-free: the cleaning's leave-one-out cubic (step 2 of the
 /// pipeline) predicts every sample of d = β − reference from its neighbours; for a white error
 /// ε_i of variance σ_β² + σ_t² β̇_i² (a camera noise plus a timing jitter δt_i, ε = β̇ δt) the
@@ -544,7 +537,8 @@ fn solve2(m: [f64; 5]) -> Option<(f64, f64)> {
 /// without intercept. The reference removes the cubic's truncation error on the motion itself
 /// (0.64 dt⁴ β⁗ on a full stencil), which grows with the speed of fast motion; what the
 /// reference misses enters only through the cubic's high-pass, and a correlation of the camera
-/// noise enters the σ_β² term (a level the speed does not change). Weighted least squares with
+/// noise enters the σ_β² term (a level the speed does not change). Weighted least squares (QR,
+/// `numerics::least_squares::weighted`) with
 /// weights 1/(σ_β² g + σ_t² q)² (the variance of a squared Gaussian, up to the factor 2),
 /// iterated from the speed-free fit; a row with e² beyond 36 times its expectation is dropped
 /// (the cleaning's 6σ rule: a spike the reference does not follow, e.g. a release it misplaces).
@@ -552,65 +546,50 @@ fn solve2(m: [f64; 5]) -> Option<(f64, f64)> {
 /// singular fit.
 pub fn speed_noise(pieces: &[SpeedPiece]) -> Option<SpeedNoise> {
     let rows = speed_rows(pieces);
-    let np = pieces.len();
-    let (mut a, mut s) = (f64::NAN, 0.0f64);
-    let mut used = vec![true; rows.len()];
-    let mut per = vec![[0.0; 5]; np];
-    for pass in 0..5 {
-        per.iter_mut().for_each(|m| *m = [0.0; 5]);
-        for (k, &(p, y, g, q)) in rows.iter().enumerate() {
-            let var = if pass == 0 {
-                g
-            } else {
-                a.max(1e-300) * g + s.max(0.0) * q
-            };
-            if pass > 0 {
-                used[k] = y <= 36.0 * var;
-            }
-            if !used[k] {
-                continue;
-            }
-            let wt = 1.0 / (var * var);
-            let m = &mut per[p];
-            m[0] += wt * g * g;
-            m[1] += wt * g * q;
-            m[2] += wt * q * q;
-            m[3] += wt * g * y;
-            m[4] += wt * q * y;
-        }
-        let tot = sum5(&per, None);
-        (a, s) = solve2(tot)?;
-        if !(a.is_finite() && s.is_finite()) {
-            return None;
-        }
+    // (σ_β², σ_t²) by weighted least squares (QR) over the rows `sel`, row variances `var`
+    let fit = |sel: &[usize], var: &dyn Fn(usize) -> f64| -> Option<(f64, f64)> {
+        let f = weighted(
+            sel,
+            2,
+            |i, j| if j == 0 { rows[i].2 } else { rows[i].3 },
+            |i| rows[i].1,
+            |i| 1.0 / var(i).powi(2),
+            DEFAULT_RCOND,
+        )
+        .ok()?;
+        (f.x[0].is_finite() && f.x[1].is_finite()).then_some((f.x[0], f.x[1]))
+    };
+    let mut sel: Vec<usize> = (0..rows.len()).collect();
+    let (mut a, mut s) = fit(&sel, &|i| rows[i].2)?;
+    let (mut va, mut vs) = (a, s);
+    for _ in 1..5 {
+        (va, vs) = (a.max(1e-300), s.max(0.0));
+        let var = |i: usize| va * rows[i].2 + vs * rows[i].3;
+        sel = (0..rows.len())
+            .filter(|&i| rows[i].1 <= 36.0 * var(i))
+            .collect();
+        (a, s) = fit(&sel, &var)?;
     }
-    let units: Vec<usize> = (0..np).filter(|&p| per[p][0] > 0.0).collect();
-    let samples = used.iter().filter(|&&u| u).count();
-    if units.len() < 2 || samples < 10 {
+    let var = |i: usize| va * rows[i].2 + vs * rows[i].3;
+    let mut units: Vec<usize> = sel.iter().map(|&i| rows[i].0).collect();
+    units.dedup();
+    if units.len() < 2 || sel.len() < 10 {
         return None;
     }
     let jackknife = units
         .iter()
-        .map(|&p| solve2(sum5(&per, Some(p))).map(|x| x.1))
+        .map(|&p| {
+            let rest: Vec<usize> = sel.iter().copied().filter(|&i| rows[i].0 != p).collect();
+            fit(&rest, &var).map(|x| x.1)
+        })
         .collect::<Option<Vec<f64>>>()?;
     Some(SpeedNoise {
         timing_var: s,
         jackknife,
         white_var: a,
-        samples,
+        samples: sel.len(),
         pieces: units.len(),
     })
-}
-
-/// The normal equations summed over the pieces, without piece `skip`.
-fn sum5(per: &[[f64; 5]], skip: Option<usize>) -> [f64; 5] {
-    let mut t = [0.0; 5];
-    for (p, m) in per.iter().enumerate() {
-        if Some(p) != skip {
-            t.iter_mut().zip(m).for_each(|(x, y)| *x += y);
-        }
-    }
-    t
 }
 
 #[cfg(test)]
