@@ -246,21 +246,32 @@ pub fn width_member(
     Some((tried, alternate))
 }
 
+/// The other of the two final refits of [`final_member`]: its model and how far its χ² (summed
+/// over the judging windows both simulate) lies above the kept one's; a second minimum of the
+/// non-convex χ², whose headline widens the σ ([`super::findings::second_minimum_size`]).
+#[derive(Debug, Clone)]
+pub struct SecondMinimum {
+    /// The refit not kept.
+    pub state: ModelState,
+    /// Its χ² minus the kept refit's (≥ 0, σ units).
+    pub rise: f64,
+}
+
 /// The final refit of an accepted Stribeck member: `polish` (shapes freed, refitted to
 /// convergence) from its judged state `judged` and, when there is one, from the `alternate`
 /// start refitted on top of `fin`; the one with the smaller χ² summed over the judging windows
-/// both simulate. The window χ² of a stick–slip model is not convex in the width w: on the
-/// campaign's Gaussian Stribeck set of level 2, seed 5 (truth Δη_s/η = 1, w = 0.5 rad/s, δ = 2)
-/// the refit from the start w = 1.2 stopped at w = 0.94, δ = 4, Δη_s/η = 0.79 ± 0.02, where the
-/// profile of w (`--profile-shapes`) found a lower χ² at w = 0.47, Δη_s/η = 0.95
-/// (docs/diagnosis.md).
+/// both simulate, with the other as a [`SecondMinimum`]. The window χ² of a stick–slip model is
+/// not convex in the width w: on the campaign's Gaussian Stribeck set of level 2, seed 5 (truth
+/// Δη_s/η = 1, w = 0.5 rad/s, δ = 2) the refit from the start w = 1.2 stopped at w = 0.94, δ = 4,
+/// Δη_s/η = 0.79 ± 0.02, where the profile of w (`--profile-shapes`) found a lower χ² at w = 0.47,
+/// Δη_s/η = 0.95 (docs/diagnosis.md).
 pub fn final_member<P>(
     ctx: &SelectCtx,
     fin: &ModelState,
     judged: &ModelState,
     alternate: Option<&Candidate>,
     polish: P,
-) -> (ModelState, Vec<ShapeProfile>)
+) -> (ModelState, Vec<ShapeProfile>, Option<SecondMinimum>)
 where
     P: Fn(&ModelState) -> (ModelState, Vec<ShapeProfile>),
 {
@@ -269,7 +280,7 @@ where
         .and_then(|c| evaluate(ctx, fin, c))
         .map(|st| polish(&st))
     else {
-        return first;
+        return (first.0, first.1, None);
     };
     let chi2 = |st: &ModelState| {
         st.fit
@@ -284,9 +295,14 @@ where
             sb += y;
         }
     }
-    if sb < sa {
-        second
+    let (kept, other) = if sb < sa {
+        (second, first)
     } else {
-        first
-    }
+        (first, second)
+    };
+    let other = SecondMinimum {
+        state: other.0,
+        rise: (sb - sa).abs(),
+    };
+    (kept.0, kept.1, Some(other))
 }

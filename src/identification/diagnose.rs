@@ -12,7 +12,7 @@
 //! 6. **report** ([`report`]): findings, rejected candidates, predictions for the figures.
 
 use super::breakaway;
-use super::findings::{judged_finding, profiled_size, rejected, rivals};
+use super::findings::{judged_finding, profiled_size, rejected, rivals, second_minimum_size};
 use super::judge::{rms_per_run, rms_rad, Folds};
 use super::mismatch::{locate, MismatchOptions};
 use super::model::{Coefficients, Geometry};
@@ -397,6 +397,9 @@ pub fn diagnose(
             if let Some(mut f) = judged_finding(t, before, &base.wins, runs, folds.k, &rv, &fin) {
                 let e = &t.candidate.effect;
                 f.size = profiled_size(e, &fin, &profiles, f.size.take(), &mut f.params);
+                if let Some(sec) = sf.second.as_ref().filter(|_| e.id == "static_friction") {
+                    f.size = second_minimum_size(e, &fin, sec, f.size.take(), &mut f.params);
+                }
                 findings.push(f);
             }
             before = t.state.as_ref().expect("accepted state");
@@ -514,6 +517,7 @@ struct StaticFrictionStage {
     held: super::judge::HeldOut,
     excess: f64,
     at_rest: Option<Finding>,
+    second: Option<breakaway::SecondMinimum>,
 }
 
 /// Stage 5b: static friction, which the weak form cannot propose (it skips stick phases). The
@@ -536,6 +540,7 @@ fn static_friction(
         profiles,
         excess: 0.0,
         at_rest: None,
+        second: None,
     };
     if tried
         .iter()
@@ -593,13 +598,14 @@ fn static_friction(
         Some(w) if w.accepted => {
             mismatch.push(stick_phases(&f));
             let st = w.state.as_ref().expect("accepted state");
-            let (fin, profiles) =
+            let (fin, profiles, second) =
                 breakaway::final_member(ctx, &out.fin, st, alternate.as_ref(), |s| {
                     polish_final(ctx, s, profiled)
                 });
             out.held = fin.held.clone();
             out.fin = fin;
             out.profiles = profiles;
+            out.second = second;
             tried.push(w);
         }
         other => {

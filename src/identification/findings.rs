@@ -1,11 +1,12 @@
 //! Findings from the judged selection: physical parameters from the refit by simulation, the
 //! headline size ([`EffectSize`]) and the numbers of the held-out judgement.
 
+use super::breakaway::SecondMinimum;
 use super::catalog::{effect_params, Effect};
 use super::judge::{rms_rad, Comparison};
 use super::model::{Shape, DRAG_REFERENCE_SPEED};
 use super::preprocess::CleanRun;
-use super::profile::ShapeProfile;
+use super::profile::{delta_chi2, ShapeProfile};
 use super::regression::{DriftParam, Term};
 use super::report::{EffectSize, Finding};
 use super::select::{ModelState, Tried};
@@ -265,6 +266,49 @@ pub fn profiled_size(
     Some(size)
 }
 
+/// The headline `size` of `effect` in the final model `fin` with its σ widened by a second
+/// minimum of the windows' χ² (`second`: another final refit, its χ² a rise r above `fin`'s).
+/// Under a quadratic profile of the headline s, χ²_P(s) = χ²_min + Δ (s − ŝ)²/σ², with Δ the
+/// rise at one σ ([`delta_chi2`] of the effect's coefficient), a refit at s₂ shows
+/// χ²_P(s₂) − χ²_min ≤ r, so σ ≥ |s₂ − ŝ| √(Δ/r); capped at |s₂ − ŝ| (r ≤ Δ: the second minimum
+/// lies inside the 1σ region, and no σ smaller than the distance covers both). The second
+/// minimum's headline and rise go to `params` as `size_second_minimum` and
+/// `size_second_minimum_chi2_rise`, the σ before as `size_sigma_one_minimum`.
+pub fn second_minimum_size(
+    effect: &Effect,
+    fin: &ModelState,
+    second: &SecondMinimum,
+    size: Option<EffectSize>,
+    params: &mut BTreeMap<String, f64>,
+) -> Option<EffectSize> {
+    let mut size = size?;
+    let other = headline_size(effect, &params_of(effect, &second.state))?;
+    let k = fin
+        .terms
+        .iter()
+        .position(|t| effect.terms.contains(t) && !matches!(t, Term::Shape(_)))?;
+    if !(other.value.is_finite() && second.rise.is_finite()) {
+        return Some(size);
+    }
+    let bound = second_minimum_sigma(
+        (other.value - size.value).abs(),
+        delta_chi2(&fin.fit, k),
+        second.rise,
+    );
+    params.insert("size_second_minimum".into(), other.value);
+    params.insert("size_second_minimum_chi2_rise".into(), second.rise);
+    params.insert("size_sigma_one_minimum".into(), size.sigma);
+    size.sigma = size.sigma.max(bound);
+    Some(size)
+}
+
+/// The smallest σ of a quadratic profile χ²_P(s) = χ²_min + Δ (s − ŝ)²/σ² that lets a second
+/// refit at distance `dist` = |s₂ − ŝ| lie `rise` = r above the minimum: |s₂ − ŝ| √(Δ/r),
+/// capped at |s₂ − ŝ| (see [`second_minimum_size`]).
+pub fn second_minimum_sigma(dist: f64, delta: f64, rise: f64) -> f64 {
+    dist * (delta / rise.max(f64::MIN_POSITIVE)).sqrt().min(1.0)
+}
+
 /// The judgement's numbers as evidence.
 pub fn judgement_evidence(
     t: &Tried,
@@ -504,5 +548,19 @@ mod tests {
             .map(|(k, v)| (k.to_string(), v))
             .collect();
         assert_eq!(dominant_harmonic(&first).unwrap().name, "amplitude");
+    }
+
+    /// A second refit on an exact quadratic profile gives back the profile's σ, wherever it lies
+    /// beyond the 1σ region; inside it, the distance.
+    #[test]
+    fn a_second_minimum_on_a_quadratic_profile_gives_its_sigma() {
+        let (sigma, delta) = (0.07, 2.3);
+        for n in [1.5, 2.0, 3.0, 7.0] {
+            let rise = delta * n * n;
+            let got = second_minimum_sigma(n * sigma, delta, rise);
+            assert!((got - sigma).abs() < 1e-15 * sigma.max(1.0), "{n}: {got}");
+        }
+        assert_eq!(second_minimum_sigma(0.05, delta, 0.5 * delta), 0.05);
+        assert_eq!(second_minimum_sigma(0.05, delta, 0.0), 0.05);
     }
 }
