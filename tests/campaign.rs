@@ -733,12 +733,22 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
 /// (`breakaway::width_member`). Before, the finding was the profile at rest (the member's w → 0
 /// limit), which reads the braking of slow sliding as a larger excess at rest: 1.5 ± 0.0001–0.009
 /// on these seeds, the end of its range (docs/diagnosis.md, "Static friction"). The 20 % is the
-/// accuracy measured on the campaign (0.79–1.04 on 5 seeds); its σ still cover the truth only
-/// in part (Known weaknesses).
+/// accuracy measured on the campaign (0.79–1.04 on 5 seeds). The truth lies within ±2σ in ≥ 90 %
+/// of the sets — more misses than `max_consistent_failures(3, 0.10, 0.01)` refute that at the 1 %
+/// level; with the final refit's second minimum in the σ (`findings::second_minimum_size`), seed
+/// 2's 0.841 carries σ 0.121 instead of 0.052 (docs/diagnosis.md).
 #[test]
 fn stribeck_member_sizes_the_excess_on_generated_sets() {
     let doc = level2_ci_campaign("stribeck", 3);
     assert_eq!(doc.cases.len(), 3);
+    let misses = doc
+        .cases
+        .iter()
+        .flat_map(|c| &c.coverage)
+        .filter(|e| e.effect == "static_friction" && e.within_2sigma != Some(true))
+        .count();
+    let bound = max_consistent_failures(3, 0.10, 0.01);
+    assert!(misses <= bound, "{misses} of 3 outside ±2σ (bound {bound})");
     for c in &doc.cases {
         let e = c
             .coverage
