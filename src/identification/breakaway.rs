@@ -242,18 +242,21 @@ pub fn width_member(
         state: st.filter(|_| accepted),
         added_z,
         member_z: None,
+        dropped: None,
     };
     Some((tried, alternate))
 }
 
-/// The other of the two final refits of [`final_member`]: its model and how far its χ² (summed
-/// over the judging windows both simulate) lies above the kept one's; a second minimum of the
-/// non-convex χ², whose headline widens the σ ([`super::findings::second_minimum_size`]).
+/// The other of the two final refits of [`final_member`]: its model and how far its χ² lies
+/// above the kept one's on the kept refit's own objective (the windows that refit used); a
+/// second minimum of the non-convex χ², whose headline widens the σ
+/// ([`super::findings::second_minimum_size`]).
 #[derive(Debug, Clone)]
 pub struct SecondMinimum {
     /// The refit not kept.
     pub state: ModelState,
-    /// Its χ² minus the kept refit's (≥ 0, σ units).
+    /// Its χ² minus the kept refit's over the windows the kept refit used (χ² in camera-noise
+    /// σ units; ≥ 0: a lower value, possible where the two used other windows, counts as 0).
     pub rise: f64,
 }
 
@@ -295,14 +298,20 @@ where
             sb += y;
         }
     }
-    let (kept, other) = if sb < sa {
-        (second, first)
+    let (kept, other, (ck, co)) = if sb < sa {
+        (second, first, (b, a))
     } else {
-        (first, second)
+        (first, second, (a, b))
     };
+    // the rise on the kept refit's objective: the windows it used (the other refit's χ² there
+    // by its own residuals or, for a window it left out, a fresh state fit at its θ)
+    let mut rise = 0.0;
+    for &(w, _) in &kept.0.fit.used {
+        rise += co[w].unwrap_or(f64::INFINITY) - ck[w].unwrap_or(0.0);
+    }
     let other = SecondMinimum {
         state: other.0,
-        rise: (sb - sa).abs(),
+        rise: rise.max(0.0),
     };
     (kept.0, kept.1, Some(other))
 }

@@ -389,7 +389,20 @@ pub fn diagnose(
             &mut mismatch,
             progress,
         );
-        let (fin, profiles, final_held) = (sf.fin, sf.profiles, sf.held);
+        stage(progress, "backward check of the accepted effects");
+        let accepted = |t: &[super::select::Tried]| t.iter().filter(|t| t.accepted).count();
+        let n_accepted = accepted(&tried);
+        let fin = super::backward::backward(&sctx, sf.fin, &mut tried, progress);
+        let (fin, profiles, final_held) = if accepted(&tried) == n_accepted {
+            (fin, sf.profiles, sf.held)
+        } else if opts.profile_shapes {
+            let (f, p) = super::select::polish_profiled(&sctx, &fin);
+            let h = f.held.clone();
+            (f, p, h)
+        } else {
+            let h = fin.held.clone();
+            (fin, Vec::new(), h)
+        };
         excess = sf.excess;
         let mut before = b;
         for t in tried.iter().filter(|t| t.accepted) {

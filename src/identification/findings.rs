@@ -266,14 +266,19 @@ pub fn profiled_size(
     Some(size)
 }
 
-/// The headline `size` of `effect` in the final model `fin` with its σ widened by a second
-/// minimum of the windows' χ² (`second`: another final refit, its χ² a rise r above `fin`'s).
-/// Under a quadratic profile of the headline s, χ²_P(s) = χ²_min + Δ (s − ŝ)²/σ², with Δ the
-/// rise at one σ ([`delta_chi2`] of the effect's coefficient), a refit at s₂ shows
-/// χ²_P(s₂) − χ²_min ≤ r, so σ ≥ |s₂ − ŝ| √(Δ/r); capped at |s₂ − ŝ| (r ≤ Δ: the second minimum
-/// lies inside the 1σ region, and no σ smaller than the distance covers both). The second
+/// The headline `size` of the Stribeck member (`effect`, the `static_friction` family with its
+/// coefficient [`Term::StaticExcess`]) in the final model `fin` with its σ widened by a second
+/// minimum of the windows' χ² (`second`: the other final refit, its χ² on the windows `fin`'s
+/// refit used a rise r above `fin`'s). Under a quadratic profile of the headline s,
+/// χ²_P(s) = χ²_min + Δ (s − ŝ)²/σ², with Δ the rise at one σ ([`delta_chi2`] of η_Δs; the
+/// headline η_Δs/η is η_Δs scaled by the fitted η, and Δ does not change under scaling), a refit
+/// at s₂ shows χ²_P(s₂) − χ²_min ≤ r (a profile minimises over the other parameters), so
+/// σ ≥ |s₂ − ŝ| √(Δ/r). The bound is capped at |s₂ − ŝ| so that a flat valley (r → 0) does not
+/// give an unbounded σ. This assumes `fin` is at the minimum of its χ²; where it is not (its
+/// refit stopped along the valley), r is the smaller and the bound the larger. The second
 /// minimum's headline and rise go to `params` as `size_second_minimum` and
-/// `size_second_minimum_chi2_rise`, the σ before as `size_sigma_one_minimum`.
+/// `size_second_minimum_chi2_rise`, the σ before as `size_sigma_one_minimum`; the size is
+/// returned unchanged when the second refit has no headline or the rise is not finite.
 pub fn second_minimum_size(
     effect: &Effect,
     fin: &ModelState,
@@ -282,12 +287,13 @@ pub fn second_minimum_size(
     params: &mut BTreeMap<String, f64>,
 ) -> Option<EffectSize> {
     let mut size = size?;
-    let other = headline_size(effect, &params_of(effect, &second.state))?;
-    let k = fin
-        .terms
-        .iter()
-        .position(|t| effect.terms.contains(t) && !matches!(t, Term::Shape(_)))?;
-    if !(other.value.is_finite() && second.rise.is_finite()) {
+    let Some(other) = headline_size(effect, &params_of(effect, &second.state)) else {
+        return Some(size);
+    };
+    let Some(k) = fin.terms.iter().position(|t| *t == Term::StaticExcess) else {
+        return Some(size);
+    };
+    if !(other.value.is_finite() && size.value.is_finite() && second.rise.is_finite()) {
         return Some(size);
     }
     let bound = second_minimum_sigma(
@@ -492,7 +498,13 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                 "windows_failed": t.cmp.map(|m| m.failed_after),
                 "member_z_against_smaller": t.member_z,
                 "added_parameters_z": t.added_z,
-                "reason": match t.cmp {
+                "dropped_wald_z": t.dropped.map(|d| d.wald_z),
+                "dropped_heldout_z": t.dropped.map(|d| d.heldout_z),
+                "reason": if let Some(d) = t.dropped { format!(
+                    "accepted in its round, dropped by the backward check: in the final model its \
+                     parameters are consistent with zero (Wald z = {:.2} < {:.2}) and the model \
+                     without it predicts the held-out windows as well (z = {:.2} < {:.2})",
+                    d.wald_z, t.z_crit, d.heldout_z, t.z_crit) } else { match t.cmp {
                     None => match t.screen {
                         Some(s) => format!(
                             "screening (half the windows): held-out z = {:.2} < {}",
@@ -515,7 +527,7 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                         .to_string(),
                     Some(_) => "significant, but another candidate of the round gained more"
                         .to_string(),
-                },
+                } },
             })
         })
         .collect()

@@ -11,6 +11,7 @@
 //! - [`profile`]: profiles of the families' shape parameters for the final model's sizes.
 //! - [`synth`]: synthetic recording sets from a truth model with a chosen effect.
 
+pub mod backward;
 pub mod breakaway;
 pub mod catalog;
 pub mod diagnose;

@@ -78,6 +78,8 @@ pub struct Tried {
     /// the held-out z of this member against the smaller member chosen before it (the larger
     /// member replaces it when z reaches the threshold).
     pub member_z: Option<f64>,
+    /// Accepted in its round and dropped by the backward check ([`super::backward`]).
+    pub dropped: Option<super::backward::Dropped>,
 }
 
 /// What the selection needs.
@@ -447,6 +449,7 @@ pub fn select(
                 accepted: false,
                 state: st,
                 member_z: None,
+                dropped: None,
             });
         }
         let passed = choose_members(ctx, &mut tried[first..], z_crit);
