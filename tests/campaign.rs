@@ -568,6 +568,30 @@ fn level2_ci_seeds(effect: &str, seeds: Vec<u64>) -> CampaignDoc {
     doc
 }
 
+/// A static torque of 12 s⁻² (6 s⁻² at 2β) and a 12 ms latency together (the campaign
+/// generator's `torque_and_latency` at level 2, seed 3): round 1 accepts a `corotating_drag`
+/// (eleven candidates tie there), the torque and the latency follow, and the drag ends at
+/// 0.003 ± 0.012 s⁻¹ in the final model. The backward check (`identification::backward`) drops
+/// it: the set is named right with the two true effects only, both sizes within ±2σ of the
+/// truth. Before the check the verdict was `corotating_drag` (docs/diagnosis.md, Known
+/// weaknesses).
+#[test]
+fn an_effect_made_redundant_by_later_ones_is_dropped() {
+    let doc = level2_ci_seeds("torque_and_latency", vec![3]);
+    let c = &doc.cases[0];
+    let lines = format!("verdict {}, coverage {:?}", c.verdict, c.coverage);
+    assert!(c.named_right, "{lines}");
+    assert!(
+        c.findings.iter().all(|f| f.effect != "corotating_drag"),
+        "{lines}"
+    );
+    assert_eq!(c.coverage.len(), 2, "{lines}");
+    assert!(
+        c.coverage.iter().all(|e| e.within_2sigma == Some(true)),
+        "{lines}"
+    );
+}
+
 /// A 12 ms camera latency (the campaign generator's `latency` at level 2, seed 4: its own
 /// equation, integrator and noise) that the base model cannot follow on the driven runs (it
 /// follows 2 of their 97 judging windows): named `sensor_latency`, with the truth within ±2σ of

@@ -60,7 +60,7 @@ fn without(ctx: &SelectCtx, fin: &ModelState, t: &Tried, drop: &[usize]) -> Opti
         theta0.push(fin.fit.theta[nt]);
     }
     let st = ModelState {
-        terms: kept.iter().map(|&k| fin.terms[k].clone()).collect(),
+        terms: kept.iter().map(|&k| fin.terms[k]).collect(),
         fit_latency: latency,
         effects: fin
             .effects
