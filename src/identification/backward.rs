@@ -62,12 +62,7 @@ fn without(ctx: &SelectCtx, fin: &ModelState, t: &Tried, drop: &[usize]) -> Opti
     let st = ModelState {
         terms: kept.iter().map(|&k| fin.terms[k]).collect(),
         fit_latency: latency,
-        effects: fin
-            .effects
-            .iter()
-            .filter(|e| e.id != t.candidate.effect.id)
-            .cloned()
-            .collect(),
+        effects: without_first(&fin.effects, &t.candidate.effect),
         ..fin.clone()
     };
     let model = st.model(ctx.runs, ctx.geo, ctx.tol);
@@ -79,6 +74,19 @@ fn without(ctx: &SelectCtx, fin: &ModelState, t: &Tried, drop: &[usize]) -> Opti
     let fit = refit_to_convergence(&model, &theta0, ctx.wins, &opts)?;
     let held = heldout(&model, &fit, ctx.wins, ctx.folds);
     Some(ModelState { fit, held, ..st })
+}
+
+/// `effects` without the first entry equal to `e` (an effect id such as `unexplained` may be
+/// accepted more than once).
+fn without_first(
+    effects: &[super::catalog::Effect],
+    e: &super::catalog::Effect,
+) -> Vec<super::catalog::Effect> {
+    let mut out = effects.to_vec();
+    if let Some(k) = out.iter().position(|x| x == e) {
+        out.remove(k);
+    }
+    out
 }
 
 /// The backward check on the final model `fin` over the accepted effects of `tried` (see the
@@ -116,7 +124,13 @@ pub fn backward(
         let Some(reduced) = without(ctx, &fin, &tried[i], &all) else {
             continue;
         };
-        let cmp = compare(&reduced.held, &fin.held, ctx.wins, ctx.runs);
+        // the final model's held-out errors computed as the reduced model's are (one-step
+        // leave-fold-out refits from the converged fit): the final model may carry those of the
+        // judge's refit with its shapes held at their starts, and the comparison must not set a
+        // converged model against a stale one
+        let model = fin.model(ctx.runs, ctx.geo, ctx.tol);
+        let fin_held = heldout(&model, &fin.fit, ctx.wins, ctx.folds);
+        let cmp = compare(&reduced.held, &fin_held, ctx.wins, ctx.runs);
         let drop = cmp.z < tried[i].z_crit;
         stage(
             progress,

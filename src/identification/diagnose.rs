@@ -405,9 +405,15 @@ pub fn diagnose(
         };
         excess = sf.excess;
         let mut before = b;
-        for t in tried.iter().filter(|t| t.accepted) {
+        // the chain of round models runs through the effects the backward check dropped too (each
+        // finding's "before" is the model of the round before its own), but only the accepted
+        // ones are findings
+        for t in tried.iter().filter(|t| t.accepted || t.dropped.is_some()) {
             let rv = rivals(t, &tried);
-            if let Some(mut f) = judged_finding(t, before, &base.wins, runs, folds.k, &rv, &fin) {
+            let found = t
+                .accepted
+                .then(|| judged_finding(t, before, &base.wins, runs, folds.k, &rv, &fin));
+            if let Some(mut f) = found.flatten() {
                 let e = &t.candidate.effect;
                 f.size = profiled_size(e, &fin, &profiles, f.size.take(), &mut f.params);
                 if let Some(sec) = sf.second.as_ref().filter(|_| e.id == "static_friction") {
