@@ -14,10 +14,10 @@
 //! model without it becomes the final model. Only with two or more accepted effects, each effect
 //! tried once; an effect is never dropped when it is the last one.
 
+use super::judge::HeldOut;
 use super::judge::{added_parameters_z, compare, heldout};
 use super::regression::Term;
-use super::select::{refit_to_convergence, ModelState, SelectCtx, Tried};
-use super::shooting::{ShootingOptions, CONVERGED_PATIENCE};
+use super::select::{try_refit_state, ModelState, SelectCtx, Tried};
 use crate::progress::{stage, Observer};
 
 /// An accepted effect dropped by the backward check.
@@ -50,7 +50,7 @@ fn positions(fin: &ModelState, t: &Tried) -> (Vec<usize>, Vec<usize>) {
 
 /// `fin` without `t`'s effect (the terms at `drop`, and the latency for `sensor_latency`),
 /// refitted to convergence from `fin`'s values (windows re-selected at the solution) with its
-/// held-out errors; `None` when the refit fails.
+/// held-out errors ([`try_refit_state`]); `None` when the refit fails.
 fn without(ctx: &SelectCtx, fin: &ModelState, t: &Tried, drop: &[usize]) -> Option<ModelState> {
     let nt = fin.terms.len();
     let kept: Vec<usize> = (0..nt).filter(|k| !drop.contains(k)).collect();
@@ -59,21 +59,14 @@ fn without(ctx: &SelectCtx, fin: &ModelState, t: &Tried, drop: &[usize]) -> Opti
     if latency {
         theta0.push(fin.fit.theta[nt]);
     }
+    let terms: Vec<Term> = kept.iter().map(|&k| fin.terms[k]).collect();
     let st = ModelState {
-        terms: kept.iter().map(|&k| fin.terms[k]).collect(),
+        terms: terms.clone(),
         fit_latency: latency,
         effects: without_first(&fin.effects, &t.candidate.effect),
         ..fin.clone()
     };
-    let model = st.model(ctx.runs, ctx.geo, ctx.tol);
-    let opts = ShootingOptions {
-        patience: CONVERGED_PATIENCE,
-        reselect: true,
-        ..*ctx.shooting
-    };
-    let fit = refit_to_convergence(&model, &theta0, ctx.wins, &opts)?;
-    let held = heldout(&model, &fit, ctx.wins, ctx.folds);
-    Some(ModelState { fit, held, ..st })
+    try_refit_state(ctx, &st, terms, &theta0, true, true)
 }
 
 /// `effects` without the first entry equal to `e` (an effect id such as `unexplained` may be
@@ -112,6 +105,11 @@ pub fn backward(
         })
         .collect();
     order.sort_by(|a, b| a.1.total_cmp(&b.1));
+    // the final model's held-out errors computed as the reduced model's are (one-step
+    // leave-fold-out refits from the converged fit): the final model may carry those of the
+    // judge's refit with its shapes held at their starts, and the comparison must not set a
+    // converged model against a stale one; computed once per final model
+    let mut fin_held: Option<HeldOut> = None;
     for (i, _) in order {
         if tried.iter().filter(|t| t.accepted).count() < 2 {
             break;
@@ -124,13 +122,15 @@ pub fn backward(
         let Some(reduced) = without(ctx, &fin, &tried[i], &all) else {
             continue;
         };
-        // the final model's held-out errors computed as the reduced model's are (one-step
-        // leave-fold-out refits from the converged fit): the final model may carry those of the
-        // judge's refit with its shapes held at their starts, and the comparison must not set a
-        // converged model against a stale one
-        let model = fin.model(ctx.runs, ctx.geo, ctx.tol);
-        let fin_held = heldout(&model, &fin.fit, ctx.wins, ctx.folds);
-        let cmp = compare(&reduced.held, &fin_held, ctx.wins, ctx.runs);
+        let held = fin_held.get_or_insert_with(|| {
+            heldout(
+                &fin.model(ctx.runs, ctx.geo, ctx.tol),
+                &fin.fit,
+                ctx.wins,
+                ctx.folds,
+            )
+        });
+        let cmp = compare(&reduced.held, held, ctx.wins, ctx.runs);
         let drop = cmp.z < tried[i].z_crit;
         stage(
             progress,
@@ -151,6 +151,7 @@ pub fn backward(
                 wald_z: z,
                 heldout_z: cmp.z,
             });
+            fin_held = Some(reduced.held.clone());
             fin = reduced;
         }
     }

@@ -390,10 +390,8 @@ pub fn diagnose(
             progress,
         );
         stage(progress, "backward check of the accepted effects");
-        let accepted = |t: &[super::select::Tried]| t.iter().filter(|t| t.accepted).count();
-        let n_accepted = accepted(&tried);
         let fin = super::backward::backward(&sctx, sf.fin, &mut tried, progress);
-        let (fin, profiles, final_held) = if accepted(&tried) == n_accepted {
+        let (fin, profiles, final_held) = if tried.iter().all(|t| t.dropped.is_none()) {
             (fin, sf.profiles, sf.held)
         } else if opts.profile_shapes {
             let (f, p) = super::select::polish_profiled(&sctx, &fin);
@@ -409,10 +407,10 @@ pub fn diagnose(
         // finding's "before" is the model of the round before its own), but only the accepted
         // ones are findings
         for t in tried.iter().filter(|t| t.accepted || t.dropped.is_some()) {
-            let rv = rivals(t, &tried);
-            let found = t
-                .accepted
-                .then(|| judged_finding(t, before, &base.wins, runs, folds.k, &rv, &fin));
+            let found = t.accepted.then(|| {
+                let rv = rivals(t, &tried);
+                judged_finding(t, before, &base.wins, runs, folds.k, &rv, &fin)
+            });
             if let Some(mut f) = found.flatten() {
                 let e = &t.candidate.effect;
                 f.size = profiled_size(e, &fin, &profiles, f.size.take(), &mut f.params);

@@ -271,9 +271,8 @@ pub fn polish_profiled(ctx: &SelectCtx, st: &ModelState) -> (ModelState, Vec<Sha
     )
 }
 
-/// `st` with `terms` refitted from `theta0` to convergence ([`refit_to_convergence`] at
-/// [`CONVERGED_PATIENCE`]; windows re-selected at the solution when `reselect`), its held-out
-/// errors recomputed when `new_heldout` (else kept); `st` itself when the refit fails.
+/// `st` with `terms` refitted from `theta0` to convergence ([`try_refit_state`]); `st` itself
+/// when the refit fails.
 fn refit_state(
     ctx: &SelectCtx,
     st: &ModelState,
@@ -282,6 +281,20 @@ fn refit_state(
     reselect: bool,
     new_heldout: bool,
 ) -> ModelState {
+    try_refit_state(ctx, st, terms, theta0, reselect, new_heldout).unwrap_or_else(|| st.clone())
+}
+
+/// `st` with `terms` refitted from `theta0` to convergence ([`refit_to_convergence`] at
+/// [`CONVERGED_PATIENCE`]; windows re-selected at the solution when `reselect`), its held-out
+/// errors recomputed when `new_heldout` (else kept); `None` when the refit fails.
+pub fn try_refit_state(
+    ctx: &SelectCtx,
+    st: &ModelState,
+    terms: Vec<Term>,
+    theta0: &[f64],
+    reselect: bool,
+    new_heldout: bool,
+) -> Option<ModelState> {
     let model = SimModel {
         terms: terms.clone(),
         ..st.model(ctx.runs, ctx.geo, ctx.tol)
@@ -291,22 +304,18 @@ fn refit_state(
         reselect,
         ..*ctx.shooting
     };
-    match refit_to_convergence(&model, theta0, ctx.wins, &opts) {
-        Some(fit) => {
-            let held = if new_heldout {
-                heldout(&model, &fit, ctx.wins, ctx.folds)
-            } else {
-                st.held.clone()
-            };
-            ModelState {
-                terms,
-                fit,
-                held,
-                ..st.clone()
-            }
-        }
-        None => st.clone(),
-    }
+    let fit = refit_to_convergence(&model, theta0, ctx.wins, &opts)?;
+    let held = if new_heldout {
+        heldout(&model, &fit, ctx.wins, ctx.folds)
+    } else {
+        st.held.clone()
+    };
+    Some(ModelState {
+        terms,
+        fit,
+        held,
+        ..st.clone()
+    })
 }
 
 /// Indices into θ of `st` of the parameters it adds to `cur`: the coefficients of its new terms
