@@ -68,6 +68,7 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for Heun {
             jac_p: None,
             events: Vec::new(),
             samples: Vec::new(),
+            sample_jacobians: Vec::new(),
             stats: Stats {
                 rhs_evals: 2 * steps,
                 steps,

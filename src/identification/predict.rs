@@ -4,10 +4,12 @@
 //! rms of β_measured − β_simulated (rad) measures how well the model predicts the motion over a
 //! horizon short enough for chaos not to matter; with a perfect model it is the camera noise.
 
-use super::lm::{least_squares, LsqFit};
+use super::lm::{least_squares_with_jacobian, LsqFit};
 use super::model::{AugmentedGear, Coefficients, Geometry};
 use super::preprocess::CleanRun;
-use crate::integrator::{EventDriven853, FlowMethod, FlowOptions};
+use crate::integrator::{EventDriven853, Flow, FlowMethod, FlowOptions, Sensitivity};
+use nalgebra::DMatrix;
+use std::cell::RefCell;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Samples per prediction window (at most).
@@ -127,9 +129,49 @@ pub fn simulate(
     times: &[f64],
     tol: f64,
 ) -> Option<Vec<f64>> {
+    let f = window_flow(sys, t0, x0, times, tol, Sensitivity::None)?;
+    Some(f.samples.iter().map(|s| s.beta).collect())
+}
+
+/// [`simulate`] with the derivative of each simulated β with respect to the initial state,
+/// ∂β(tᵢ)/∂(β₀, β̇₀) (the variational equations and the saltation matrices of the events:
+/// [`crate::integrator::Flow::sample_jacobians`]).
+pub fn simulate_with_jacobian(
+    sys: &AugmentedGear,
+    t0: f64,
+    x0: [f64; 2],
+    times: &[f64],
+    tol: f64,
+) -> Option<(Vec<f64>, Vec<[f64; 2]>)> {
+    let f = window_flow(sys, t0, x0, times, tol, Sensitivity::State)?;
+    if f.sample_jacobians.len() != times.len() {
+        return None;
+    }
+    let beta = f.samples.iter().map(|s| s.beta).collect();
+    let jac = f
+        .sample_jacobians
+        .iter()
+        .map(|j| [j[(0, 0)], j[(0, 1)]])
+        .collect();
+    Some((beta, jac))
+}
+
+/// The window's flow with the samples at `times` (counted in [`simulations`] and
+/// [`simulation_steps`]); `None` when it fails, needs more than [`WINDOW_MAX_STEPS`] steps or
+/// misses a sample.
+fn window_flow(
+    sys: &AugmentedGear,
+    t0: f64,
+    x0: [f64; 2],
+    times: &[f64],
+    tol: f64,
+    sensitivity: Sensitivity,
+) -> Option<Flow> {
     SIMULATIONS.fetch_add(1, Ordering::Relaxed);
     let t1 = *times.last()?;
-    let mut opts = FlowOptions::with_tol(tol).samples(times.to_vec());
+    let mut opts = FlowOptions::with_tol(tol)
+        .samples(times.to_vec())
+        .sensitivity(sensitivity);
     opts.max_steps = WINDOW_MAX_STEPS;
     let f = match EventDriven853.flow(sys, t0, x0, t1, &opts) {
         Ok(f) => f,
@@ -142,10 +184,7 @@ pub fn simulate(
         }
     };
     STEPS.fetch_add((f.stats.steps + f.stats.rejected) as u64, Ordering::Relaxed);
-    if f.samples.len() != times.len() {
-        return None;
-    }
-    Some(f.samples.iter().map(|s| s.beta).collect())
+    (f.samples.len() == times.len()).then_some(f)
 }
 
 /// (β_sim − β)/σ of a window simulated from the state `x0` at its first sample (tolerance `tol`);
@@ -169,9 +208,38 @@ pub fn window_residuals(
     )
 }
 
+/// [`window_residuals`] and their Jacobian with respect to `x0` (rows: samples; 0 on masked
+/// samples), from one simulation with the variational equations ([`simulate_with_jacobian`]).
+pub fn window_residuals_jacobian(
+    sys: &AugmentedGear,
+    t: &[f64],
+    b: &[f64],
+    keep: &[bool],
+    sigma: f64,
+    x0: [f64; 2],
+    tol: f64,
+) -> Option<(Vec<f64>, DMatrix<f64>)> {
+    let (s, jac) = simulate_with_jacobian(sys, t[0], x0, t, tol)?;
+    let mut j = DMatrix::zeros(t.len(), 2);
+    let mut r = vec![0.0; t.len()];
+    for i in 0..t.len() {
+        if keep[i] {
+            r[i] = (s[i] - b[i]) / sigma;
+            j[(i, 0)] = jac[i][0] / sigma;
+            j[(i, 1)] = jac[i][1] / sigma;
+        }
+    }
+    Some((r, j))
+}
+
+/// Evaluation budget of a window's state fit ([`fit_window_state`]) per start, in units of
+/// (parameters + 1) = 3 residual evaluations.
+const STATE_FIT_PATIENCE: usize = 20;
+
 /// Fits a window's initial state with the model fixed, from `guess` and, when that fit is poor,
 /// from finite-difference and at-rest velocities. Residuals are (β_sim − β)/σ on kept samples;
-/// the window is simulated at the relative tolerance `tol`.
+/// the window is simulated at the relative tolerance `tol`. The Levenberg–Marquardt steps use the
+/// exact derivative of the simulated window, ∂β(tᵢ)/∂(β₀, β̇₀) ([`window_residuals_jacobian`]).
 #[allow(clippy::too_many_arguments)]
 pub fn fit_window_state(
     sys: &AugmentedGear,
@@ -183,14 +251,34 @@ pub fn fit_window_state(
     multi_start: bool,
     tol: f64,
 ) -> Option<LsqFit> {
-    let f = |p: &[f64]| window_residuals(sys, t, b, keep, sigma, [p[0], p[1]], tol);
-    let mut fit = least_squares(&f, &guess, &[1e-7, 1e-6], 20);
+    // every evaluation also gives the Jacobian (one simulation with the variational equations,
+    // instead of four more by central differences); the optimiser asks for it at the last
+    // point evaluated
+    let last: RefCell<Option<([f64; 2], DMatrix<f64>)>> = RefCell::new(None);
+    let f = |p: &[f64]| {
+        let x = [p[0], p[1]];
+        let (r, j) = window_residuals_jacobian(sys, t, b, keep, sigma, x, tol)?;
+        *last.borrow_mut() = Some((x, j));
+        Some(r)
+    };
+    let jac = |p: &[f64], _r: &[f64]| {
+        let x = [p[0], p[1]];
+        if let Some((at, j)) = last.borrow().as_ref() {
+            if *at == x {
+                return Some(j.clone());
+            }
+        }
+        window_residuals_jacobian(sys, t, b, keep, sigma, x, tol).map(|(_, j)| j)
+    };
+    let fit_from =
+        |p0: [f64; 2]| least_squares_with_jacobian(&f, &jac, &p0, STATE_FIT_PATIENCE, None);
+    let mut fit = fit_from(guess);
     let kept = keep.iter().filter(|&&k| k).count().max(1) as f64;
     let poor = |x: &Option<LsqFit>| x.as_ref().map(|f| f.rss / kept > 4.0).unwrap_or(true);
     if multi_start && poor(&fit) {
         let fd = (b[1] - b[0]) / (t[1] - t[0]);
         for v0 in [fd, 0.0, 0.5 * fd, 2.0 * fd] {
-            if let Some(f2) = least_squares(&f, &[b[0], v0], &[1e-7, 1e-6], 20) {
+            if let Some(f2) = fit_from([b[0], v0]) {
                 if fit.as_ref().map(|f1| f2.rss < f1.rss).unwrap_or(true) {
                     fit = Some(f2);
                 }

@@ -24,7 +24,10 @@ use super::lm::{
     cluster_sandwich, covariance_floor, least_squares_with_jacobian, scaled_cov, LsqFit,
 };
 use super::model::{AugmentedGear, Coefficients, Geometry, Shape};
-use super::predict::{fit_window_state, prediction_windows, window_residuals, window_system};
+use super::predict::{
+    fit_window_state, prediction_windows, window_residuals, window_residuals_jacobian,
+    window_system,
+};
 use super::preprocess::CleanRun;
 use super::regression::Term;
 use super::spec::{coefficients_for_run, set_shape, simulable};
@@ -666,8 +669,6 @@ struct Projected {
 const COEF_STEP: f64 = 1e-4;
 /// Finite-difference step of the latency, s.
 const LATENCY_STEP: f64 = 1e-5;
-/// Finite-difference steps of a window's initial state (β: rad, β̇: rad/s).
-const STATE_STEP: [f64; 2] = [1e-6, 1e-5];
 
 /// The Jacobian of the profiled residuals at θ by variable projection (Kaufman's form of the
 /// Golub–Pereyra derivative): for every used window w, with its state x_w held at the projected
@@ -675,8 +676,9 @@ const STATE_STEP: [f64; 2] = [1e-6, 1e-5];
 ///
 /// J_w = (I − Q_w Q_wᵀ) ∂r_w/∂θ,  Q_w an orthonormal basis of the columns of ∂r_w/∂x_w,
 ///
-/// both derivatives by central differences of simulations from the same state (steps
-/// [`COEF_STEP`], [`LATENCY_STEP`], [`STATE_STEP`]). At a projected state (∂r_w/∂x_wᵀ r_w = 0)
+/// ∂r_w/∂θ by central differences of simulations from the same state (steps [`COEF_STEP`],
+/// [`LATENCY_STEP`]), ∂r_w/∂x_w exactly from the variational equations of the simulation at θ
+/// ([`window_residuals_jacobian`]). At a projected state (∂r_w/∂x_wᵀ r_w = 0)
 /// this is the derivative of the profiled residuals to first order, and it does not depend on how
 /// far each projection was iterated: differencing the projected residuals themselves (each trial
 /// θ re-projecting the states from the previous trial's) adds the projections' stopping errors
@@ -705,8 +707,10 @@ fn varpro_jacobian(
         let x = states[k];
         let nw = w.keep.len();
         let mut jw = DMatrix::zeros(nw, n);
-        // the residuals at θ itself, for the one-sided differences at a range's end
-        let r0 = if inward { Some(sim(theta, x)?) } else { None };
+        // the residuals at θ itself (for the one-sided differences at a range's end) and their
+        // derivative with respect to the window's state, from the variational equations
+        let (r0, jx) =
+            window_residuals_jacobian(&model.system(theta, w), t, b, &w.keep, s, x, model.tol)?;
         let mut th = theta.to_vec();
         for c in 0..n {
             let h = if c >= nt {
@@ -725,13 +729,13 @@ fn varpro_jacobian(
                 th[c] = theta[c] + h;
                 (sim(&th, x)?, h)
             } else {
-                (r0.clone()?, 0.0)
+                (r0.clone(), 0.0)
             };
             let (rm, hm) = if down {
                 th[c] = theta[c] - h;
                 (sim(&th, x)?, h)
             } else {
-                (r0.clone()?, 0.0)
+                (r0.clone(), 0.0)
             };
             th[c] = theta[c];
             for i in 0..nw {
@@ -739,12 +743,8 @@ fn varpro_jacobian(
             }
         }
         let mut basis: Vec<DVector<f64>> = Vec::with_capacity(2);
-        for (i, &h) in STATE_STEP.iter().enumerate() {
-            let (mut xp, mut xm) = (x, x);
-            xp[i] += h;
-            xm[i] -= h;
-            let (rp, rm) = (sim(theta, xp)?, sim(theta, xm)?);
-            let mut q = DVector::from_iterator(nw, (0..nw).map(|a| (rp[a] - rm[a]) / (2.0 * h)));
+        for i in 0..2 {
+            let mut q = jx.column(i).clone_owned();
             let norm0 = q.norm();
             for e in &basis {
                 let d = e.dot(&q);
@@ -812,8 +812,8 @@ fn window_covariance(
     }
 }
 
-/// Refits a window's state from the warm start `x` by Gauss–Newton steps (forward-difference
-/// Jacobian, 2×2 normal equations; a step that does not lower the χ² is halved, up to
+/// Refits a window's state from the warm start `x` by Gauss–Newton steps (the exact Jacobian of
+/// the simulated window, [`window_residuals_jacobian`]; 2×2 normal equations; a step that does not lower the χ² is halved, up to
 /// [`PROJECTION_HALVINGS`] times): the projection step of variable projection, a few simulations
 /// instead of a full optimiser run. It stops when the Gauss–Newton decrement gᵀ(JᵀJ)⁻¹g (the χ²
 /// a full step would still gain) is below [`PROJECTION_DECREMENT`], or after
@@ -828,20 +828,16 @@ fn project_state(
     x: [f64; 2],
     tol: f64,
 ) -> Option<(Vec<f64>, [f64; 2])> {
-    let resid = |p: [f64; 2]| window_residuals(sys, t, b, keep, sigma, p, tol);
+    let resid = |p: [f64; 2]| window_residuals_jacobian(sys, t, b, keep, sigma, p, tol);
     let rss = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
     let gn = || -> Option<(Vec<f64>, [f64; 2])> {
         let mut x = x;
-        let mut r = resid(x)?;
+        let (mut r, mut jac) = resid(x)?;
         let mut e = rss(&r);
         for step in 0..PROJECTION_STEPS {
-            let h = PROJECTION_FD_STEP;
-            let (r0p, r0m) = (resid([x[0] + h[0], x[1]])?, resid([x[0] - h[0], x[1]])?);
-            let (r1p, r1m) = (resid([x[0], x[1] + h[1]])?, resid([x[0], x[1] - h[1]])?);
             let (mut a00, mut a01, mut a11, mut g0, mut g1) = (0.0, 0.0, 0.0, 0.0, 0.0);
             for k in 0..r.len() {
-                let j0 = (r0p[k] - r0m[k]) / (2.0 * h[0]);
-                let j1 = (r1p[k] - r1m[k]) / (2.0 * h[1]);
+                let (j0, j1) = (jac[(k, 0)], jac[(k, 1)]);
                 a00 += j0 * j0;
                 a01 += j0 * j1;
                 a11 += j1 * j1;
@@ -864,8 +860,8 @@ fn project_state(
                 return Some((r, x));
             }
             match halved_step(&resid, &rss, x, dx, e) {
-                Some((xn, rn, en)) => {
-                    (x, r, e) = (xn, rn, en);
+                Some((xn, (rn, jn), en)) => {
+                    (x, r, jac, e) = (xn, rn, jn, en);
                 }
                 None if step == 0 => return None,
                 None => {
@@ -892,9 +888,6 @@ fn project_state(
 
 /// Most Gauss–Newton steps of a window's state projection ([`project_state`]).
 const PROJECTION_STEPS: usize = 8;
-/// Central-difference steps of the projection's Jacobian (β₀: rad, β̇₀: rad/s): far above the
-/// integrator's error (10⁻⁸ rad at the default tolerance) and far below the camera noise.
-const PROJECTION_FD_STEP: [f64; 2] = [1e-5, 1e-4];
 /// Most halvings of a projection step that does not lower the χ².
 const PROJECTION_HALVINGS: usize = 4;
 /// The Gauss–Newton decrement (χ² units) below which a projection has converged: the χ² it could
@@ -902,22 +895,26 @@ const PROJECTION_HALVINGS: usize = 4;
 /// a refit of a few thousand frames).
 const PROJECTION_DECREMENT: f64 = 1e-8;
 
+/// A window's residuals and their Jacobian with respect to its state
+/// ([`window_residuals_jacobian`]).
+type ResidualsJacobian = (Vec<f64>, DMatrix<f64>);
+
 /// The step `dx` from `x`, halved until the χ² does not rise (at most [`PROJECTION_HALVINGS`]
-/// times): (state, residuals, χ²), or `None` when no such step lowers it.
+/// times): (state, its residuals and Jacobian, χ²), or `None` when no such step lowers it.
 fn halved_step(
-    resid: &impl Fn([f64; 2]) -> Option<Vec<f64>>,
+    resid: &impl Fn([f64; 2]) -> Option<ResidualsJacobian>,
     rss: &impl Fn(&[f64]) -> f64,
     x: [f64; 2],
     dx: [f64; 2],
     e: f64,
-) -> Option<([f64; 2], Vec<f64>, f64)> {
+) -> Option<([f64; 2], ResidualsJacobian, f64)> {
     let mut f = 1.0;
     for _ in 0..=PROJECTION_HALVINGS {
         let xn = [x[0] + f * dx[0], x[1] + f * dx[1]];
-        if let Some(rn) = resid(xn) {
-            let en = rss(&rn);
+        if let Some(rj) = resid(xn) {
+            let en = rss(&rj.0);
             if en <= e {
-                return Some((xn, rn, en));
+                return Some((xn, rj, en));
             }
         }
         f *= 0.5;

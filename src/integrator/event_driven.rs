@@ -18,6 +18,7 @@ use super::{
 use crate::error::{Error, Result};
 use crate::model::{release_function, DrivenOscillator};
 use crate::numerics::Illinois;
+use nalgebra::Matrix2;
 
 /// Largest number of coefficients r of the continuous extension.
 const RMAX: usize = 4 + DMAX;
@@ -124,6 +125,8 @@ struct Solver<'a, S: ?Sized, P, const N: usize> {
     stats: Stats,
     events: Vec<Event>,
     samples: Vec<Sample>,
+    /// ∂(β, ω)/∂(β₀, ω₀) at each sample (only with a sensitivity).
+    sample_jacobians: Vec<Matrix2<f64>>,
     next_sample: usize,
     pair: std::marker::PhantomData<P>,
 }
@@ -149,6 +152,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             stats: Stats::default(),
             events: Vec::new(),
             samples: Vec::with_capacity(opts.sample_times.len()),
+            sample_jacobians: Vec::new(),
             next_sample: 0,
             pair: std::marker::PhantomData,
         }
@@ -194,17 +198,21 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         }
     }
 
-    /// Records the samples in (.., t] of a constant state (stick phases).
-    fn samples_constant(&mut self, t: f64, beta: f64) {
+    /// Records the samples in (.., t] of a constant state `y` (stick phases: ω = 0, and the
+    /// Jacobian columns, after the stick-entry saltation, constant too).
+    fn samples_constant(&mut self, t: f64, y: &[f64; N]) {
         while let Some(&ts) = self.opts.sample_times.get(self.next_sample) {
             if ts > t {
                 break;
             }
             self.samples.push(Sample {
                 t: ts,
-                beta,
+                beta: y[0],
                 omega: 0.0,
             });
+            if let (Some(jx), _) = self.layout.jacobians(y) {
+                self.sample_jacobians.push(jx);
+            }
             self.next_sample += 1;
         }
     }
@@ -482,12 +490,23 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         near_sigma: bool,
     ) -> Option<(f64, [f64; N])> {
         let tab = Self::TAB;
+        // the Jacobian columns at samples need the extra dense stages over every component
+        let sample_jacobians = self.layout().ncols > 0
+            && self
+                .opts
+                .sample_times
+                .get(self.next_sample)
+                .is_some_and(|&ts| ts <= tn);
         if tab.dense_extra > 0 {
-            let state_only = Layout {
-                ncols: 0,
-                with_params: false,
-            };
-            self.dense_stages::<2>(state_only, t, hs, y, s, k);
+            if sample_jacobians {
+                self.dense_stages::<N>(self.layout(), t, hs, y, s, k);
+            } else {
+                let state_only = Layout {
+                    ncols: 0,
+                    with_params: false,
+                };
+                self.dense_stages::<2>(state_only, t, hs, y, s, k);
+            }
         }
         let state_coeffs = [
             dense_coeffs(tab, 0, y, yn, k, hs),
@@ -495,6 +514,16 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         ];
         let m = 4 + tab.dense_rows;
         let dense_state = |i: usize, th: f64| -> f64 { nested(&state_coeffs[i][..m], th) };
+        // ∂(β, ω)/∂(β₀, ω₀) on the continuous extension (components 2..6: columns β₀, ω₀)
+        let jac_coeffs: Option<[[f64; RMAX]; 4]> = sample_jacobians
+            .then(|| std::array::from_fn(|c| dense_coeffs(tab, 2 + c, y, yn, k, hs)));
+        let dense_jac = jac_coeffs.as_ref().map(|c| {
+            move |th: f64| -> Matrix2<f64> {
+                let v = |i: usize| nested(&c[i][..m], th);
+                // y[2..6] = (∂β/∂β₀, ∂ω/∂β₀, ∂β/∂ω₀, ∂ω/∂ω₀)
+                Matrix2::new(v(0), v(2), v(1), v(3))
+            }
+        });
 
         let root = if near_sigma {
             self.find_crossing(s, y, yn, &state_coeffs[1][..m], &dense_state)
@@ -502,13 +531,13 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             None
         };
         let Some(thc) = root else {
-            self.samples_dense(t, hs, tn, &dense_state, true);
+            self.samples_dense(t, hs, tn, &dense_state, dense_jac.as_ref(), true);
             return None;
         };
         let tc = t + thc * hs;
         // samples strictly before the event from the continuous extension
-        self.samples_dense(t, hs, tc, &dense_state, false);
-        if tab.dense_extra > 0 && self.layout().ncols > 0 {
+        self.samples_dense(t, hs, tc, &dense_state, dense_jac.as_ref(), false);
+        if tab.dense_extra > 0 && self.layout().ncols > 0 && !sample_jacobians {
             self.dense_stages::<N>(self.layout(), t, hs, y, s, k);
         }
         let mut yc = [0.0; N];
@@ -524,7 +553,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     /// events, samples and counts.
     fn finish(mut self, t: f64, y: [f64; N], mode: Mode) -> Flow {
         if self.next_sample < self.opts.sample_times.len() && mode == Mode::Stick {
-            self.samples_constant(t, y[0]);
+            self.samples_constant(t, &y);
         }
         let (jac_x, jac_p) = self.layout.jacobians(&y);
         Flow {
@@ -535,6 +564,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             jac_p,
             events: self.events,
             samples: self.samples,
+            sample_jacobians: self.sample_jacobians,
             stats: self.stats,
         }
     }
@@ -571,15 +601,16 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     ) -> Option<(f64, f64)> {
         let sys = self.sys;
         let beta = y[0];
+        let stuck = *y;
         let from = if nudge { t + 1e-9 * sys.period() } else { t };
         match sys.next_release(from, beta, t1) {
             None => {
-                self.samples_constant(t1, beta);
+                self.samples_constant(t1, &stuck);
                 None
             }
             Some(tr) => {
                 let tr = tr.max(t);
-                self.samples_constant(tr, beta);
+                self.samples_constant(tr, &stuck);
                 let f = sys.forces(tr, beta, 0.0);
                 let s = if f.a >= 0.0 { 1.0 } else { -1.0 };
                 // the output leaves with a − s r; zero for r_s = r(t, β, 0) (tangential release)
@@ -650,12 +681,15 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
 
     /// Records the requested samples in (t, t_end) (or (t, t_end] when `inclusive`) from the
     /// continuous extension.
-    fn samples_dense<F: Fn(usize, f64) -> f64>(
+    /// With `jac`, also the state Jacobian at each sample from the continuous extension of the
+    /// Jacobian columns.
+    fn samples_dense<F: Fn(usize, f64) -> f64, J: Fn(f64) -> Matrix2<f64>>(
         &mut self,
         t: f64,
         hs: f64,
         t_end: f64,
         dense: &F,
+        jac: Option<&J>,
         inclusive: bool,
     ) {
         while let Some(&ts) = self.opts.sample_times.get(self.next_sample) {
@@ -668,6 +702,9 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 beta: dense(0, th),
                 omega: dense(1, th),
             });
+            if let Some(j) = jac {
+                self.sample_jacobians.push(j(th));
+            }
             self.next_sample += 1;
         }
     }

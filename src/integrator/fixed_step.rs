@@ -140,6 +140,7 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for FixedStep {
             jac_p,
             events: Vec::new(),
             samples,
+            sample_jacobians: Vec::new(),
             stats,
         })
     }

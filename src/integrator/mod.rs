@@ -261,6 +261,12 @@ pub struct Flow {
     pub events: Vec<Event>,
     /// Samples at the requested times.
     pub samples: Vec<Sample>,
+    /// ∂(β, ω)(tᵢ)/∂(β₀, ω₀) at each sample, when a sensitivity is requested: the variational
+    /// columns on the continuous extension, with the saltation matrices of the events before tᵢ
+    /// (the derivative of the computed samples, e.g. for a Gauss–Newton fit of the initial
+    /// state). Filled by the event-driven methods ([`EventDriven`], [`EventDriven853`]); empty
+    /// otherwise.
+    pub sample_jacobians: Vec<Matrix2<f64>>,
     /// Work counters.
     pub stats: Stats,
 }

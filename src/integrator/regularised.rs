@@ -203,6 +203,7 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for Regularised {
                 jac_p,
                 events: Vec::new(),
                 samples,
+                sample_jacobians: Vec::new(),
                 stats: Stats::default(),
             });
         }
@@ -303,6 +304,7 @@ impl<S: DrivenOscillator + ?Sized> FlowMethod<S> for Regularised {
             jac_p,
             events: Vec::new(),
             samples,
+            sample_jacobians: Vec::new(),
             stats,
         })
     }
