@@ -17,7 +17,9 @@ use gearbif::identification::model::Shape;
 use gearbif::identification::profile::{delta_chi2, profile_shape};
 use gearbif::identification::regression::{Term, BASE_TERMS};
 use gearbif::identification::select::refit_to_convergence;
-use gearbif::identification::shooting::{ShootingOptions, SimModel, Win, CONVERGED_PATIENCE};
+use gearbif::identification::shooting::{
+    Reselect, ShootingOptions, SimModel, Win, CONVERGED_PATIENCE,
+};
 use std::time::Instant;
 
 fn main() {
@@ -41,7 +43,7 @@ fn main() {
     let model = SimModel::of_terms(&prep.runs, base.geo, terms, opts.tol);
     let sopts = ShootingOptions {
         patience: CONVERGED_PATIENCE,
-        reselect: true,
+        reselect: Reselect::Always,
         ..ShootingOptions::default()
     };
     println!("base theta {:?}", &st.fit.theta);
@@ -75,7 +77,7 @@ fn main() {
     let f = last.unwrap();
     let wins: Vec<Win> = f.used.iter().map(|&(w, _)| base.wins[w].clone()).collect();
     let popts = ShootingOptions {
-        reselect: false,
+        reselect: Reselect::Never,
         ..sopts
     };
     let fit = |m: &SimModel, th: &[f64]| -> Option<(f64, Vec<f64>)> {

@@ -334,7 +334,7 @@ fn refit_sizes_are_unbiased_at_low_noise() {
     use gearbif::campaign::rng::Rng;
     use gearbif::identification::diagnose::DiagnoseOptions;
     use gearbif::identification::regression::{fit, Term, BASE_TERMS};
-    use gearbif::identification::shooting::{refit, ShootingOptions, SimModel};
+    use gearbif::identification::shooting::{refit, Reselect, ShootingOptions, SimModel};
     let mut rng = Rng::new(5, 77);
     let (mut truth, stated, _) = draw_lab(&mut rng);
     let (a1, a2, tau) = (12.0, 6.0, 0.006);
@@ -381,7 +381,7 @@ fn refit_sizes_are_unbiased_at_low_noise() {
     };
     let sopts = ShootingOptions {
         patience: 4,
-        reselect: true,
+        reselect: Reselect::Always,
         ..ShootingOptions::default()
     };
     let f = refit(&model, &theta0, &base.wins, &sopts).unwrap();
@@ -672,7 +672,7 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
     use gearbif::identification::model::Shape;
     use gearbif::identification::regression::{Term, BASE_TERMS};
     use gearbif::identification::select::refit_to_convergence;
-    use gearbif::identification::shooting::{ShootingOptions, SimModel};
+    use gearbif::identification::shooting::{Reselect, ShootingOptions, SimModel};
     let (mut covered, mut worst) = (0, 0.0_f64);
     let mut lines = Vec::new();
     for seed in 1..=3u64 {
@@ -716,7 +716,7 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
         };
         let sopts = ShootingOptions {
             patience: 4,
-            reselect: true,
+            reselect: Reselect::Always,
             ..ShootingOptions::default()
         };
         let f = refit_to_convergence(&model, &theta0, &base.wins, &sopts).unwrap();
@@ -852,7 +852,7 @@ fn a_shape_sigma_matches_the_curvature_of_its_profile() {
     use gearbif::identification::model::Shape;
     use gearbif::identification::regression::{Term, BASE_TERMS};
     use gearbif::identification::select::refit_to_convergence;
-    use gearbif::identification::shooting::{ShootingOptions, SimModel, Win};
+    use gearbif::identification::shooting::{Reselect, ShootingOptions, SimModel, Win};
     let c = build_case(
         effect("power_law_drag").unwrap(),
         2.0,
@@ -870,7 +870,7 @@ fn a_shape_sigma_matches_the_curvature_of_its_profile() {
     theta0.extend([3.2, 2.0]);
     let sopts = ShootingOptions {
         patience: 4,
-        reselect: true,
+        reselect: Reselect::Always,
         ..ShootingOptions::default()
     };
     let f = refit_to_convergence(&model, &theta0, &base.wins, &sopts).unwrap();

@@ -18,6 +18,7 @@ use super::judge::HeldOut;
 use super::judge::{added_parameters_z, compare, heldout};
 use super::regression::Term;
 use super::select::{try_refit_state, ModelState, SelectCtx, Tried};
+use super::shooting::Reselect;
 use crate::progress::{stage, Observer};
 
 /// An accepted effect dropped by the backward check.
@@ -66,7 +67,7 @@ fn without(ctx: &SelectCtx, fin: &ModelState, t: &Tried, drop: &[usize]) -> Opti
         effects: without_first(&fin.effects, &t.candidate.effect),
         ..fin.clone()
     };
-    try_refit_state(ctx, &st, terms, &theta0, true, true)
+    try_refit_state(ctx, &st, terms, &theta0, Reselect::Always, true)
 }
 
 /// `effects` without the first entry equal to `e` (an effect id such as `unexplained` may be

@@ -10,7 +10,9 @@ use super::preprocess::CleanRun;
 use super::profile::{delta_chi2, profile_shape, ShapeProfile};
 use super::propose::{propose, Candidate, ProposeCtx};
 use super::regression::Term;
-use super::shooting::{par_map, refit, ShootingOptions, SimFit, SimModel, Win, CONVERGED_PATIENCE};
+use super::shooting::{
+    par_map, refit, Reselect, ShootingOptions, SimFit, SimModel, Win, CONVERGED_PATIENCE,
+};
 use super::spec::{fix_shapes, free_shapes};
 use crate::progress::{stage, Observer};
 
@@ -127,7 +129,7 @@ fn start_theta(cur: &ModelState, cand: &Candidate) -> Vec<f64> {
 }
 
 /// Refits `cur` + `cand` on the windows `wins` (those its start cannot follow tried again at
-/// the solution when it follows fewer than the fraction `reselect_below` of them;
+/// the solution as `reselect` says;
 /// [`refit_from_better_start`] with `cur_followed` the number of them the current model follows)
 /// and gives its held-out errors on them.
 fn evaluate_on(
@@ -136,7 +138,7 @@ fn evaluate_on(
     cur_followed: usize,
     cur: &ModelState,
     cand: &Candidate,
-    reselect_below: f64,
+    reselect: Reselect,
 ) -> Option<ModelState> {
     let mut terms = cur.terms.clone();
     terms.extend(judged_terms(cur, cand).0);
@@ -157,7 +159,7 @@ fn evaluate_on(
         held_shapes: Vec::new(),
     };
     let opts = ShootingOptions {
-        reselect_below,
+        reselect,
         ..*ctx.shooting
     };
     let fit = refit_from_better_start(&model, cur, &theta0, wins, &opts, cur_followed)?;
@@ -212,7 +214,7 @@ fn refit_from_better_start(
 
 /// Refits `cur` + `cand` on all judging windows and gives its held-out errors. When its start
 /// follows fewer than half of the judging windows, the windows it cannot follow are tried again
-/// at the solution ([`ShootingOptions::reselect_below`]): a large effect
+/// at the solution ([`Reselect::OnceBelow`]): a large effect
 /// that the current model misses leaves most driven windows unfollowable from the weak-form
 /// start, and a candidate refitted on the rest (ring-downs, where a latency only shifts the
 /// window's state) was judged on a refit that had not seen its evidence (docs/diagnosis.md,
@@ -221,7 +223,8 @@ fn refit_from_better_start(
 /// the CPU of a diagnosis by 45–85 % where the start follows nearly all of them.
 pub fn evaluate(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<ModelState> {
     let followed = cur.fit.used.len();
-    evaluate_on(ctx, ctx.wins, followed, cur, cand, CANDIDATE_RESELECT_BELOW)
+    let reselect = Reselect::OnceBelow(CANDIDATE_RESELECT_BELOW);
+    evaluate_on(ctx, ctx.wins, followed, cur, cand, reselect)
 }
 
 /// The fraction of the judging windows below which a candidate's refit re-selects its windows
@@ -230,7 +233,7 @@ pub const CANDIDATE_RESELECT_BELOW: f64 = 0.5;
 
 /// The final model refitted to convergence (the judge's refits stop after a few
 /// Levenberg–Marquardt steps from their warm starts: enough to judge, not to report), the windows
-/// left out at its start tried again at the solution ([`ShootingOptions::reselect`]), with the
+/// left out at its start tried again at the solution ([`Reselect::Always`]), with the
 /// families' shape parameters freed ([`free_shapes`]): they are fitted here, by simulation, next
 /// to the linear coefficients, and their σ come from this refit's covariance. Its held-out errors
 /// are recomputed when no shape was freed; with shapes, the judged model's are kept (the one-step
@@ -242,7 +245,7 @@ pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
     }
     let (terms, theta0) = free_shapes(&st.terms, &st.fit.theta);
     let freed = terms != st.terms;
-    refit_state(ctx, st, terms, &theta0, true, !freed)
+    try_refit_state(ctx, st, terms, &theta0, Reselect::Always, !freed).unwrap_or_else(|| st.clone())
 }
 
 /// [`polish`], then every shape parameter of the final model profiled ([`profile_shape`], in
@@ -274,7 +277,7 @@ pub fn polish_profiled(ctx: &SelectCtx, st: &ModelState) -> (ModelState, Vec<Sha
     // all the windows, the lost ones by a fresh state fit) comes out too high
     let opts = ShootingOptions {
         patience: CONVERGED_PATIENCE,
-        reselect: true,
+        reselect: Reselect::Always,
         ..*ctx.shooting
     };
     let model = fin.model(ctx.runs, ctx.geo, ctx.tol);
@@ -305,34 +308,26 @@ pub fn polish_profiled(ctx: &SelectCtx, st: &ModelState) -> (ModelState, Vec<Sha
     if best >= chi2_polished {
         return (fin, profiles);
     }
-    (
-        refit_state(ctx, &fin, fin.terms.clone(), &theta, true, false),
-        profiles,
-    )
-}
-
-/// `st` with `terms` refitted from `theta0` to convergence ([`try_refit_state`]); `st` itself
-/// when the refit fails.
-fn refit_state(
-    ctx: &SelectCtx,
-    st: &ModelState,
-    terms: Vec<Term>,
-    theta0: &[f64],
-    reselect: bool,
-    new_heldout: bool,
-) -> ModelState {
-    try_refit_state(ctx, st, terms, theta0, reselect, new_heldout).unwrap_or_else(|| st.clone())
+    let refitted = try_refit_state(
+        ctx,
+        &fin,
+        fin.terms.clone(),
+        &theta,
+        Reselect::Always,
+        false,
+    );
+    (refitted.unwrap_or(fin), profiles)
 }
 
 /// `st` with `terms` refitted from `theta0` to convergence ([`refit_to_convergence`] at
-/// [`CONVERGED_PATIENCE`]; windows re-selected at the solution when `reselect`), its held-out
+/// [`CONVERGED_PATIENCE`]; windows re-selected at the solution as `reselect` says), its held-out
 /// errors recomputed when `new_heldout` (else kept); `None` when the refit fails.
 pub fn try_refit_state(
     ctx: &SelectCtx,
     st: &ModelState,
     terms: Vec<Term>,
     theta0: &[f64],
-    reselect: bool,
+    reselect: Reselect,
     new_heldout: bool,
 ) -> Option<ModelState> {
     let model = SimModel {
@@ -372,9 +367,17 @@ fn added(cur: &ModelState, st: &ModelState) -> Vec<usize> {
 
 /// The accepted model of a round refitted to convergence (shapes held, windows not re-selected)
 /// with its held-out errors, so that the next round's candidates are judged against a model at
-/// its optimum ([`refit_state`]).
+/// its optimum ([`try_refit_state`]; `st` itself when the refit fails).
 fn converge(ctx: &SelectCtx, st: &ModelState) -> ModelState {
-    refit_state(ctx, st, st.terms.clone(), &st.fit.theta, false, true)
+    try_refit_state(
+        ctx,
+        st,
+        st.terms.clone(),
+        &st.fit.theta,
+        Reselect::Never,
+        true,
+    )
+    .unwrap_or_else(|| st.clone())
 }
 
 /// Most restarts of the final refit from its own solution ([`refit_to_convergence`]).
@@ -418,7 +421,7 @@ pub fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Com
     let idx: Vec<usize> = (0..ctx.wins.len()).step_by(2).collect();
     let sub: Vec<Win> = idx.iter().map(|&k| ctx.wins[k].clone()).collect();
     let followed = cur.fit.used.iter().filter(|&&(wi, _)| wi % 2 == 0).count();
-    let st = evaluate_on(ctx, &sub, followed, cur, cand, 0.0)?;
+    let st = evaluate_on(ctx, &sub, followed, cur, cand, Reselect::Never)?;
     let cur_sub = HeldOut {
         chi2: idx.iter().map(|&k| cur.held.chi2[k]).collect(),
         chi2_fit: idx.iter().map(|&k| cur.held.chi2_fit[k]).collect(),

@@ -41,14 +41,23 @@ pub struct ShootingOptions {
     pub max_windows: usize,
     /// Outer Levenberg–Marquardt patience (evaluations ≈ patience × (parameters + 1)).
     pub patience: usize,
-    /// Try the windows left out at the start again at the solution and refit with those the
-    /// fitted model follows ([`refit`]); for the reported fits and the judge's refits of the
-    /// candidates ([`super::select`] sets it there whatever the default).
-    pub reselect: bool,
-    /// Re-select once (one round of `reselect`) when the fit from the start used fewer than this
-    /// fraction of the windows (0: never; [`super::select::evaluate`] sets 0.5 for the
-    /// candidates' refits).
-    pub reselect_below: f64,
+    /// Whether the windows left out at the start are tried again at the solution ([`refit`]).
+    pub reselect: Reselect,
+}
+
+/// When a refit tries the windows its start could not follow again at its solution and refits
+/// with those the fitted model follows ([`refit`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Reselect {
+    /// Never: the windows the start follows are the fit's.
+    Never,
+    /// Up to [`MAX_RESELECT`] times: the reported fits and the profiles of shape parameters.
+    Always,
+    /// Once, when the fit from the start used fewer than this fraction of the windows: the
+    /// judge's refits of the candidates ([`super::select::evaluate`], 0.5), enough to bring back
+    /// the windows a large missed effect made unfollowable from the start, at a fraction of the
+    /// cost of `Always`.
+    OnceBelow(f64),
 }
 
 /// The patience of a refit that must be converged, not only improved: the current model every
@@ -64,8 +73,7 @@ impl Default for ShootingOptions {
         Self {
             max_windows: 240,
             patience: 1,
-            reselect: false,
-            reselect_below: 0.0,
+            reselect: Reselect::Never,
         }
     }
 }
@@ -459,15 +467,10 @@ pub fn refit(
     let mut states = followed_windows(model, theta0, wins, &all);
     let mut fit = fit_windows(model, theta0, wins, &states, opts)?;
     let rms_start_rad = fit.rms_start_rad;
-    // the judge's candidates (`reselect_below`) get one round: enough to bring back the windows
-    // a large missed effect made unfollowable from the start, at a fraction of the cost
-    let few = (fit.used.len() as f64) < opts.reselect_below * wins.len() as f64;
-    let rounds = if opts.reselect {
-        MAX_RESELECT
-    } else if few {
-        1
-    } else {
-        0
+    let rounds = match opts.reselect {
+        Reselect::Never => 0,
+        Reselect::Always => MAX_RESELECT,
+        Reselect::OnceBelow(f) => usize::from((fit.used.len() as f64) < f * wins.len() as f64),
     };
     for _ in 0..rounds {
         let out: Vec<usize> = all
