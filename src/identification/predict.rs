@@ -113,7 +113,10 @@ pub fn simulation_steps() -> (u64, u64) {
 /// away inside a window (an extrapolated drift with a negative damping, a torque harmonic driven
 /// far off by a leave-fold-out step) would otherwise shrink its steps without bound and hold the
 /// diagnosis for minutes; with the budget its simulation fails, and the judge counts the window
-/// as that model's loss ([`super::judge::compare`]).
+/// as that model's loss ([`super::judge::compare`]). The same budget holds for the simulations
+/// with the variational equations ([`simulate_with_jacobian`]), whose step control also holds the
+/// Jacobian columns' error: 19–22 steps per window simulation on average against 16 (the full-size
+/// `torque_and_latency` set of docs/performance.md), far inside it.
 pub const WINDOW_MAX_STEPS: usize = 2_000;
 
 /// β of `sys` from the state `x0` at `t0`, at `times` (exact Filippov flow of eq. `model`,

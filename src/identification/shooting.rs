@@ -710,10 +710,14 @@ fn varpro_jacobian(
         let x = states[k];
         let nw = w.keep.len();
         let mut jw = DMatrix::zeros(nw, n);
-        // the residuals at θ itself (for the one-sided differences at a range's end) and their
-        // derivative with respect to the window's state, from the variational equations
-        let (r0, jx) =
+        // the derivative of the residuals with respect to the window's state, from the
+        // variational equations
+        let (_, jx) =
             window_residuals_jacobian(&model.system(theta, w), t, b, &w.keep, s, x, model.tol)?;
+        // the residuals at θ itself for the one-sided differences at a range's end, by the same
+        // plain simulation as the differences (the variational run's step sequence differs, and
+        // its rounding would not cancel in the difference)
+        let r0 = if inward { Some(sim(theta, x)?) } else { None };
         let mut th = theta.to_vec();
         for c in 0..n {
             let h = if c >= nt {
@@ -732,13 +736,13 @@ fn varpro_jacobian(
                 th[c] = theta[c] + h;
                 (sim(&th, x)?, h)
             } else {
-                (r0.clone(), 0.0)
+                (r0.clone()?, 0.0)
             };
             let (rm, hm) = if down {
                 th[c] = theta[c] - h;
                 (sim(&th, x)?, h)
             } else {
-                (r0.clone(), 0.0)
+                (r0.clone()?, 0.0)
             };
             th[c] = theta[c];
             for i in 0..nw {

@@ -76,17 +76,23 @@ impl Layout {
         }
     }
 
+    /// The state Jacobian ∂(β, ω)/∂(β₀, ω₀) stored in `y` (components 2..6), if carried.
+    pub fn state_jacobian(&self, y: &[f64]) -> Option<Matrix2<f64>> {
+        (self.ncols > 0).then(|| {
+            Matrix2::new(
+                y[z_beta(COL_BETA0)],
+                y[z_beta(COL_OMEGA0)],
+                y[z_omega(COL_BETA0)],
+                y[z_omega(COL_OMEGA0)],
+            )
+        })
+    }
+
     /// The state and parameter Jacobians stored in `y`.
     pub fn jacobians(&self, y: &[f64]) -> (Option<Matrix2<f64>>, Option<Matrix2xX<f64>>) {
-        if self.ncols == 0 {
+        let Some(jx) = self.state_jacobian(y) else {
             return (None, None);
-        }
-        let jx = Matrix2::new(
-            y[z_beta(COL_BETA0)],
-            y[z_beta(COL_OMEGA0)],
-            y[z_omega(COL_BETA0)],
-            y[z_omega(COL_OMEGA0)],
-        );
+        };
         let jp = self.with_params.then(|| {
             let np = self.ncols - 2;
             let mut m = Matrix2xX::zeros(np);

@@ -210,7 +210,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 beta: y[0],
                 omega: 0.0,
             });
-            if let (Some(jx), _) = self.layout.jacobians(y) {
+            if let Some(jx) = self.layout.state_jacobian(y) {
                 self.sample_jacobians.push(jx);
             }
             self.next_sample += 1;
@@ -491,14 +491,14 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     ) -> Option<(f64, [f64; N])> {
         let tab = Self::TAB;
         // the Jacobian columns at samples need the extra dense stages over every component
-        let sample_jacobians = self.layout().ncols > 0
+        let jac_at_samples = self.layout().ncols > 0
             && self
                 .opts
                 .sample_times
                 .get(self.next_sample)
                 .is_some_and(|&ts| ts <= tn);
         if tab.dense_extra > 0 {
-            if sample_jacobians {
+            if jac_at_samples {
                 self.dense_stages::<N>(self.layout(), t, hs, y, s, k);
             } else {
                 let state_only = Layout {
@@ -514,14 +514,21 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         ];
         let m = 4 + tab.dense_rows;
         let dense_state = |i: usize, th: f64| -> f64 { nested(&state_coeffs[i][..m], th) };
-        // ∂(β, ω)/∂(β₀, ω₀) on the continuous extension (components 2..6: columns β₀, ω₀)
-        let jac_coeffs: Option<[[f64; RMAX]; 4]> = sample_jacobians
-            .then(|| std::array::from_fn(|c| dense_coeffs(tab, 2 + c, y, yn, k, hs)));
+        // ∂(β, ω)/∂(β₀, ω₀) on the continuous extension (the state columns: components 2..6)
+        let layout = self.layout;
+        let jac_coeffs: Option<[[f64; RMAX]; 6]> = jac_at_samples.then(|| {
+            std::array::from_fn(|i| {
+                if i < 2 {
+                    [0.0; RMAX]
+                } else {
+                    dense_coeffs(tab, i, y, yn, k, hs)
+                }
+            })
+        });
         let dense_jac = jac_coeffs.as_ref().map(|c| {
-            move |th: f64| -> Matrix2<f64> {
-                let v = |i: usize| nested(&c[i][..m], th);
-                // y[2..6] = (∂β/∂β₀, ∂ω/∂β₀, ∂β/∂ω₀, ∂ω/∂ω₀)
-                Matrix2::new(v(0), v(2), v(1), v(3))
+            move |th: f64| -> Option<Matrix2<f64>> {
+                let z: [f64; 6] = std::array::from_fn(|i| nested(&c[i][..m], th));
+                layout.state_jacobian(&z)
             }
         });
 
@@ -537,7 +544,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         let tc = t + thc * hs;
         // samples strictly before the event from the continuous extension
         self.samples_dense(t, hs, tc, &dense_state, dense_jac.as_ref(), false);
-        if tab.dense_extra > 0 && self.layout().ncols > 0 && !sample_jacobians {
+        if tab.dense_extra > 0 && self.layout().ncols > 0 && !jac_at_samples {
             self.dense_stages::<N>(self.layout(), t, hs, y, s, k);
         }
         let mut yc = [0.0; N];
@@ -683,7 +690,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     /// continuous extension.
     /// With `jac`, also the state Jacobian at each sample from the continuous extension of the
     /// Jacobian columns.
-    fn samples_dense<F: Fn(usize, f64) -> f64, J: Fn(f64) -> Matrix2<f64>>(
+    fn samples_dense<F: Fn(usize, f64) -> f64, J: Fn(f64) -> Option<Matrix2<f64>>>(
         &mut self,
         t: f64,
         hs: f64,
@@ -702,8 +709,8 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 beta: dense(0, th),
                 omega: dense(1, th),
             });
-            if let Some(j) = jac {
-                self.sample_jacobians.push(j(th));
+            if let Some(j) = jac.and_then(|j| j(th)) {
+                self.sample_jacobians.push(j);
             }
             self.next_sample += 1;
         }
