@@ -1,9 +1,10 @@
 //! The backward check (stage 5c of the pipeline): the greedy rounds add one effect each, and an
 //! effect accepted early may have absorbed part of a mismatch that a later effect explains
 //! better. On a full-size Lorentzian breakaway set (`lorentz_stribeck`, level 1, seed 1,
-//! docs/diagnosis.md) round 1 accepted a power-law drag and round 2 an input compliance, both
-//! consistent with zero once round 3's Stribeck member was in (the drag's coefficient
-//! 0.02 ± 3.3 s⁻², the lag −0.03 ± 0.04°), and the verdict was the drag.
+//! docs/diagnosis.md), before the candidates' nested start ([`super::select`]), round 1 accepted
+//! a power-law drag and round 2 an input compliance, both consistent with zero once round 3's
+//! Stribeck member was in (the drag's coefficient 0.02 ± 3.3 s⁻², the lag −0.03 ± 0.04°), and the
+//! verdict was the drag.
 //!
 //! Once every effect is in, each accepted effect is tested in the final model, in ascending order
 //! of the Wald z of its parameters there ([`added_parameters_z`], the test the rounds apply to a
