@@ -246,8 +246,8 @@ const FD_STATE_STEP: [f64; 2] = [1e-7, 1e-6];
 /// from finite-difference and at-rest velocities. Residuals are (β_sim − β)/σ on kept samples;
 /// the window is simulated at the relative tolerance `tol`. The Levenberg–Marquardt steps use the
 /// exact derivative of the simulated window, ∂β(tᵢ)/∂(β₀, β̇₀) ([`window_residuals_jacobian`]);
-/// a start whose fit stays poor (χ² > 4 per frame) is also fitted by central differences, and
-/// the better of the two is kept.
+/// a start whose fit stays poor (χ² > 4 per frame) is fitted on by central differences from
+/// where it stopped, and the better of the two is kept.
 #[allow(clippy::too_many_arguments)]
 pub fn fit_window_state(
     sys: &AugmentedGear,
@@ -281,7 +281,7 @@ pub fn fit_window_state(
     let kept = keep.iter().filter(|&&k| k).count().max(1) as f64;
     let poor = |x: &Option<LsqFit>| x.as_ref().map(|f| f.rss / kept > 4.0).unwrap_or(true);
     // a start whose fit by the exact derivative stays poor is fitted again by central
-    // differences, and the better fit is kept: near an arrival at Σ where |a| is within a hair of
+    // differences from where it stopped, and the better fit is kept: near an arrival at Σ where |a| is within a hair of
     // the static bound r_s (the end of a ring-down), the flow's derivative is exact but holds only
     // for perturbations far below a Levenberg–Marquardt step (a crossing with a post-crossing
     // acceleration of 10⁻¹¹ rad/s² against a difference quotient at 10⁻⁶ that sees the motion
@@ -292,7 +292,10 @@ pub fn fit_window_state(
         if !poor(&exact) {
             return exact;
         }
-        let differenced = least_squares(&plain, &p0, &FD_STATE_STEP, STATE_FIT_PATIENCE);
+        // from where the exact fit stopped (from the start when it failed): a genuine poor
+        // minimum costs one differenced Jacobian there, a stall moves on
+        let from = exact.as_ref().map_or(p0, |a| [a.p[0], a.p[1]]);
+        let differenced = least_squares(&plain, &from, &FD_STATE_STEP, STATE_FIT_PATIENCE);
         match (exact, differenced) {
             (Some(a), Some(d)) => Some(if d.rss < a.rss { d } else { a }),
             (a, d) => a.or(d),
