@@ -391,7 +391,8 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 .is_some_and(|&ts| ts <= tn);
             let near_sigma = info.wmin <= tab.node_gap * hs * info.dmax;
             if near_sigma || sample_inside {
-                let crossing = self.dense_step(t, hs, tn, &y, &yn, s, &mut k, near_sigma);
+                let crossing =
+                    self.dense_step(t, hs, tn, &y, &yn, s, &mut k, near_sigma, sample_inside);
                 if let Some((tc, mut yc)) = crossing {
                     guard.record(
                         tc,
@@ -473,8 +474,8 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     }
 
     /// An accepted step from (t, y) to (tn, yn), hs = tn − t, on side `s` that may reach Σ
-    /// (`near_sigma`) or holds a sample, on its continuous extension: the first point with
-    /// s·ω ≤ 0 ([`Self::find_crossing`]) if `near_sigma`; with one at tc, the samples before tc
+    /// (`near_sigma`) or holds a sample (`sample_inside`), on its continuous extension: the first
+    /// point with s·ω ≤ 0 ([`Self::find_crossing`]) if `near_sigma`; with one at tc, the samples before tc
     /// and (tc, y(tc)) with the Jacobian columns interpolated and ω = 0 (the arrival is not yet
     /// handled); without, the samples in (t, tn] and `None`.
     #[allow(clippy::too_many_arguments)]
@@ -488,15 +489,11 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         s: f64,
         k: &mut [[f64; N]; SMAX],
         near_sigma: bool,
+        sample_inside: bool,
     ) -> Option<(f64, [f64; N])> {
         let tab = Self::TAB;
         // the Jacobian columns at samples need the extra dense stages over every component
-        let jac_at_samples = self.layout().ncols > 0
-            && self
-                .opts
-                .sample_times
-                .get(self.next_sample)
-                .is_some_and(|&ts| ts <= tn);
+        let jac_at_samples = self.layout().ncols > 0 && sample_inside;
         if tab.dense_extra > 0 {
             if jac_at_samples {
                 self.dense_stages::<N>(self.layout(), t, hs, y, s, k);
@@ -608,16 +605,15 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     ) -> Option<(f64, f64)> {
         let sys = self.sys;
         let beta = y[0];
-        let stuck = *y;
         let from = if nudge { t + 1e-9 * sys.period() } else { t };
         match sys.next_release(from, beta, t1) {
             None => {
-                self.samples_constant(t1, &stuck);
+                self.samples_constant(t1, y);
                 None
             }
             Some(tr) => {
                 let tr = tr.max(t);
-                self.samples_constant(tr, &stuck);
+                self.samples_constant(tr, y);
                 let f = sys.forces(tr, beta, 0.0);
                 let s = if f.a >= 0.0 { 1.0 } else { -1.0 };
                 // the output leaves with a − s r; zero for r_s = r(t, β, 0) (tangential release)
