@@ -4,10 +4,12 @@
 //! rms of β_measured − β_simulated (rad) measures how well the model predicts the motion over a
 //! horizon short enough for chaos not to matter; with a perfect model it is the camera noise.
 
-use super::lm::{least_squares, least_squares_with_jacobian, LsqFit};
+use super::lm::{fd_jacobian, least_squares_tol, least_squares_with_jacobian, LsqFit};
 use super::model::{AugmentedGear, Coefficients, Geometry};
 use super::preprocess::CleanRun;
 use crate::integrator::{EventDriven853, Flow, FlowMethod, FlowOptions, Sensitivity};
+use crate::numerics::least_squares::{lstsq, DEFAULT_RCOND};
+use faer::Mat;
 use nalgebra::DMatrix;
 use std::cell::RefCell;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -238,16 +240,49 @@ pub fn window_residuals_jacobian(
 /// Evaluation budget of a window's state fit ([`fit_window_state`]) per start, in units of
 /// (parameters + 1) = 3 residual evaluations.
 const STATE_FIT_PATIENCE: usize = 20;
+/// Relative tolerances (ftol on the reduction of χ², xtol on the step) of a window's state fit
+/// ([`fit_window_state`]). A window simulated at the relative tolerance 10⁻⁸ carries an
+/// integration error in every residual that makes reductions of χ² below ~10⁻¹⁰ of it noise; the
+/// optimiser's own default (30 ε) spent a third of a diagnosis's simulations shrinking its trust
+/// region through that noise (the `cubic_drag` set of docs/performance.md: 2.44 against 3.09
+/// million window simulations).
+const STATE_FIT_TOL: (f64, f64) = (1e-10, 1e-10);
 /// Relative central-difference steps (of max(|x|, 1)) of a window's state fit by differences
 /// ([`fit_window_state`]: β₀, β̇₀).
 const FD_STATE_STEP: [f64; 2] = [1e-7, 1e-6];
 
+/// Whether a window state fit by the exact derivative stopped short of its minimum: the
+/// Gauss–Newton step of the central-difference Jacobian J_h at the fit's end (steps
+/// [`FD_STATE_STEP`]) predicts a decrease of χ² by more than 1, ‖r‖² − min_δ ‖r + J_h δ‖² > 1
+/// (one standard error of a state coordinate; so also when J_h cannot be formed or solved).
+///
+/// The exact derivative of the flow holds for perturbations below the distance to the nearest
+/// change of the event sequence. Near an arrival at Σ where the acceleration is a hair from the
+/// static bound r_s (the end of a ring-down), that distance falls far below a
+/// Levenberg–Marquardt step (a crossing with a post-crossing acceleration of 10⁻¹¹ rad/s²
+/// against a difference quotient at 10⁻⁶ that sees the motion stop), and the exact fit stalls
+/// (χ² 563 against 95 on a 30-frame window); a difference quotient over the step sees the change.
+fn stalled<F: Fn(&[f64]) -> Option<Vec<f64>>>(plain: &F, fit: &LsqFit) -> bool {
+    let Some(jh) = fd_jacobian(plain, &fit.p, &fit.resid, &FD_STATE_STEP, false) else {
+        return true;
+    };
+    let a = Mat::from_fn(jh.nrows(), jh.ncols(), |i, k| jh[(i, k)]);
+    match lstsq(&a, &fit.resid, DEFAULT_RCOND) {
+        Ok(s) => {
+            let after: f64 = s.resid.iter().map(|v| v * v).sum();
+            fit.rss - after > 1.0
+        }
+        Err(_) => true,
+    }
+}
+
 /// Fits a window's initial state with the model fixed, from `guess` and, when that fit is poor,
 /// from finite-difference and at-rest velocities. Residuals are (β_sim − β)/σ on kept samples;
 /// the window is simulated at the relative tolerance `tol`. The Levenberg–Marquardt steps use the
-/// exact derivative of the simulated window, ∂β(tᵢ)/∂(β₀, β̇₀) ([`window_residuals_jacobian`]);
-/// a start whose fit stays poor (χ² > 4 per frame) is fitted on by central differences from
-/// where it stopped, and the better of the two is kept.
+/// exact derivative of the simulated window, ∂β(tᵢ)/∂(β₀, β̇₀) ([`window_residuals_jacobian`]).
+/// Where a start's fit stays poor (χ² > 4 per frame), the central-difference derivative at its
+/// end is asked whether the fit stalled ([`stalled`]); only then is it fitted on by central
+/// differences from there, and the better of the two is kept.
 #[allow(clippy::too_many_arguments)]
 pub fn fit_window_state(
     sys: &AugmentedGear,
@@ -280,22 +315,30 @@ pub fn fit_window_state(
     };
     let kept = keep.iter().filter(|&&k| k).count().max(1) as f64;
     let poor = |x: &Option<LsqFit>| x.as_ref().map(|f| f.rss / kept > 4.0).unwrap_or(true);
-    // a start whose fit by the exact derivative stays poor is fitted again by central
-    // differences from where it stopped, and the better fit is kept: near an arrival at Σ where |a| is within a hair of
-    // the static bound r_s (the end of a ring-down), the flow's derivative is exact but holds only
-    // for perturbations far below a Levenberg–Marquardt step (a crossing with a post-crossing
-    // acceleration of 10⁻¹¹ rad/s² against a difference quotient at 10⁻⁶ that sees the motion
-    // stop), and the exact fit stalls there (χ² 563 against 95 on a 30-frame window)
     let plain = |p: &[f64]| window_residuals(sys, t, b, keep, sigma, [p[0], p[1]], tol);
     let fit_from = |p0: [f64; 2]| {
-        let exact = least_squares_with_jacobian(&f, &jac, &p0, STATE_FIT_PATIENCE, None);
+        let exact =
+            least_squares_with_jacobian(&f, &jac, &p0, STATE_FIT_PATIENCE, Some(STATE_FIT_TOL));
         if !poor(&exact) {
             return exact;
         }
-        // from where the exact fit stopped (from the start when it failed): a genuine poor
-        // minimum costs one differenced Jacobian there, a stall moves on
+        // a genuine poor minimum (the model does not follow the window) costs one differenced
+        // Jacobian; a stall moves on by differences from where it stopped (from the start when
+        // the exact fit failed)
+        if let Some(a) = &exact {
+            if !stalled(&plain, a) {
+                return exact;
+            }
+        }
         let from = exact.as_ref().map_or(p0, |a| [a.p[0], a.p[1]]);
-        let differenced = least_squares(&plain, &from, &FD_STATE_STEP, STATE_FIT_PATIENCE);
+        let differenced = least_squares_tol(
+            &plain,
+            &from,
+            &FD_STATE_STEP,
+            STATE_FIT_PATIENCE,
+            Some(STATE_FIT_TOL),
+            false,
+        );
         match (exact, differenced) {
             (Some(a), Some(d)) => Some(if d.rss < a.rss { d } else { a }),
             (a, d) => a.or(d),
