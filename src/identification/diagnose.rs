@@ -12,7 +12,9 @@
 //! 6. **report** ([`report`]): findings, rejected candidates, predictions for the figures.
 
 use super::breakaway;
-use super::findings::{judged_finding, profiled_size, rejected, rivals, second_minimum_size};
+use super::findings::{
+    excess_profile_size, judged_finding, profiled_size, rejected, rivals, second_minimum_size,
+};
 use super::judge::{rms_per_run, rms_rad, Folds};
 use super::mismatch::{locate, MismatchOptions};
 use super::model::{Coefficients, Geometry};
@@ -402,6 +404,17 @@ pub fn diagnose(
             (fin, Vec::new(), h)
         };
         excess = sf.excess;
+        // the Stribeck member's excess: its σ from its profile (the covariance's σ is the
+        // curvature of a curved valley at its minimum)
+        let excess_sides = if tried
+            .iter()
+            .any(|t| t.accepted && t.candidate.effect.id == "static_friction")
+        {
+            stage(progress, "profile of the breakaway excess (its σ)");
+            super::select::excess_profile(&sctx, &fin)
+        } else {
+            None
+        };
         let mut before = b;
         // the chain of round models runs through the effects the backward check dropped too (each
         // finding's "before" is the model of the round before its own), but only the accepted
@@ -414,6 +427,10 @@ pub fn diagnose(
             if let Some(mut f) = found.flatten() {
                 let e = &t.candidate.effect;
                 f.size = profiled_size(e, &fin, &profiles, f.size.take(), &mut f.params);
+                if let Some(sides) = excess_sides.as_ref().filter(|_| e.id == "static_friction") {
+                    f.size =
+                        excess_profile_size(sides, f.size.take(), &mut f.params, &mut f.evidence);
+                }
                 if let Some(sec) = sf.second.as_ref().filter(|_| e.id == "static_friction") {
                     f.size = second_minimum_size(e, &fin, sec, f.size.take(), &mut f.params);
                 }

@@ -6,20 +6,37 @@ use super::catalog::{effect_params, Effect};
 use super::judge::{rms_rad, Comparison};
 use super::model::{Shape, DRAG_REFERENCE_SPEED};
 use super::preprocess::CleanRun;
-use super::profile::{delta_chi2, ShapeProfile};
+use super::profile::{delta_chi2, ProfileSide, ShapeProfile};
 use super::regression::{DriftParam, Term};
 use super::report::{EffectSize, Finding};
 use super::select::{ModelState, Tried};
 use super::shooting::{SimFit, Win};
+use super::spec::free_shapes;
 use serde_json::json;
 use std::collections::BTreeMap;
 
 /// (value, 1σ) of every term of a refitted model, by term name.
+///
+/// A family member with its shapes on the weak-form grid (a final model whose refit with the
+/// shapes freed failed, [`super::select::polish`]) is entered as the family's coefficient and
+/// its shapes, held (σ 0), so that its finding has the family's parameters and size.
 pub fn coefficient_map(st: &ModelState) -> BTreeMap<String, (f64, f64)> {
-    st.terms
+    let n = st.terms.len();
+    let (terms, theta) = free_shapes(&st.terms, &st.fit.theta[..n]);
+    let mut err = Vec::with_capacity(terms.len());
+    let mut k = 0;
+    for t in &terms {
+        if matches!(t, Term::Shape(_)) && !st.terms.contains(t) {
+            err.push(0.0);
+        } else {
+            err.push(st.fit.err[k]);
+            k += 1;
+        }
+    }
+    terms
         .iter()
-        .enumerate()
-        .map(|(k, t)| (t.name(), (st.fit.theta[k], st.fit.err[k])))
+        .zip(theta.iter().zip(err))
+        .map(|(t, (&v, e))| (t.name(), (v, e)))
         .collect()
 }
 
@@ -263,6 +280,56 @@ pub fn profiled_size(
     params.insert("size_profile_hi".into(), hi);
     params.insert("size_sigma_covariance".into(), size.sigma);
     size.sigma = size.sigma.max(size.value - lo).max(hi - size.value);
+    Some(size)
+}
+
+/// The headline `size` of the Stribeck member (the relative excess η_Δs/η of the
+/// `static_friction` family) with its σ widened to the profile σ of its excess, the larger of the
+/// two sides of [`super::select::excess_profile`] (`sides`: lower, upper; a symmetric σ that covers
+/// the flatter side), scaled from η_Δs to the headline by the fitted η (`params`'
+/// `excess_relative`/`eta_static_excess`). `params` get each side's σ (headline units) as
+/// `size_profile_sigma_lo`/`_hi`, `size_profile_beyond_lo`/`_hi` = 1 where that side's σ
+/// extrapolates beyond its last point, and the covariance's σ as `size_sigma_covariance`;
+/// `evidence` the profile's points (η_Δs, rise) and Δ as `excess_profile`.
+pub fn excess_profile_size(
+    sides: &(ProfileSide, ProfileSide),
+    size: Option<EffectSize>,
+    params: &mut BTreeMap<String, f64>,
+    evidence: &mut BTreeMap<String, serde_json::Value>,
+) -> Option<EffectSize> {
+    evidence.insert(
+        "excess_profile".into(),
+        json!({
+            "delta_chi2": sides.0.delta,
+            "points_excess_rise": sides.0.points.iter().rev().chain(&sides.1.points).collect::<Vec<_>>(),
+        }),
+    );
+    let mut size = size?;
+    let (Some(&rel), Some(&abs)) = (
+        params.get("excess_relative"),
+        params.get("eta_static_excess"),
+    ) else {
+        return Some(size);
+    };
+    if !(abs != 0.0 && (rel / abs).is_finite()) {
+        return Some(size);
+    }
+    let scale = (rel / abs).abs();
+    let (lo, hi) = (sides.0.sigma * scale, sides.1.sigma * scale);
+    params.insert("size_profile_sigma_lo".into(), lo);
+    params.insert("size_profile_sigma_hi".into(), hi);
+    params.insert(
+        "size_profile_beyond_lo".into(),
+        f64::from(u8::from(sides.0.beyond)),
+    );
+    params.insert(
+        "size_profile_beyond_hi".into(),
+        f64::from(u8::from(sides.1.beyond)),
+    );
+    params.insert("size_sigma_covariance".into(), size.sigma);
+    if lo.is_finite() && hi.is_finite() {
+        size.sigma = size.sigma.max(lo).max(hi);
+    }
     Some(size)
 }
 
@@ -574,5 +641,57 @@ mod tests {
         }
         assert_eq!(second_minimum_sigma(0.05, delta, 0.5 * delta), 0.05);
         assert_eq!(second_minimum_sigma(0.05, delta, 0.0), 0.05);
+    }
+
+    /// A final model whose Stribeck member kept its shapes on the grid (its free refit failed)
+    /// reports the family's parameters: the excess relative to η with its σ, the grid's w and δ
+    /// held (σ 0), and a headline size.
+    #[test]
+    fn a_grid_member_reports_the_family_parameters() {
+        let terms = vec![
+            Term::Zeta,
+            Term::Eta,
+            Term::SinACosB,
+            Term::CosASinB,
+            Term::StribeckGrid(50, 10),
+        ];
+        let theta = vec![1.25, 20.0, -287.0, 66.0, 11.5];
+        let err = vec![0.01, 0.12, 0.17, 0.10, 0.43];
+        let n = terms.len();
+        let st = ModelState {
+            terms,
+            fit_latency: false,
+            fit: SimFit {
+                theta,
+                err,
+                cov: nalgebra::DMatrix::zeros(n, n),
+                jac: nalgebra::DMatrix::zeros(0, n),
+                resid: Vec::new(),
+                used: Vec::new(),
+                states: Vec::new(),
+                rms_rad: 0.0,
+                rms_start_rad: 0.0,
+                samples: 0,
+                inflation: 1.0,
+                converged: true,
+            },
+            held: super::super::judge::HeldOut {
+                chi2: Vec::new(),
+                chi2_fit: Vec::new(),
+            },
+            effects: Vec::new(),
+        };
+        let e = super::super::catalog::catalog()
+            .into_iter()
+            .find(|e| e.id == "static_friction")
+            .unwrap();
+        let p = params_of(&e, &st);
+        assert_eq!(p["eta_static_excess"], 11.5);
+        assert_eq!(p["excess_relative"], 11.5 / 20.0);
+        assert_eq!(p["excess_relative_err"], 0.43 / 20.0);
+        assert_eq!((p["stribeck_width"], p["stribeck_width_err"]), (0.5, 0.0));
+        assert_eq!((p["stribeck_power"], p["stribeck_power_err"]), (1.0, 0.0));
+        let size = headline_size(&e, &p).unwrap();
+        assert_eq!((size.value, size.sigma), (11.5 / 20.0, 0.43 / 20.0));
     }
 }

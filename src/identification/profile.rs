@@ -364,6 +364,106 @@ where
     (v, false, th)
 }
 
+/// One side of a coefficient's profile: the profile χ²_P(v) − χ²_min (the rise) evaluated at
+/// distances d from the fitted value ŝ on one side, and the σ that side implies.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProfileSide {
+    /// The σ of this side: d √(Δ/r) at the last distance d evaluated, the σ of a quadratic
+    /// profile through the minimum and that point (the rise Δ marks 1σ, [`delta_chi2`]).
+    pub sigma: f64,
+    /// Whether the last point evaluated lies inside the 1σ end (r < Δ): `sigma` then extrapolates
+    /// a quadratic profile beyond the points seen (or is the distance to the range's end when
+    /// the profile is flat there).
+    pub beyond: bool,
+    /// The evaluated points: (held value, rise).
+    pub points: Vec<(f64, f64)>,
+    /// The rise Δ that marks 1σ.
+    pub delta: f64,
+}
+
+/// Distance of a coefficient profile's first point from the fitted value, in units of the
+/// covariance's σ ([`profile_side`]): a profile that is quadratic with that σ rises there by 4Δ,
+/// far above the scatter of refits, and the point stays inside the quadratic region.
+pub const SIDE_FIRST_SIGMAS: f64 = 2.0;
+/// The farthest a coefficient profile's second point goes, in covariance σ ([`profile_side`]).
+pub const SIDE_MAX_SIGMAS: f64 = 8.0;
+
+/// One side (`dir` = ±1) of the profile of a coefficient fitted at `value` with the covariance σ
+/// `sigma`, its range ending at `lower` below: `rise(v)` refits the model with the coefficient
+/// held at v and returns χ²_P(v) − χ²_min (`None`: the refit failed). The first point lies
+/// [`SIDE_FIRST_SIGMAS`] σ away; its rise r gives σ₁ = d √(Δ/r). When σ₁ > d (the 1σ end lies
+/// beyond the point: a flatter valley than the covariance says) one more point is evaluated at
+/// d₂ = min(σ₁, [`SIDE_MAX_SIGMAS`] σ) and the side's σ is d₂ √(Δ/r₂). A rise that is not
+/// positive counts as flat (σ = ∞ before the cap: the second point goes to the cap). A side
+/// whose range ends within the first distance (the lower end, e.g. an excess of 0) is evaluated
+/// at the end; `None` when no point could be evaluated.
+pub fn profile_side(
+    mut rise: impl FnMut(f64) -> Option<f64>,
+    value: f64,
+    sigma: f64,
+    delta: f64,
+    dir: f64,
+    lower: f64,
+) -> Option<ProfileSide> {
+    let at = |d: f64| {
+        let v = value + dir * d;
+        if dir < 0.0 {
+            v.max(lower)
+        } else {
+            v
+        }
+    };
+    let implied = |d: f64, r: f64| {
+        if r > 0.0 {
+            d * (delta / r).sqrt()
+        } else {
+            f64::INFINITY
+        }
+    };
+    let mut points = Vec::new();
+    let d1 = (at(SIDE_FIRST_SIGMAS * sigma) - value).abs();
+    if d1 <= 0.0 {
+        return None;
+    }
+    let r1 = rise(value + dir * d1)?;
+    points.push((value + dir * d1, r1));
+    let s1 = implied(d1, r1);
+    if s1 <= d1 {
+        return Some(ProfileSide {
+            sigma: s1,
+            beyond: false,
+            points,
+            delta,
+        });
+    }
+    let d2 = (at(s1.min(SIDE_MAX_SIGMAS * sigma)) - value).abs();
+    if d2 <= d1 * (1.0 + 1e-9) {
+        // the range ends at the first point: the profile stays within 1σ up to it
+        return Some(ProfileSide {
+            sigma: s1.min(SIDE_MAX_SIGMAS * sigma).max(d1),
+            beyond: true,
+            points,
+            delta,
+        });
+    }
+    let Some(r2) = rise(value + dir * d2) else {
+        return Some(ProfileSide {
+            sigma: s1.min(SIDE_MAX_SIGMAS * sigma),
+            beyond: true,
+            points,
+            delta,
+        });
+    };
+    points.push((value + dir * d2, r2));
+    let s2 = implied(d2, r2).min(SIDE_MAX_SIGMAS * sigma).max(d1);
+    Some(ProfileSide {
+        sigma: s2,
+        beyond: r2 < delta * (1.0 - 1e-9),
+        points,
+        delta,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -479,5 +579,31 @@ mod tests {
                 assert!(l.iter().any(|&v| (v - g).abs() < 1e-12), "{s:?} {g}");
             }
         }
+    }
+
+    /// A quadratic profile with σ = 0.05 where the covariance says 0.05: one point per side, σ
+    /// exact; with σ = 0.2 (a valley four times flatter than the covariance's σ of 0.05) the
+    /// second point at 4σ_cov lands on the 1σ end and gives 0.2 again; a flat side is capped.
+    #[test]
+    fn a_profile_side_recovers_the_sigma_of_a_quadratic_profile() {
+        let (s_hat, delta) = (0.84, 2.7);
+        for true_sigma in [0.05, 0.2] {
+            let mut calls = 0;
+            let rise = |v: f64| {
+                calls += 1;
+                Some(delta * ((v - s_hat) / true_sigma).powi(2))
+            };
+            let side = profile_side(rise, s_hat, 0.05, delta, 1.0, 0.0).unwrap();
+            assert!((side.sigma - true_sigma).abs() < 1e-12, "{side:?}");
+            assert_eq!(side.points.len(), if true_sigma > 0.1 { 2 } else { 1 });
+            assert!(!side.beyond);
+        }
+        let side = profile_side(|_| Some(0.0), s_hat, 0.05, delta, 1.0, 0.0).unwrap();
+        assert!((side.sigma - SIDE_MAX_SIGMAS * 0.05).abs() < 1e-12 && side.beyond);
+        // the lower side of an excess of 0.06 ends at 0: evaluated there, and flat beyond
+        let side = profile_side(|_| Some(0.5), 0.06, 0.05, delta, -1.0, 0.0).unwrap();
+        assert_eq!(side.points.len(), 1);
+        assert!((side.points[0].0 - 0.0).abs() < 1e-15 && side.beyond);
+        assert!(side.sigma >= 0.06);
     }
 }

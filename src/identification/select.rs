@@ -7,7 +7,7 @@ use super::catalog::{judged_members, Effect};
 use super::judge::{added_parameters_z, compare, heldout, z_threshold, Comparison, Folds, HeldOut};
 use super::model::Geometry;
 use super::preprocess::CleanRun;
-use super::profile::{delta_chi2, profile_shape, ShapeProfile};
+use super::profile::{delta_chi2, profile_shape, profile_side, ProfileSide, ShapeProfile};
 use super::propose::{propose, Candidate, ProposeCtx};
 use super::regression::Term;
 use super::shooting::{
@@ -316,6 +316,67 @@ pub fn polish_profiled(ctx: &SelectCtx, st: &ModelState) -> (ModelState, Vec<Sha
         false,
     );
     (refitted.unwrap_or(fin), profiles)
+}
+
+/// The profile σ of the breakaway excess η_Δs (θ entry [`Term::StaticExcess`]) of a final model
+/// whose friction family has shape parameters (the Stribeck member η_Δs exp(−(|β̇|/w)^δ)): the
+/// excess held at values on each side ([`profile_side`]) with every other parameter refitted to
+/// convergence on the windows the final refit used (the held value is the model's
+/// `eta_static_excess`, the term out of θ), the rise of their Σ window χ² over the final refit's
+/// measured against Δ ([`delta_chi2`]). The covariance σ is the curvature at the minimum of a
+/// valley that curves through (w, δ, η_Δs) and can be several times too small (docs/diagnosis.md,
+/// "The Stribeck member's σ"). Returns (lower side, upper side); `None` when the model has no
+/// excess with a shape or its σ is not finite. Costs two to four refits to convergence.
+pub fn excess_profile(ctx: &SelectCtx, fin: &ModelState) -> Option<(ProfileSide, ProfileSide)> {
+    let k = fin.terms.iter().position(|t| *t == Term::StaticExcess)?;
+    if !fin.terms.iter().any(|t| matches!(t, Term::Shape(_))) {
+        return None;
+    }
+    let (value, sigma) = (fin.fit.theta[k], fin.fit.err[k]);
+    if !(sigma.is_finite() && sigma > 0.0 && value.is_finite()) {
+        return None;
+    }
+    let wins: Vec<Win> = fin
+        .fit
+        .used
+        .iter()
+        .map(|&(w, _)| ctx.wins[w].clone())
+        .collect();
+    let opts = ShootingOptions {
+        patience: CONVERGED_PATIENCE,
+        reselect: Reselect::Always,
+        ..*ctx.shooting
+    };
+    let model = fin.model(ctx.runs, ctx.geo, ctx.tol);
+    let total = |f: &SimFit, m: &SimModel| -> f64 {
+        f.window_chi2(m, &wins)
+            .0
+            .iter()
+            .map(|c| c.unwrap_or(f64::INFINITY))
+            .sum()
+    };
+    let chi_min = total(&fin.fit, &model);
+    let mut terms = fin.terms.clone();
+    terms.remove(k);
+    let delta = delta_chi2(&fin.fit, k);
+    let side = |dir: f64| {
+        // each held value warm-started from the last one on its side
+        let mut warm = fin.fit.theta.clone();
+        warm.remove(k);
+        let rise = |v: f64| {
+            let m = SimModel {
+                terms: terms.clone(),
+                eta_static_excess: model.eta_static_excess + v,
+                ..model.clone()
+            };
+            let f = refit_to_convergence(&m, &warm, &wins, &opts)?;
+            let c = total(&f, &m);
+            warm = f.theta;
+            c.is_finite().then_some(c - chi_min)
+        };
+        profile_side(rise, value, sigma, delta, dir, 0.0)
+    };
+    Some((side(-1.0)?, side(1.0)?))
 }
 
 /// `st` with `terms` refitted from `theta0` to convergence ([`refit_to_convergence`] at

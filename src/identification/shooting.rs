@@ -711,13 +711,19 @@ fn varpro_jacobian(
         let nw = w.keep.len();
         let mut jw = DMatrix::zeros(nw, n);
         // the derivative of the residuals with respect to the window's state, from the
-        // variational equations
-        let (_, jx) =
-            window_residuals_jacobian(&model.system(theta, w), t, b, &w.keep, s, x, model.tol)?;
-        // the residuals at θ itself for the one-sided differences at a range's end, by the same
-        // plain simulation as the differences (the variational run's step sequence differs, and
-        // its rounding would not cancel in the difference)
-        let r0 = if inward { Some(sim(theta, x)?) } else { None };
+        // variational equations; a window that cannot be simulated at θ (its step budget)
+        // contributes no rows (a zero block) instead of failing the whole refit's step
+        let Some((_, jx)) =
+            window_residuals_jacobian(&model.system(theta, w), t, b, &w.keep, s, x, model.tol)
+        else {
+            return Some(jw);
+        };
+        // the residuals at θ itself for one-sided differences (at a range's end, or where one
+        // side's simulation fails), by the same plain simulation as the differences (the
+        // variational run's step sequence differs, and its rounding would not cancel in the
+        // difference); evaluated when first needed
+        let mut r0: Option<Option<Vec<f64>>> = None;
+        let mut at_theta = || r0.get_or_insert_with(|| sim(theta, x)).clone();
         let mut th = theta.to_vec();
         for c in 0..n {
             let h = if c >= nt {
@@ -732,21 +738,26 @@ fn varpro_jacobian(
                 }
                 _ => (true, true),
             };
-            let (rp, hp) = if up {
-                th[c] = theta[c] + h;
-                (sim(&th, x)?, h)
-            } else {
-                (r0.clone()?, 0.0)
+            let mut side = |dir: f64, inside: bool| {
+                let r = if inside {
+                    th[c] = theta[c] + dir * h;
+                    let r = sim(&th, x);
+                    th[c] = theta[c];
+                    r.map(|r| (r, h))
+                } else {
+                    None
+                };
+                r.or_else(|| at_theta().map(|r| (r, 0.0)))
             };
-            let (rm, hm) = if down {
-                th[c] = theta[c] - h;
-                (sim(&th, x)?, h)
-            } else {
-                (r0.clone()?, 0.0)
+            // a column whose simulations all fail stays zero: the step does not move along it
+            let (Some((rp, hp)), Some((rm, hm))) = (side(1.0, up), side(-1.0, down)) else {
+                continue;
             };
-            th[c] = theta[c];
+            if hp + hm <= 0.0 {
+                continue;
+            }
             for i in 0..nw {
-                jw[(i, c)] = (rp[i] - rm[i]) / (hp + hm).max(f64::MIN_POSITIVE);
+                jw[(i, c)] = (rp[i] - rm[i]) / (hp + hm);
             }
         }
         let mut basis: Vec<DVector<f64>> = Vec::with_capacity(2);
