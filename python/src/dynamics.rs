@@ -69,7 +69,7 @@ pub fn check_tol(tol: f64) -> PyResult<()> {
 /// default, with the crossings, stick phases and releases on ω = 0 located to the tolerance).
 ///
 /// simulate(system, x0, t_end, *, t0=0.0, samples_per_period=50, sample_times=None, tol=1e-9,
-///          method="dop853")
+///          method="dop853", jacobians=False)
 ///
 /// x0 = (β [rad], ω [rad/s]) at t0 [s]; the trajectory is sampled at sample_times [s] (sorted, in
 /// [t0, t_end]) or on a uniform grid of samples_per_period points per drive period. tol is the
@@ -80,9 +80,12 @@ pub fn check_tol(tol: f64) -> PyResult<()> {
 /// Returns a dict: t [s], beta [rad, on the lift], omega [rad/s] (numpy arrays), for the gear also
 /// alpha [rad] = 2πft + α₀ and delta = beta − alpha [rad]; events (list of dicts: t [s],
 /// beta [rad], kind = crossing | stick_start | release | graze, and the sides from/to/side);
-/// x_end (numpy), mode at t_end (positive | negative | stick), stats (work counters).
+/// x_end (numpy), mode at t_end (positive | negative | stick), stats (work counters). With
+/// jacobians=True also jac, an (n, 2, 2) numpy array: ∂(β, ω)(tᵢ)/∂(β₀, ω₀) at every sample (the
+/// variational equations on the continuous extension, with the saltation matrices of the events
+/// before tᵢ; constant during a stick phase), e.g. for a Gauss–Newton fit of an initial state.
 #[pyfunction]
-#[pyo3(signature = (system, x0, t_end, *, t0=0.0, samples_per_period=50, sample_times=None, tol=1e-9, method="dop853"))]
+#[pyo3(signature = (system, x0, t_end, *, t0=0.0, samples_per_period=50, sample_times=None, tol=1e-9, method="dop853", jacobians=false))]
 #[allow(clippy::too_many_arguments)]
 fn simulate<'py>(
     py: Python<'py>,
@@ -94,6 +97,7 @@ fn simulate<'py>(
     sample_times: Option<&Bound<'py, PyAny>>,
     tol: f64,
     method: &str,
+    jacobians: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let sys = extract_system(system)?;
     let x0 = state(x0, "x0")?;
@@ -127,7 +131,12 @@ fn simulate<'py>(
     }
     let opts = FlowOptions::with_tol(tol)
         .record_events(true)
-        .samples(times);
+        .samples(times)
+        .sensitivity(if jacobians {
+            Sensitivity::State
+        } else {
+            Sensitivity::None
+        });
     let r = py.detach(|| match method {
         Method::EventDriven => EventDriven.flow(sys.dynsys(), t0, x0, t_end, &opts),
         _ => EventDriven853.flow(sys.dynsys(), t0, x0, t_end, &opts),
@@ -148,6 +157,18 @@ fn simulate<'py>(
         "omega",
         PyArray1::from_vec(py, flow.samples.iter().map(|s| s.omega).collect()),
     )?;
+    if jacobians {
+        let n = flow.sample_jacobians.len();
+        let flat: Vec<f64> = flow
+            .sample_jacobians
+            .iter()
+            .flat_map(|j| [j[(0, 0)], j[(0, 1)], j[(1, 0)], j[(1, 1)]])
+            .collect();
+        let jac = PyArray1::from_vec(py, flat)
+            .reshape([n, 2, 2])
+            .expect("4n elements reshape to (n, 2, 2)");
+        d.set_item("jac", jac)?;
+    }
     d.set_item("events", to_python(py, &flow.events)?)?;
     d.set_item("x_end", vec2(py, flow.x))?;
     d.set_item("mode", mode_name(flow.mode))?;
