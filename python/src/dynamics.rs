@@ -9,7 +9,7 @@ use gearbif::integrator::{
 use gearbif::maps::{poincare_map as map, Section};
 use gearbif::orbits::{OrbitSpec, PeriodicOrbit, ShootingOptions};
 use gearbif::sweep::Method;
-use numpy::PyArray1;
+use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyAny, PyDict};
 
