@@ -355,7 +355,8 @@ pub fn excess_profile(ctx: &SelectCtx, fin: &ModelState) -> Option<(ProfileSide,
             .map(|c| c.unwrap_or(f64::INFINITY))
             .sum()
     };
-    let chi_min = total(&fin.fit, &model);
+    // the final refit's χ² on its own windows (`wins`, in its order): its residuals
+    let chi_min: f64 = fin.fit.resid.iter().map(|r| r * r).sum();
     let mut terms = fin.terms.clone();
     terms.remove(k);
     let delta = delta_chi2(&fin.fit, k);
