@@ -138,6 +138,14 @@ pub fn plan(spec: &CampaignSpec) -> Result<Vec<Case>> {
     Ok(out)
 }
 
+/// The message of a caught panic (its `&str` or `String` payload).
+fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "(no message)".to_string())
+}
+
 /// Generates, writes, reads back, diagnoses and scores one case. `sets_dir` receives the set (and
 /// loses it again unless `keep`).
 pub fn run_case(
@@ -159,7 +167,12 @@ pub fn run_case(
         profile_shapes: spec.profile_shapes,
         ..DiagnoseOptions::default()
     };
-    let diag = diagnose(&set, &opts, &crate::progress::Silent);
+    // a diagnosis that panics (a bug) is recorded as that case's error, and the campaign goes on
+    let diag = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        diagnose(&set, &opts, &crate::progress::Silent)
+    }))
+    .map_err(|p| format!("the diagnosis panicked: {}", panic_message(&*p)))
+    .and_then(|d| d.map_err(|e| e.to_string()));
     let seconds = t0.elapsed().as_secs_f64();
     if !keep {
         let _ = std::fs::remove_dir_all(&dir);
@@ -193,7 +206,7 @@ pub fn run_case(
                 .collect(),
             None,
         ),
-        Err(e) => ("error".to_string(), Vec::new(), Some(e.to_string())),
+        Err(e) => ("error".to_string(), Vec::new(), Some(e)),
     };
     Ok(CaseResult {
         effect: case.effect.id.to_string(),
