@@ -242,10 +242,10 @@ pub fn window_residuals_jacobian(
 const STATE_FIT_PATIENCE: usize = 20;
 /// Relative tolerances (ftol on the reduction of χ², xtol on the step) of a window's state fit
 /// ([`fit_window_state`]). A window simulated at the relative tolerance 10⁻⁸ carries an
-/// integration error in every residual that makes reductions of χ² below ~10⁻¹⁰ of it noise; the
-/// optimiser's own default (30 ε) spent a third of a diagnosis's simulations shrinking its trust
-/// region through that noise (the `cubic_drag` set of docs/performance.md: 2.44 against 3.09
-/// million window simulations).
+/// integration error in every residual that makes reductions of χ² below ~10⁻¹⁰ of it noise; with
+/// the optimiser's own default (30 ε) the fits shrank their trust region through that noise (the
+/// `cubic_drag` set of docs/performance.md: 3.09 million window simulations in the diagnosis with
+/// the default, 2.30 million with these).
 const STATE_FIT_TOL: (f64, f64) = (1e-10, 1e-10);
 /// Relative central-difference steps (of max(|x|, 1)) of a window's state fit by differences
 /// ([`fit_window_state`]: β₀, β̇₀).
