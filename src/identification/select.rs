@@ -247,6 +247,42 @@ pub fn polish(ctx: &SelectCtx, st: &ModelState) -> ModelState {
     try_refit_state(ctx, st, terms, &theta0, Reselect::Always, !freed).unwrap_or_else(|| st.clone())
 }
 
+/// The judging windows the final refit `fin` used, in its order (the fixed set of windows of its
+/// profiles).
+fn used_windows(ctx: &SelectCtx, fin: &ModelState) -> Vec<Win> {
+    fin.fit
+        .used
+        .iter()
+        .map(|&(w, _)| ctx.wins[w].clone())
+        .collect()
+}
+
+/// A profile's refit of `model` (a quantity held outside θ) from `theta0` to convergence on the
+/// fixed windows `wins` ([`used_windows`]): (Σ window χ² over all of them, θ). Windows left out at
+/// the start are tried again at the solution ([`Reselect::Always`]): without, a held value far
+/// from the fit loses the windows its start cannot follow, and its χ² (the lost ones by a fresh
+/// state fit) comes out too high.
+fn held_refit(
+    ctx: &SelectCtx,
+    model: &SimModel,
+    theta0: &[f64],
+    wins: &[Win],
+) -> Option<(f64, Vec<f64>)> {
+    let opts = ShootingOptions {
+        patience: CONVERGED_PATIENCE,
+        reselect: Reselect::Always,
+        ..*ctx.shooting
+    };
+    let f = refit_to_convergence(model, theta0, wins, &opts)?;
+    let chi2 = f
+        .window_chi2(model, wins)
+        .0
+        .iter()
+        .map(|c| c.unwrap_or(f64::INFINITY))
+        .sum();
+    Some((chi2, f.theta))
+}
+
 /// [`polish`], then every shape parameter of the final model profiled ([`profile_shape`], in
 /// the order of its terms, each from the previous one's minimum) on the windows the polished
 /// refit used, the others refitted to convergence at each held value ([`refit_to_convergence`],
@@ -265,35 +301,12 @@ pub fn polish_profiled(ctx: &SelectCtx, st: &ModelState) -> (ModelState, Vec<Sha
     if shapes.is_empty() {
         return (fin, Vec::new());
     }
-    let wins: Vec<Win> = fin
-        .fit
-        .used
-        .iter()
-        .map(|&(w, _)| ctx.wins[w].clone())
-        .collect();
-    // windows left out at a held value's start are tried again at its solution: without, a held
-    // value far from the fit loses the windows its start cannot follow, and its χ² (summed over
-    // all the windows, the lost ones by a fresh state fit) comes out too high
-    let opts = ShootingOptions {
-        patience: CONVERGED_PATIENCE,
-        reselect: Reselect::Always,
-        ..*ctx.shooting
-    };
+    let wins = used_windows(ctx, &fin);
     let model = fin.model(ctx.runs, ctx.geo, ctx.tol);
-    let total = |f: &SimFit, m: &SimModel| -> f64 {
-        f.window_chi2(m, &wins)
-            .0
-            .iter()
-            .map(|c| c.unwrap_or(f64::INFINITY))
-            .sum()
-    };
     // every held value refitted to convergence (warm-started from the nearest one): a single
     // Levenberg–Marquardt run leaves ζ and the drag's q where the neighbour had them, and the
     // profile of a drag exponent of 1.5 then had its minimum at 1.96 (docs/diagnosis.md)
-    let fit = |m: &SimModel, th: &[f64]| -> Option<(f64, Vec<f64>)> {
-        let f = refit_to_convergence(m, th, &wins, &opts)?;
-        Some((total(&f, m), f.theta))
-    };
+    let fit = |m: &SimModel, th: &[f64]| held_refit(ctx, m, th, &wins);
     let chi2_polished: f64 = fin.fit.resid.iter().map(|r| r * r).sum();
     let mut theta = fin.fit.theta.clone();
     let mut profiles = Vec::new();
@@ -336,25 +349,8 @@ pub fn excess_profile(ctx: &SelectCtx, fin: &ModelState) -> Option<(ProfileSide,
     if !(sigma.is_finite() && sigma > 0.0 && value.is_finite()) {
         return None;
     }
-    let wins: Vec<Win> = fin
-        .fit
-        .used
-        .iter()
-        .map(|&(w, _)| ctx.wins[w].clone())
-        .collect();
-    let opts = ShootingOptions {
-        patience: CONVERGED_PATIENCE,
-        reselect: Reselect::Always,
-        ..*ctx.shooting
-    };
+    let wins = used_windows(ctx, fin);
     let model = fin.model(ctx.runs, ctx.geo, ctx.tol);
-    let total = |f: &SimFit, m: &SimModel| -> f64 {
-        f.window_chi2(m, &wins)
-            .0
-            .iter()
-            .map(|c| c.unwrap_or(f64::INFINITY))
-            .sum()
-    };
     // the final refit's χ² on its own windows (`wins`, in its order): its residuals
     let chi_min: f64 = fin.fit.resid.iter().map(|r| r * r).sum();
     let mut terms = fin.terms.clone();
@@ -370,9 +366,8 @@ pub fn excess_profile(ctx: &SelectCtx, fin: &ModelState) -> Option<(ProfileSide,
                 eta_static_excess: model.eta_static_excess + v,
                 ..model.clone()
             };
-            let f = refit_to_convergence(&m, &warm, &wins, &opts)?;
-            let c = total(&f, &m);
-            warm = f.theta;
+            let (c, th) = held_refit(ctx, &m, &warm, &wins)?;
+            warm = th;
             c.is_finite().then_some(c - chi_min)
         };
         profile_side(rise, value, sigma, delta, dir, 0.0)
