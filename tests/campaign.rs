@@ -568,6 +568,123 @@ fn level2_ci_seeds(effect: &str, seeds: Vec<u64>) -> CampaignDoc {
     doc
 }
 
+/// The backward check drops an accepted effect the recordings do not need and keeps the one they
+/// do. On sets with a two-harmonic static torque and nothing else (the campaign generator's
+/// `static_torque_2h`, level 1, `ci` size, seeds 1–3), the torque member with two harmonics and
+/// then a corotating drag (absent from the recordings) are accepted by hand, each refitted by
+/// simulation on top of the model before it (`select::evaluate`, as the rounds do), and
+/// `backward::backward` runs on the model with both at the threshold of a round of the actual
+/// size: the drag is dropped in every seed (its Wald z in the final model is below the
+/// threshold and the model without it does not predict the held-out runs significantly worse),
+/// the torque is kept, and the final model has no drag term. (A drag that absorbed part of the
+/// torque would keep a Wald z above the threshold, or predict better, and fail this.)
+#[test]
+fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
+    use gearbif::identification::backward::backward;
+    use gearbif::identification::catalog::catalog;
+    use gearbif::identification::diagnose::{fit_base, prepare, DiagnoseOptions};
+    use gearbif::identification::judge::{z_threshold, Folds};
+    use gearbif::identification::propose::{propose, Candidate, ProposeCtx};
+    use gearbif::identification::regression::Term;
+    use gearbif::identification::select::{evaluate, ModelState, SelectCtx, Tried};
+    use gearbif::progress::Silent;
+    for seed in 1..=3u64 {
+        let spec = effect("static_torque_2h").unwrap();
+        let g = build_case(spec, 1.0, seed, &SetSize::ci(), &Rk4Filippov::default()).unwrap();
+        let opts = DiagnoseOptions::default();
+        let prep = prepare(&g.set, &opts, &Silent).unwrap();
+        let folds = Folds::new(&prep.runs, opts.folds);
+        let base = fit_base(&prep, &g.set, &opts, &folds, &Silent).unwrap();
+        let b = base.state.clone().expect("the base refit");
+        let pctx = ProposeCtx {
+            runs: &prep.runs,
+            geo: &base.geo,
+            weak: &opts.weak,
+            latency_span: opts.latency_span,
+            max_dictionary: opts.max_dictionary,
+        };
+        let sctx = SelectCtx {
+            runs: &prep.runs,
+            geo: &base.geo,
+            wins: &base.wins,
+            folds: &folds,
+            shooting: &opts.shooting,
+            tol: opts.tol,
+            propose: &pctx,
+            max_rounds: opts.max_effects,
+        };
+        // the candidates of a round on `cur` and the round's threshold
+        let round = |cur: &ModelState| {
+            let lat = cur.fit_latency.then(|| cur.latency());
+            let cands = propose(&pctx, &cur.terms, lat, &cur.effects);
+            let z_crit = z_threshold(cands.len());
+            (cands, z_crit)
+        };
+        let pick = |cur: &ModelState, id: &str, n: usize| {
+            let (cands, z_crit) = round(cur);
+            let c = cands
+                .into_iter()
+                .find(|c| c.effect.id == id && c.terms.len() == n)
+                .unwrap_or_else(|| panic!("seed {seed}: no {id} candidate with {n} terms"));
+            (c, z_crit)
+        };
+        let (torque, z1) = pick(&b, "static_torque", 4);
+        let with_torque = evaluate(&sctx, &b, &torque).expect("the torque's refit");
+        // the drag is not proposed on these sets (the weak form does not see it): its candidate
+        // starts nested, at the current θ with a zero drag
+        let (_, z2) = round(&with_torque);
+        let nt = with_torque.terms.len();
+        let drag = Candidate {
+            effect: catalog()
+                .into_iter()
+                .find(|e| e.id == "corotating_drag")
+                .unwrap(),
+            terms: vec![Term::Corot],
+            weak_coef: with_torque.fit.theta[..nt]
+                .iter()
+                .copied()
+                .chain([0.0])
+                .collect(),
+            weak_coef_current: with_torque.fit.theta[..nt].to_vec(),
+            latency: None,
+            weak_dbic: 0.0,
+        };
+        let with_both = evaluate(&sctx, &with_torque, &drag).expect("the drag's refit");
+        let accepted = |round, candidate, z_crit, state| Tried {
+            round,
+            candidate,
+            cmp: None,
+            screen: None,
+            z_crit,
+            accepted: true,
+            state: Some(state),
+            added_z: None,
+            member_z: None,
+            dropped: None,
+        };
+        let mut tried = vec![
+            accepted(1, torque, z1, with_torque),
+            accepted(2, drag, z2, with_both.clone()),
+        ];
+        let fin = backward(&sctx, with_both, &mut tried, &Silent);
+        assert!(
+            !tried[1].accepted && tried[1].dropped.is_some(),
+            "seed {seed}: the drag was kept: {:?}",
+            tried[1].dropped
+        );
+        assert!(
+            tried[0].accepted && tried[0].dropped.is_none(),
+            "seed {seed}"
+        );
+        assert!(
+            !fin.terms.contains(&Term::Corot),
+            "seed {seed}: {:?}",
+            fin.terms
+        );
+        assert_eq!(fin.effects.len(), 1, "seed {seed}");
+    }
+}
+
 /// A static torque of 12 s⁻² (6 s⁻² at 2β) and a 12 ms latency together (the campaign
 /// generator's `torque_and_latency` at level 2, seed 3): round 1 accepts a `corotating_drag`
 /// (eleven candidates tie there), the torque and the latency follow, and the drag ends at

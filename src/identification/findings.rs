@@ -18,26 +18,23 @@ use std::collections::BTreeMap;
 /// (value, 1σ) of every term of a refitted model, by term name.
 ///
 /// A family member with its shapes on the weak-form grid (a final model whose refit with the
-/// shapes freed failed, [`super::select::polish`]) is entered as the family's coefficient and
-/// its shapes, held (σ 0), so that its finding has the family's parameters and size.
+/// shapes freed failed, [`super::select::polish`]) is entered under the family's coefficient
+/// (the Stribeck grid member's excess as [`Term::StaticExcess`]), so that its finding has the
+/// coefficient's parameters; its held shapes are not entered (they have no σ: a drag held at a
+/// grid exponent reports no exponent, and so no headline, rather than one with σ 0).
 pub fn coefficient_map(st: &ModelState) -> BTreeMap<String, (f64, f64)> {
     let n = st.terms.len();
     let (terms, theta) = free_shapes(&st.terms, &st.fit.theta[..n]);
-    let mut err = Vec::with_capacity(terms.len());
+    let mut out = BTreeMap::new();
     let mut k = 0;
-    for t in &terms {
+    for (t, &v) in terms.iter().zip(&theta) {
         if matches!(t, Term::Shape(_)) && !st.terms.contains(t) {
-            err.push(0.0);
-        } else {
-            err.push(st.fit.err[k]);
-            k += 1;
+            continue;
         }
+        out.insert(t.name(), (v, st.fit.err[k]));
+        k += 1;
     }
-    terms
-        .iter()
-        .zip(theta.iter().zip(err))
-        .map(|(t, (&v, e))| (t.name(), (v, e)))
-        .collect()
+    out
 }
 
 /// (ζ, η, g) of a refitted model.
@@ -326,7 +323,10 @@ pub fn excess_profile_size(
         "size_profile_beyond_hi".into(),
         f64::from(u8::from(sides.1.beyond)),
     );
-    params.insert("size_sigma_covariance".into(), size.sigma);
+    // the covariance's σ (already entered when a shape profile widened the size first)
+    params
+        .entry("size_sigma_covariance".into())
+        .or_insert(size.sigma);
     if lo.is_finite() && hi.is_finite() {
         size.sigma = size.sigma.max(lo).max(hi);
     }
@@ -644,8 +644,8 @@ mod tests {
     }
 
     /// A final model whose Stribeck member kept its shapes on the grid (its free refit failed)
-    /// reports the family's parameters: the excess relative to η with its σ, the grid's w and δ
-    /// held (σ 0), and a headline size.
+    /// reports the family's coefficient: the excess relative to η with its σ and a headline
+    /// size, and no held shape (they have no σ).
     #[test]
     fn a_grid_member_reports_the_family_parameters() {
         let terms = vec![
@@ -689,8 +689,7 @@ mod tests {
         assert_eq!(p["eta_static_excess"], 11.5);
         assert_eq!(p["excess_relative"], 11.5 / 20.0);
         assert_eq!(p["excess_relative_err"], 0.43 / 20.0);
-        assert_eq!((p["stribeck_width"], p["stribeck_width_err"]), (0.5, 0.0));
-        assert_eq!((p["stribeck_power"], p["stribeck_power_err"]), (1.0, 0.0));
+        assert!(!p.contains_key("stribeck_width") && !p.contains_key("stribeck_power"));
         let size = headline_size(&e, &p).unwrap();
         assert_eq!((size.value, size.sigma), (11.5 / 20.0, 0.43 / 20.0));
     }

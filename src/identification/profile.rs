@@ -372,8 +372,8 @@ pub struct ProfileSide {
     /// profile through the minimum and that point (the rise Δ marks 1σ, [`delta_chi2`]).
     pub sigma: f64,
     /// Whether the last point evaluated lies inside the 1σ end (r < Δ): `sigma` then extrapolates
-    /// a quadratic profile beyond the points seen (or is the distance to the range's end when
-    /// the profile is flat there).
+    /// a quadratic profile beyond the points seen, at most to [`SIDE_MAX_SIGMAS`] σ (that cap
+    /// where the profile is flat).
     pub beyond: bool,
     /// The evaluated points: (held value, rise).
     pub points: Vec<(f64, f64)>,
@@ -396,7 +396,8 @@ pub const SIDE_MAX_SIGMAS: f64 = 8.0;
 /// d₂ = min(σ₁, [`SIDE_MAX_SIGMAS`] σ) and the side's σ is d₂ √(Δ/r₂). A rise that is not
 /// positive counts as flat (σ = ∞ before the cap: the second point goes to the cap). A side
 /// whose range ends within the first distance (the lower end, e.g. an excess of 0) is evaluated
-/// at the end; `None` when no point could be evaluated.
+/// at the end, and a side with no room (the fitted value at the end) has σ 0 and no points;
+/// `None` when no point could be evaluated.
 pub fn profile_side(
     mut rise: impl FnMut(f64) -> Option<f64>,
     value: f64,
@@ -421,6 +422,15 @@ pub fn profile_side(
         }
     };
     let mut points = Vec::new();
+    if dir < 0.0 && value <= lower {
+        // at (or below) the range's end: this side has no room, and tells nothing
+        return Some(ProfileSide {
+            sigma: 0.0,
+            beyond: false,
+            points,
+            delta,
+        });
+    }
     let d1 = (at(SIDE_FIRST_SIGMAS * sigma) - value).abs();
     if d1 <= 0.0 {
         return None;
@@ -605,5 +615,8 @@ mod tests {
         assert_eq!(side.points.len(), 1);
         assert!((side.points[0].0 - 0.0).abs() < 1e-15 && side.beyond);
         assert!(side.sigma >= 0.06);
+        // an excess fitted at the range's end: the lower side has no room
+        let side = profile_side(|_| panic!("no evaluation"), 0.0, 0.05, delta, -1.0, 0.0).unwrap();
+        assert!(side.points.is_empty() && side.sigma == 0.0);
     }
 }

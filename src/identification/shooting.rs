@@ -598,7 +598,9 @@ fn fit_windows(
                 warm.lock().ok()?.states.clone()
             }
         };
-        varpro_jacobian(model, theta, wins, &used, &states, row, false)
+        Some(varpro_jacobian(
+            model, theta, wins, &used, &states, row, false,
+        ))
     };
     let r0 = residuals(theta0)?;
     let sigma_rms = |res: &[f64]| -> f64 {
@@ -631,7 +633,7 @@ fn fit_windows(
         // valley along it
         residuals(&sol.p)?;
         let states = warm.lock().ok()?.states.clone();
-        sol.jac = varpro_jacobian(model, &sol.p, wins, &used, &states, row, true)?;
+        sol.jac = varpro_jacobian(model, &sol.p, wins, &used, &states, row, true);
         sol.cov = scaled_cov(&sol.jac, sol.rss);
     }
     let samples: usize = used.iter().map(|&(wi, _)| wins[wi].kept()).sum();
@@ -687,7 +689,9 @@ const LATENCY_STEP: f64 = 1e-5;
 /// θ re-projecting the states from the previous trial's) adds the projections' stopping errors
 /// divided by the step, which on a drag family made the exponent's column 30 % too long and its
 /// σ 25 times too small. A state direction the window does not see (a window at rest throughout:
-/// β̇₀ has no effect) is left out of Q_w. `None` when a simulation fails.
+/// β̇₀ has no effect) is left out of Q_w. A window that cannot be simulated at θ gives a zero
+/// block, and a column whose simulation fails on one side is differenced one-sided from θ (zero
+/// when both fail), so that one window does not fail the refit's step.
 fn varpro_jacobian(
     model: &SimModel,
     theta: &[f64],
@@ -696,10 +700,10 @@ fn varpro_jacobian(
     states: &[[f64; 2]],
     rows: usize,
     inward: bool,
-) -> Option<DMatrix<f64>> {
+) -> DMatrix<f64> {
     let n = theta.len();
     let nt = model.terms.len();
-    let blocks: Vec<Option<DMatrix<f64>>> = par_map(used.len(), |k| {
+    let blocks: Vec<DMatrix<f64>> = par_map(used.len(), |k| {
         let w = &wins[used[k].0];
         let r = &model.runs[w.run];
         let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
@@ -716,7 +720,7 @@ fn varpro_jacobian(
         let Some((_, jx)) =
             window_residuals_jacobian(&model.system(theta, w), t, b, &w.keep, s, x, model.tol)
         else {
-            return Some(jw);
+            return jw;
         };
         // the residuals at θ itself for one-sided differences (at a range's end, or where one
         // side's simulation fails), by the same plain simulation as the differences (the
@@ -781,14 +785,13 @@ fn varpro_jacobian(
             }
             jw.set_column(c, &col);
         }
-        Some(jw)
+        jw
     });
     let mut j = DMatrix::zeros(rows, n);
     for (k, blk) in blocks.into_iter().enumerate() {
-        let blk = blk?;
         j.view_mut((used[k].1, 0), (blk.nrows(), n)).copy_from(&blk);
     }
-    Some(j)
+    j
 }
 
 /// The covariance of θ of a refit: the window-clustered sandwich ([`cluster_sandwich`], CR2)
