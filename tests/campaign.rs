@@ -582,11 +582,13 @@ fn level2_ci_seeds(effect: &str, seeds: Vec<u64>) -> CampaignDoc {
 fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
     use gearbif::identification::backward::backward;
     use gearbif::identification::catalog::catalog;
-    use gearbif::identification::diagnose::{fit_base, prepare, DiagnoseOptions};
+    use gearbif::identification::diagnose::{
+        fit_base, prepare, propose_ctx, select_ctx, DiagnoseOptions,
+    };
     use gearbif::identification::judge::{z_threshold, Folds};
-    use gearbif::identification::propose::{propose, Candidate, ProposeCtx};
+    use gearbif::identification::propose::{propose, Candidate};
     use gearbif::identification::regression::Term;
-    use gearbif::identification::select::{evaluate, ModelState, SelectCtx, Tried};
+    use gearbif::identification::select::{evaluate, ModelState, Tried};
     use gearbif::progress::Silent;
     for seed in 1..=3u64 {
         let spec = effect("static_torque_2h").unwrap();
@@ -596,23 +598,8 @@ fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
         let folds = Folds::new(&prep.runs, opts.folds);
         let base = fit_base(&prep, &g.set, &opts, &folds, &Silent).unwrap();
         let b = base.state.clone().expect("the base refit");
-        let pctx = ProposeCtx {
-            runs: &prep.runs,
-            geo: &base.geo,
-            weak: &opts.weak,
-            latency_span: opts.latency_span,
-            max_dictionary: opts.max_dictionary,
-        };
-        let sctx = SelectCtx {
-            runs: &prep.runs,
-            geo: &base.geo,
-            wins: &base.wins,
-            folds: &folds,
-            shooting: &opts.shooting,
-            tol: opts.tol,
-            propose: &pctx,
-            max_rounds: opts.max_effects,
-        };
+        let pctx = propose_ctx(&prep.runs, &base, &opts);
+        let sctx = select_ctx(&pctx, &base, &folds, &opts);
         // the candidates of a round on `cur` and the round's threshold
         let round = |cur: &ModelState| {
             let lat = cur.fit_latency.then(|| cur.latency());

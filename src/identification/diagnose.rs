@@ -169,6 +169,41 @@ pub struct Prepared {
     pub kappa: Option<KappaFit>,
 }
 
+/// The proposer's context of stage 5 on the cleaned `runs` with the base model `base`.
+pub fn propose_ctx<'a>(
+    runs: &'a [CleanRun],
+    base: &'a BaseModel,
+    opts: &'a DiagnoseOptions,
+) -> ProposeCtx<'a> {
+    ProposeCtx {
+        runs,
+        geo: &base.geo,
+        weak: &opts.weak,
+        latency_span: opts.latency_span,
+        max_dictionary: opts.max_dictionary,
+    }
+}
+
+/// The selection's context of stage 5 (the rounds, the final refit, static friction, the
+/// backward check): the proposer `pctx`, the base model's judging windows and `folds`.
+pub fn select_ctx<'a>(
+    pctx: &'a ProposeCtx<'a>,
+    base: &'a BaseModel,
+    folds: &'a Folds,
+    opts: &'a DiagnoseOptions,
+) -> SelectCtx<'a> {
+    SelectCtx {
+        runs: pctx.runs,
+        geo: &base.geo,
+        wins: &base.wins,
+        folds,
+        shooting: &opts.shooting,
+        tol: opts.tol,
+        propose: pctx,
+        max_rounds: opts.max_effects,
+    }
+}
+
 /// Stage 1: cleaning (one camera: the pooled noise of the runs sets the outlier threshold of the
 /// predictions unless experiment.toml states it) and the ring-down fits.
 pub fn prepare(
@@ -359,23 +394,8 @@ pub fn diagnose(
     let mut excess = 0.0;
     let mut remains = None;
     if let (Some(b), false) = (&base.state, opts.base_only) {
-        let pctx = ProposeCtx {
-            runs,
-            geo: &base.geo,
-            weak: &opts.weak,
-            latency_span: opts.latency_span,
-            max_dictionary: opts.max_dictionary,
-        };
-        let sctx = SelectCtx {
-            runs,
-            geo: &base.geo,
-            wins: &base.wins,
-            folds: &folds,
-            shooting: &opts.shooting,
-            tol: opts.tol,
-            propose: &pctx,
-            max_rounds: opts.max_effects,
-        };
+        let pctx = propose_ctx(runs, &base, opts);
+        let sctx = select_ctx(&pctx, &base, &folds, opts);
         let (t, fin) = select(&sctx, b.clone(), progress);
         tried = t;
         stage(progress, "final model refitted to convergence");
