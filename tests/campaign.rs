@@ -654,6 +654,11 @@ fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
             accepted(2, drag, z2, with_both.clone()),
         ];
         let fin = backward(&sctx, with_both, &mut tried, &Silent);
+        // the numbers of docs/diagnosis.md ("Pipeline", after step 8), shown with --nocapture
+        eprintln!(
+            "seed {seed}: drag {:?} (threshold {z2:.2})",
+            tried[1].dropped
+        );
         assert!(
             !tried[1].accepted && tried[1].dropped.is_some(),
             "seed {seed}: the drag was kept: {:?}",

@@ -6,7 +6,7 @@ use super::catalog::{effect_params, Effect};
 use super::judge::{rms_rad, Comparison};
 use super::model::{Shape, DRAG_REFERENCE_SPEED};
 use super::preprocess::CleanRun;
-use super::profile::{delta_chi2, ProfileSide, ShapeProfile};
+use super::profile::{delta_chi2, quadratic_sigma, ProfileSide, ShapeProfile};
 use super::regression::{DriftParam, Term};
 use super::report::{EffectSize, Finding};
 use super::select::{ModelState, Tried};
@@ -376,10 +376,10 @@ pub fn second_minimum_size(
 }
 
 /// The smallest σ of a quadratic profile χ²_P(s) = χ²_min + Δ (s − ŝ)²/σ² that lets a second
-/// refit at distance `dist` = |s₂ − ŝ| lie `rise` = r above the minimum: |s₂ − ŝ| √(Δ/r),
-/// capped at |s₂ − ŝ| (see [`second_minimum_size`]).
+/// refit at distance `dist` = |s₂ − ŝ| lie `rise` = r above the minimum: |s₂ − ŝ| √(Δ/r)
+/// ([`quadratic_sigma`]), capped at |s₂ − ŝ| (see [`second_minimum_size`]).
 pub fn second_minimum_sigma(dist: f64, delta: f64, rise: f64) -> f64 {
-    dist * (delta / rise.max(f64::MIN_POSITIVE)).sqrt().min(1.0)
+    quadratic_sigma(dist, delta, rise).min(dist)
 }
 
 /// The judgement's numbers as evidence.

@@ -388,6 +388,17 @@ pub const SIDE_FIRST_SIGMAS: f64 = 2.0;
 /// The farthest a coefficient profile's second point goes, in covariance σ ([`profile_side`]).
 pub const SIDE_MAX_SIGMAS: f64 = 8.0;
 
+/// The σ of a quadratic profile χ²_P(s) = χ²_min + Δ (s − ŝ)²/σ² through a point at distance
+/// `dist` = |s − ŝ| that lies `rise` = r above the minimum: dist √(Δ/r); infinite for r ≤ 0 (a
+/// flat profile).
+pub fn quadratic_sigma(dist: f64, delta: f64, rise: f64) -> f64 {
+    if rise > 0.0 {
+        dist * (delta / rise).sqrt()
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// One side (`dir` = ±1) of the profile of a coefficient fitted at `value` with the covariance σ
 /// `sigma`, its range ending at `lower` below: `rise(v)` refits the model with the coefficient
 /// held at v and returns χ²_P(v) − χ²_min (`None`: the refit failed). The first point lies
@@ -414,13 +425,7 @@ pub fn profile_side(
             v
         }
     };
-    let implied = |d: f64, r: f64| {
-        if r > 0.0 {
-            d * (delta / r).sqrt()
-        } else {
-            f64::INFINITY
-        }
-    };
+    let implied = |d: f64, r: f64| quadratic_sigma(d, delta, r);
     let mut points = Vec::new();
     if dir < 0.0 && value <= lower {
         // at (or below) the range's end: this side has no room, and tells nothing
