@@ -74,6 +74,10 @@ pub struct CaseResult {
     /// its σ (report key `remaining.noise.speed_noise`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub timing_jitter: Option<[f64; 2]>,
+    /// The selection's forks (report key `fits.selection_forks`): rounds whose two best named
+    /// candidates the held-out windows did not tell apart.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub forks: Vec<crate::identification::select::Fork>,
     /// The error, if the diagnosis failed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,

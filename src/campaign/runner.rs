@@ -193,6 +193,12 @@ pub fn run_case(
         .and_then(|r| r.noise.as_ref())
         .and_then(|n| n.speed_noise.as_ref())
         .map(|s| [s.timing_var_s2, s.timing_var_sigma_s2]);
+    let forks = diag
+        .as_ref()
+        .ok()
+        .and_then(|d| d.report.fits.as_ref())
+        .and_then(|f| serde_json::from_value(f["selection_forks"].clone()).ok())
+        .unwrap_or_default();
     let (verdict, findings, error) = match diag {
         Ok(d) => (
             d.report.verdict.clone(),
@@ -225,6 +231,7 @@ pub fn run_case(
         remaining_z,
         noise_at_rest,
         timing_jitter,
+        forks,
         error,
     })
 }

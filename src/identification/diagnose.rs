@@ -25,7 +25,7 @@ use super::propose::ProposeCtx;
 use super::regression::{build, fit_checked, Design, LinFit, Term, WeakOptions, BASE_TERMS};
 use super::report::{Baseline, Finding, Mismatch, Report, RunRms, SCHEMA};
 use super::ringdown::{fit_kappa, fit_ringdown, KappaFit, RingdownFit};
-use super::select::{select, ModelState, SelectCtx, Tried};
+use super::select::{select, Fork, ModelState, SelectCtx, Tried};
 use super::shooting::{
     choose_windows, mask_windows, par_map, refit, ShootingOptions, SimModel, Win,
     CONVERGED_PATIENCE,
@@ -43,6 +43,9 @@ pub struct DiagnoseOptions {
     pub weak: WeakOptions,
     /// Most effects accepted by the judge (rounds).
     pub max_effects: usize,
+    /// Most forks along a branch of the selection: a round whose two best named candidates the
+    /// held-out windows do not tell apart runs on in a branch for each ([`select`]).
+    pub max_forks: usize,
     /// BIC decrease that makes a mismatch fingerprint significant.
     pub bic_threshold: f64,
     /// Report per-run held-out rms of the base model (from the judge's folds).
@@ -90,6 +93,7 @@ impl Default for DiagnoseOptions {
         Self {
             weak: WeakOptions::default(),
             max_effects: 3,
+            max_forks: 1,
             bic_threshold: 10.0,
             heldout_predictions: true,
             ringdown_fits: true,
@@ -201,6 +205,7 @@ pub fn select_ctx<'a>(
         tol: opts.tol,
         propose: pctx,
         max_rounds: opts.max_effects,
+        max_forks: opts.max_forks,
     }
 }
 
@@ -389,6 +394,7 @@ pub fn diagnose(
     );
     let runs = &prep.runs;
     let mut tried: Vec<Tried> = Vec::new();
+    let mut forks: Vec<Fork> = Vec::new();
     let mut findings: Vec<Finding> = Vec::new();
     let mut final_state = base.state.clone();
     let mut excess = 0.0;
@@ -396,8 +402,10 @@ pub fn diagnose(
     if let (Some(b), false) = (&base.state, opts.base_only) {
         let pctx = propose_ctx(runs, &base, opts);
         let sctx = select_ctx(&pctx, &base, &folds, opts);
-        let (t, fin) = select(&sctx, b.clone(), progress);
-        tried = t;
+        let sel = select(&sctx, b.clone(), progress);
+        let fin = sel.fin;
+        tried = sel.tried;
+        forks = sel.forks;
         stage(progress, "final model refitted to convergence");
         let (fin, profiles) = polish_final(&sctx, &fin, opts.profile_shapes);
         stage(
@@ -503,7 +511,7 @@ pub fn diagnose(
         excess,
         (mismatch, chi_run),
         findings,
-        &tried,
+        (&tried, &forks),
         progress,
     )?;
     d.report.remaining = remains;
@@ -704,7 +712,7 @@ fn report(
     excess: f64,
     (mismatch, chi_run): (Vec<Mismatch>, Vec<f64>),
     findings: Vec<Finding>,
-    tried: &[Tried],
+    (tried, forks): (&[Tried], &[Fork]),
     progress: &dyn Observer,
 ) -> Result<Diagnosis> {
     let runs = &prep.runs;
@@ -792,7 +800,14 @@ fn report(
             })
             .collect(),
     };
-    let fits = fits_document(opts, &prep, &base, final_state.as_ref(), latency, tried);
+    let fits = fits_document(
+        opts,
+        &prep,
+        &base,
+        final_state.as_ref(),
+        latency,
+        (tried, forks),
+    );
     // fingerprints: base equation-error residuals (the final model's on the same rows)
     let fingerprint = fingerprints(&base, final_state.as_ref(), runs, &opts.weak, latency);
     Ok(Diagnosis {
@@ -867,7 +882,7 @@ fn fits_document(
     base: &BaseModel,
     final_state: Option<&ModelState>,
     latency: f64,
-    tried: &[Tried],
+    (tried, forks): (&[Tried], &[Fork]),
 ) -> serde_json::Value {
     let runs = &prep.runs;
     let final_map: BTreeMap<String, serde_json::Value> = final_state
@@ -886,6 +901,7 @@ fn fits_document(
         "augmented_coefficients": final_map,
         "latency_s": latency,
         "rejected_candidates": rejected(tried),
+        "selection_forks": forks,
         "judge": {
             "folds": if base.wins.is_empty() { 0 } else { opts.folds },
             "windows": base.wins.len(),

@@ -3,8 +3,7 @@
 //! and κ(α0) from the ring-downs. Words with the numbers behind them; nothing here names an
 //! effect.
 
-use super::model::AugmentedGear;
-use super::predict::fit_window_state;
+use super::predict::{fit_window_state, simulate_states, WindowStates};
 use super::preprocess::{
     rest_autocovariance, speed_noise, CleanRun, RestAutocov, RestPiece, SpeedPiece,
 };
@@ -12,7 +11,6 @@ use super::regression::{delta_bic, fit, Design, LinFit, Term};
 use super::report::{Mismatch, NoiseFloor, Remainder, RemainderBin, SpeedNoiseFloor};
 use super::ringdown::KappaFit;
 use super::shooting::{par_map, SimModel, Win};
-use crate::integrator::{EventDriven853, FlowMethod, FlowOptions};
 use crate::numerics::least_squares::{weighted, DEFAULT_RCOND};
 use nalgebra::DMatrix;
 use serde_json::json;
@@ -379,17 +377,9 @@ pub struct WindowGeometry {
     pub sim: Vec<(f64, f64)>,
 }
 
-/// β and β̇ of `sys` from `x0` at the first of `t` (the diagnosis's window integrator and budget).
-fn window_flow(sys: &AugmentedGear, t: &[f64], x0: [f64; 2], tol: f64) -> Option<Vec<(f64, f64)>> {
-    let mut opts = FlowOptions::with_tol(tol).samples(t.to_vec());
-    opts.max_steps = super::predict::WINDOW_MAX_STEPS;
-    let f = EventDriven853.flow(sys, t[0], x0, *t.last()?, &opts).ok()?;
-    (f.samples.len() == t.len()).then(|| f.samples.iter().map(|s| (s.beta, s.omega)).collect())
-}
-
 /// The geometry of every window of `wins` under `model` at θ: the window's state fitted (from the
 /// warm start of the refit when there is one, else multi-start), the Jacobian of the simulated β
-/// with respect to that state by forward differences, its hat matrix H (the first-order
+/// with respect to that state (exact: [`simulate_states`]), its hat matrix H (the first-order
 /// projection of the state fit), and the samples at which
 /// the simulated output is stuck (β̇ = 0 in the Filippov stick mode). `None` for a window the
 /// model cannot fit or simulate.
@@ -420,33 +410,17 @@ pub fn window_geometry(
                 [f.p[0], f.p[1]]
             }
         };
-        // the stuck flags over the window and up to a window length past it (a stick phase
-        // continues across the next window's start, where that window's own fitted velocity
-        // may move the model for a frame or two)
+        // one simulation over the window and up to a window length past it: the stuck flags over
+        // both (a stick phase continues across the next window's start, where that window's own
+        // fitted velocity may move the model for a frame or two), the window's samples and their
+        // derivative with respect to the window's state (variational equations and saltation
+        // matrices)
         let ext = &r.t[w.lo..(w.hi + super::predict::WINDOW).min(r.t.len())];
-        let stuck: Vec<bool> = window_flow(&sys, ext, x, model.tol)?
-            .iter()
-            .map(|s| s.1 == 0.0)
-            .collect();
-        let s0 = window_flow(&sys, t, x, model.tol)?;
-        // steps of 1 % of the camera noise (β) and of σ/dt (β̇): far above the integration error
-        // on a lifted β of many turns, far inside the range where the trajectory is linear in
-        // the state
-        let h = [
-            0.01 * r.sigma_camera,
-            0.01 * r.sigma_camera / r.dt.max(1e-12),
-        ];
-        let s1 = window_flow(&sys, t, [x[0] + h[0], x[1]], model.tol)?;
-        let s2 = window_flow(&sys, t, [x[0], x[1] + h[1]], model.tol)?;
+        let WindowStates { states, jac } = simulate_states(&sys, ext[0], x, ext, model.tol, true)?;
+        let stuck: Vec<bool> = states.iter().map(|s| s.1 == 0.0).collect();
+        let s0 = states[..t.len()].to_vec();
         let kept: Vec<usize> = (0..t.len()).filter(|&q| w.keep[q]).collect();
-        let j = DMatrix::from_fn(kept.len(), 2, |i, c| {
-            let q = kept[i];
-            if c == 0 {
-                (s1[q].0 - s0[q].0) / h[0]
-            } else {
-                (s2[q].0 - s0[q].0) / h[1]
-            }
-        });
+        let j = DMatrix::from_fn(kept.len(), 2, |i, c| jac[kept[i]][c]);
         let svd = j.svd(true, false);
         let u = svd.u?;
         let smax = svd.singular_values.max();

@@ -148,17 +148,46 @@ pub fn simulate_with_jacobian(
     times: &[f64],
     tol: f64,
 ) -> Option<(Vec<f64>, Vec<[f64; 2]>)> {
-    let f = window_flow(sys, t0, x0, times, tol, Sensitivity::State)?;
-    if f.sample_jacobians.len() != times.len() {
+    let w = simulate_states(sys, t0, x0, times, tol, true)?;
+    Some((w.states.iter().map(|s| s.0).collect(), w.jac))
+}
+
+/// A window's simulated samples ([`simulate_states`]).
+#[derive(Debug, Clone)]
+pub struct WindowStates {
+    /// (β, β̇) at the sample times (β̇ = 0 exactly in a stick phase, the Filippov stick mode).
+    pub states: Vec<(f64, f64)>,
+    /// ∂β(tᵢ)/∂(β₀, β̇₀) (empty when not asked for).
+    pub jac: Vec<[f64; 2]>,
+}
+
+/// The simulated states (β, β̇) of `sys` from `x0` at `t0`, at `times`, with ∂β(tᵢ)/∂(β₀, β̇₀)
+/// when `jacobians` (the variational equations and the saltation matrices of the events:
+/// [`crate::integrator::Flow::sample_jacobians`]).
+pub fn simulate_states(
+    sys: &AugmentedGear,
+    t0: f64,
+    x0: [f64; 2],
+    times: &[f64],
+    tol: f64,
+    jacobians: bool,
+) -> Option<WindowStates> {
+    let sens = if jacobians {
+        Sensitivity::State
+    } else {
+        Sensitivity::None
+    };
+    let f = window_flow(sys, t0, x0, times, tol, sens)?;
+    if jacobians && f.sample_jacobians.len() != times.len() {
         return None;
     }
-    let beta = f.samples.iter().map(|s| s.beta).collect();
+    let states = f.samples.iter().map(|s| (s.beta, s.omega)).collect();
     let jac = f
         .sample_jacobians
         .iter()
         .map(|j| [j[(0, 0)], j[(0, 1)]])
         .collect();
-    Some((beta, jac))
+    Some(WindowStates { states, jac })
 }
 
 /// The window's flow with the samples at `times` (counted in [`simulations`] and

@@ -103,6 +103,8 @@ pub struct SelectCtx<'a> {
     pub propose: &'a ProposeCtx<'a>,
     /// Most rounds.
     pub max_rounds: usize,
+    /// Most forks along a branch of the selection ([`select`]).
+    pub max_forks: usize,
 }
 
 /// The terms `cand` adds as judged, with their weak-form values: a family's shape parameter held
@@ -485,99 +487,293 @@ pub fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Com
     Some(compare(&cur_sub, &st.held, &sub, ctx.runs))
 }
 
-/// The greedy selection from `base`; `progress` gets a line per candidate. Returns the tried
-/// candidates of all rounds (the accepted ones with their refitted state) and the final model.
-pub fn select(
+/// A round whose accepted candidate and a named rival could not be told apart: each was accepted
+/// in a branch of its own, the rounds went on in both, and the final model that predicts the
+/// held-out windows better was kept ([`select`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Fork {
+    /// The round.
+    pub round: usize,
+    /// The effect accepted in that round on the kept branch.
+    pub kept: String,
+    /// The effect accepted in that round on the other branch.
+    pub other: String,
+    /// Held-out z of the larger-gain candidate of the two against the other in their round
+    /// (below the round's threshold: no significant difference).
+    pub round_z: f64,
+    /// Effects of the kept branch's final model.
+    pub kept_effects: Vec<String>,
+    /// Effects of the other branch's final model.
+    pub other_effects: Vec<String>,
+    /// Held-out χ² gain of the kept branch's final model over the other's (≥ 0).
+    pub final_gain: f64,
+    /// Its z (paired windows).
+    pub final_z: f64,
+}
+
+/// The selection's result: every candidate tried on the kept branch (the accepted ones with
+/// their refitted state), its final model, and the forks taken.
+#[derive(Debug, Clone)]
+pub struct Selection {
+    /// Candidates of all rounds.
+    pub tried: Vec<Tried>,
+    /// The final model.
+    pub fin: ModelState,
+    /// Forks, by round.
+    pub forks: Vec<Fork>,
+}
+
+/// The greedy selection from `base`; `progress` gets a line per candidate. A round whose best
+/// candidate has a named rival it does not predict significantly better than ([`close_rival`])
+/// forks, at most [`SelectCtx::max_forks`] times along a branch: both are accepted in branches
+/// of their own, and the branch whose final model predicts the held-out windows better is kept,
+/// so that the order of two close rivals does not decide which effects are named.
+pub fn select(ctx: &SelectCtx, base: ModelState, progress: &dyn Observer) -> Selection {
+    let mut sel = rounds_from(ctx, Vec::new(), base, 1, ctx.max_forks, progress);
+    sel.forks.sort_by_key(|f| f.round);
+    sel
+}
+
+/// The rounds from `start` on, from the model `cur` with the candidates `tried` of the rounds
+/// before; `forks` forks left.
+fn rounds_from(
     ctx: &SelectCtx,
-    base: ModelState,
+    mut tried: Vec<Tried>,
+    mut cur: ModelState,
+    start: usize,
+    forks: usize,
     progress: &dyn Observer,
-) -> (Vec<Tried>, ModelState) {
-    let mut cur = base;
-    let mut tried: Vec<Tried> = Vec::new();
-    for round in 1..=ctx.max_rounds {
-        let lat = cur.fit_latency.then(|| cur.latency());
-        let cands = propose(ctx.propose, &cur.terms, lat, &cur.effects);
-        if cands.is_empty() {
-            break;
-        }
-        let z_crit = z_threshold(cands.len());
-        let first = tried.len();
-        // the candidates of a round are independent given `cur`: judged in parallel (each
-        // refit's windows in parallel too), their lines printed afterwards in the proposer's
-        // order, so the output does not depend on the number of threads
-        let judged = par_map(cands.len(), |k| {
-            let c = &cands[k];
-            let scr = screen(ctx, &cur, c);
-            let st = match scr {
-                Some(sc) if sc.z >= SCREEN_Z => evaluate(ctx, &cur, c),
-                _ => None,
-            };
-            (scr, st)
-        });
-        for (c, (scr, st)) in cands.into_iter().zip(judged) {
-            stage(
-                progress,
-                &format!(
-                    "round {round}: judged {} ({}) by simulation on held-out runs",
-                    c.effect.id,
-                    c.terms
-                        .iter()
-                        .map(|t| t.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            );
-            let cmp = st
-                .as_ref()
-                .map(|s| compare(&cur.held, &s.held, ctx.wins, ctx.runs));
-            let added_z = st
-                .as_ref()
-                .map(|s| added_parameters_z(&s.fit, &added(&cur, s)));
-            stage(
-                progress,
-                &format!(
-                "  screening z = {} (gain {}), held-out z = {} (threshold {z_crit:.2}), gain = {}, \
-                 added parameters' Wald z = {}; windows it could not simulate: {}",
-                scr.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
-                scr.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
-                cmp.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
-                cmp.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
-                added_z.map(|z| format!("{z:.2}")).unwrap_or("–".into()),
-                cmp.or(scr)
-                    .map(|c| c.failed_after.to_string())
-                    .unwrap_or("–".into()),
-            ),
-            );
-            tried.push(Tried {
-                round,
-                candidate: c,
-                added_z,
-                cmp,
-                screen: scr,
-                z_crit,
-                accepted: false,
-                state: st,
-                member_z: None,
-                dropped: None,
-            });
-        }
-        let passed = choose_members(ctx, &mut tried[first..], z_crit);
-        let Some(bi) = choose_named(ctx, &tried[first..], &passed, z_crit).map(|k| first + k)
-        else {
-            for t in &mut tried[first..] {
-                t.state = None;
-            }
+) -> Selection {
+    for round in start..=ctx.max_rounds {
+        let Some(mut judged) = judge_round(ctx, &cur, round, progress) else {
             break;
         };
-        tried[bi].accepted = true;
-        cur = converge(ctx, tried[bi].state.as_ref().expect("evaluated"));
-        for (k, t) in tried.iter_mut().enumerate().skip(first) {
-            if k != bi {
+        let z_crit = judged[0].z_crit;
+        let passed = choose_members(ctx, &mut judged, z_crit);
+        let Some(bi) = choose_named(ctx, &judged, &passed, z_crit) else {
+            for t in &mut judged {
                 t.state = None;
             }
+            tried.extend(judged);
+            break;
+        };
+        if forks > 0 {
+            if let Some((ri, z)) = close_rival(ctx, &judged, &passed, bi, z_crit) {
+                let at = RoundFork {
+                    round,
+                    pair: (bi, ri),
+                    z,
+                    forks: forks - 1,
+                };
+                return fork(ctx, tried, judged, at, progress);
+            }
+        }
+        cur = accept(ctx, &mut judged, bi);
+        tried.extend(judged);
+    }
+    Selection {
+        tried,
+        fin: cur,
+        forks: Vec::new(),
+    }
+}
+
+/// Where a selection forks: the round, its candidates (accepted, rival), their held-out z and
+/// the forks left to each branch.
+struct RoundFork {
+    round: usize,
+    pair: (usize, usize),
+    z: f64,
+    forks: usize,
+}
+
+/// Both branches of a fork at `at` (the round's candidates `judged`, after the rounds `tried`),
+/// each run to its end; the one whose final model predicts the held-out windows better is kept.
+fn fork(
+    ctx: &SelectCtx,
+    tried: Vec<Tried>,
+    judged: Vec<Tried>,
+    at: RoundFork,
+    progress: &dyn Observer,
+) -> Selection {
+    let name = |k: usize| judged[k].candidate.effect.id.to_string();
+    let branch = |k: usize| {
+        stage(
+            progress,
+            &format!(
+                "round {}: {} and {} not told apart (held-out z {:.2}): branch accepting {}",
+                at.round,
+                name(at.pair.0),
+                name(at.pair.1),
+                at.z,
+                name(k)
+            ),
+        );
+        let mut round = judged.clone();
+        let cur = accept(ctx, &mut round, k);
+        let mut t = tried.clone();
+        t.extend(round);
+        rounds_from(ctx, t, cur, at.round + 1, at.forks, progress)
+    };
+    let a = branch(at.pair.0);
+    let b = branch(at.pair.1);
+    let cmp = compare(&a.fin.held, &b.fin.held, ctx.wins, ctx.runs);
+    let ((mut kept, ki), (other, oi), sign) = if cmp.gain > 0.0 {
+        ((b, at.pair.1), (a, at.pair.0), 1.0)
+    } else {
+        ((a, at.pair.0), (b, at.pair.1), -1.0)
+    };
+    let effects = |s: &Selection| s.fin.effects.iter().map(|e| e.id.to_string()).collect();
+    let f = Fork {
+        round: at.round,
+        kept: name(ki),
+        other: name(oi),
+        round_z: at.z,
+        kept_effects: effects(&kept),
+        other_effects: effects(&other),
+        final_gain: sign * cmp.gain,
+        final_z: sign * cmp.z,
+    };
+    stage(
+        progress,
+        &format!(
+            "round {}: kept the branch accepting {} ({}) over {} ({}): held-out χ² gain {:.1}, z {:.2}",
+            f.round,
+            f.kept,
+            f.kept_effects.join(" + "),
+            f.other,
+            f.other_effects.join(" + "),
+            f.final_gain,
+            f.final_z
+        ),
+    );
+    kept.forks.push(f);
+    kept
+}
+
+/// `round[k]` accepted: the model refitted to convergence; the other candidates' states dropped.
+fn accept(ctx: &SelectCtx, round: &mut [Tried], k: usize) -> ModelState {
+    round[k].accepted = true;
+    let cur = converge(ctx, round[k].state.as_ref().expect("evaluated"));
+    for (j, t) in round.iter_mut().enumerate() {
+        if j != k {
+            t.state = None;
         }
     }
-    (tried, cur)
+    cur
+}
+
+/// The named rival of the accepted `round[bi]`: among the significant candidates `passed` of
+/// other catalog effects (not `unexplained`, whose choice against a named effect is
+/// [`choose_named`]'s), the one of largest gain that `round[bi]` does not predict the held-out
+/// windows significantly better than (paired z < `z_crit`), with that z.
+fn close_rival(
+    ctx: &SelectCtx,
+    round: &[Tried],
+    passed: &[usize],
+    bi: usize,
+    z_crit: f64,
+) -> Option<(usize, f64)> {
+    let chosen = round[bi].state.as_ref()?;
+    let gain = |k: usize| round[k].cmp.map_or(f64::NEG_INFINITY, |c| c.gain);
+    passed
+        .iter()
+        .copied()
+        .filter(|&k| {
+            let id = round[k].candidate.effect.id;
+            k != bi && id != "unexplained" && id != round[bi].candidate.effect.id
+        })
+        .filter_map(|k| {
+            let s = round[k].state.as_ref()?;
+            let z = compare(&s.held, &chosen.held, ctx.wins, ctx.runs).z;
+            (z < z_crit).then_some((k, z))
+        })
+        .max_by(|a, b| gain(a.0).total_cmp(&gain(b.0)))
+}
+
+/// The candidates of `round` proposed for `cur`, each screened and judged by simulation (in
+/// parallel, their lines printed afterwards in the proposer's order, so the output does not
+/// depend on the number of threads). `None` when nothing is proposed.
+fn judge_round(
+    ctx: &SelectCtx,
+    cur: &ModelState,
+    round: usize,
+    progress: &dyn Observer,
+) -> Option<Vec<Tried>> {
+    let lat = cur.fit_latency.then(|| cur.latency());
+    let cands = propose(ctx.propose, &cur.terms, lat, &cur.effects);
+    if cands.is_empty() {
+        return None;
+    }
+    let z_crit = z_threshold(cands.len());
+    let judged = par_map(cands.len(), |k| {
+        let c = &cands[k];
+        let scr = screen(ctx, cur, c);
+        let st = match scr {
+            Some(sc) if sc.z >= SCREEN_Z => evaluate(ctx, cur, c),
+            _ => None,
+        };
+        (scr, st)
+    });
+    let mut out = Vec::with_capacity(judged.len());
+    for (c, (scr, st)) in cands.into_iter().zip(judged) {
+        let cmp = st
+            .as_ref()
+            .map(|s| compare(&cur.held, &s.held, ctx.wins, ctx.runs));
+        let added_z = st
+            .as_ref()
+            .map(|s| added_parameters_z(&s.fit, &added(cur, s)));
+        let t = Tried {
+            round,
+            candidate: c,
+            added_z,
+            cmp,
+            screen: scr,
+            z_crit,
+            accepted: false,
+            state: st,
+            member_z: None,
+            dropped: None,
+        };
+        report_tried(&t, progress);
+        out.push(t);
+    }
+    Some(out)
+}
+
+/// The progress lines of a judged candidate.
+fn report_tried(t: &Tried, progress: &dyn Observer) {
+    let c = &t.candidate;
+    stage(
+        progress,
+        &format!(
+            "round {}: judged {} ({}) by simulation on held-out runs",
+            t.round,
+            c.effect.id,
+            c.terms
+                .iter()
+                .map(|t| t.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    );
+    let (scr, cmp) = (t.screen, t.cmp);
+    stage(
+        progress,
+        &format!(
+            "  screening z = {} (gain {}), held-out z = {} (threshold {:.2}), gain = {}, \
+             added parameters' Wald z = {}; windows it could not simulate: {}",
+            scr.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
+            scr.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
+            cmp.map(|c| format!("{:.2}", c.z)).unwrap_or("–".into()),
+            t.z_crit,
+            cmp.map(|c| format!("{:.1}", c.gain)).unwrap_or("–".into()),
+            t.added_z.map(|z| format!("{z:.2}")).unwrap_or("–".into()),
+            cmp.or(scr)
+                .map(|c| c.failed_after.to_string())
+                .unwrap_or("–".into()),
+        ),
+    );
 }
 
 /// The candidate of a round to accept among the significant ones `passed` (indices into `round`):
