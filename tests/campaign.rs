@@ -683,7 +683,7 @@ fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
 /// latency 570 k (z 3.63), and the drag does not predict the held-out windows significantly
 /// better than the latency (paired z 1.31). The greedy rule accepted the drag; the latency then
 /// missed its threshold in round 3 (z 3.15 against 3.17) and the set was named
-/// `corotating_drag`. The selection now forks there (`select::select`): the drag's branch ends
+/// `corotating_drag`. The selection now forks there (`beam::select`): the drag's branch ends
 /// with drag + torque, the latency's with latency + torque, and the latter's final model
 /// predicts the held-out windows better and is kept. The set is named right, with both true
 /// effects' sizes within ±2σ and no drag.

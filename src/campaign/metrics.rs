@@ -77,7 +77,7 @@ pub struct CaseResult {
     /// The selection's forks (report key `fits.selection_forks`): rounds whose two best named
     /// candidates the held-out windows did not tell apart.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub forks: Vec<crate::identification::select::Fork>,
+    pub forks: Vec<crate::identification::beam::Fork>,
     /// The error, if the diagnosis failed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,

@@ -11,6 +11,7 @@
 //!    ([`super::breakaway`]) and the nominal consistency ([`super::nominal`]).
 //! 6. **report** ([`report`]): findings, rejected candidates, predictions for the figures.
 
+use super::beam::{select, Fork};
 use super::breakaway;
 use super::findings::{
     excess_profile_size, judged_finding, profiled_size, rejected, rivals, second_minimum_size,
@@ -25,7 +26,7 @@ use super::propose::ProposeCtx;
 use super::regression::{build, fit_checked, Design, LinFit, Term, WeakOptions, BASE_TERMS};
 use super::report::{Baseline, Finding, Mismatch, Report, RunRms, SCHEMA};
 use super::ringdown::{fit_kappa, fit_ringdown, KappaFit, RingdownFit};
-use super::select::{select, Fork, ModelState, SelectCtx, Tried};
+use super::select::{ModelState, SelectCtx, Tried};
 use super::shooting::{
     choose_windows, mask_windows, par_map, refit, ShootingOptions, SimModel, Win,
     CONVERGED_PATIENCE,
@@ -43,9 +44,10 @@ pub struct DiagnoseOptions {
     pub weak: WeakOptions,
     /// Most effects accepted by the judge (rounds).
     pub max_effects: usize,
-    /// Most forks along a branch of the selection: a round whose two best named candidates the
-    /// held-out windows do not tell apart runs on in a branch for each ([`select`]).
-    pub max_forks: usize,
+    /// Fork the selection once on close rivals: a round whose accepted candidate does not predict
+    /// the held-out windows significantly better than a named rival runs on in a branch for each
+    /// ([`super::beam`]).
+    pub fork_close_rivals: bool,
     /// BIC decrease that makes a mismatch fingerprint significant.
     pub bic_threshold: f64,
     /// Report per-run held-out rms of the base model (from the judge's folds).
@@ -93,7 +95,7 @@ impl Default for DiagnoseOptions {
         Self {
             weak: WeakOptions::default(),
             max_effects: 3,
-            max_forks: 1,
+            fork_close_rivals: true,
             bic_threshold: 10.0,
             heldout_predictions: true,
             ringdown_fits: true,
@@ -205,7 +207,7 @@ pub fn select_ctx<'a>(
         tol: opts.tol,
         propose: pctx,
         max_rounds: opts.max_effects,
-        max_forks: opts.max_forks,
+        fork_close_rivals: opts.fork_close_rivals,
     }
 }
 

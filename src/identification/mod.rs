@@ -3,7 +3,7 @@
 //!
 //! The diagnosis is a pipeline ([`diagnose`]): clean ([`preprocess`], [`ringdown`]) → fit base
 //! ([`regression`], [`shooting`]) → mismatch ([`mismatch`]) → propose ([`propose`], [`catalog`])
-//! → judge by simulation on held-out runs ([`select`], [`judge`], [`breakaway`], [`backward`],
+//! → judge by simulation on held-out runs ([`beam`], [`select`], [`judge`], [`breakaway`], [`backward`],
 //! [`nominal`]) →
 //! report ([`findings`], [`report`]).
 //!
@@ -13,6 +13,7 @@
 //! - [`synth`]: synthetic recording sets from a truth model with a chosen effect.
 
 pub mod backward;
+pub mod beam;
 pub mod breakaway;
 pub mod catalog;
 pub mod diagnose;

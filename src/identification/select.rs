@@ -1,7 +1,8 @@
-//! Greedy selection over rounds ([`super::judge`]'s rule): each round the weak form proposes
-//! candidates for the current model ([`super::propose`]), every candidate is refitted by
-//! simulation on top of the accepted ones and judged by its held-out prediction, and the best
-//! significant one is accepted. Every candidate tried is kept with its numbers.
+//! A round of the selection ([`super::judge`]'s rule): the weak form proposes candidates for the
+//! current model ([`super::propose`]), every candidate is refitted by simulation on top of the
+//! accepted ones and judged by its held-out prediction, and the best significant one is accepted
+//! (its close rival too, in a branch of its own: [`super::beam`]). Every candidate tried is kept
+//! with its numbers. Also the refits of the final model (polish, profiles).
 
 use super::catalog::{judged_members, Effect};
 use super::judge::{added_parameters_z, compare, heldout, z_threshold, Comparison, Folds, HeldOut};
@@ -103,8 +104,8 @@ pub struct SelectCtx<'a> {
     pub propose: &'a ProposeCtx<'a>,
     /// Most rounds.
     pub max_rounds: usize,
-    /// Most forks along a branch of the selection ([`select`]).
-    pub max_forks: usize,
+    /// Whether a round with close rivals forks ([`super::beam::select`]).
+    pub fork_close_rivals: bool,
 }
 
 /// The terms `cand` adds as judged, with their weak-form values: a family's shape parameter held
@@ -487,172 +488,8 @@ pub fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Com
     Some(compare(&cur_sub, &st.held, &sub, ctx.runs))
 }
 
-/// A round whose accepted candidate and a named rival could not be told apart: each was accepted
-/// in a branch of its own, the rounds went on in both, and the final model that predicts the
-/// held-out windows better was kept ([`select`]).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Fork {
-    /// The round.
-    pub round: usize,
-    /// The effect accepted in that round on the kept branch.
-    pub kept: String,
-    /// The effect accepted in that round on the other branch.
-    pub other: String,
-    /// Held-out z of the larger-gain candidate of the two against the other in their round
-    /// (below the round's threshold: no significant difference).
-    pub round_z: f64,
-    /// Effects of the kept branch's final model.
-    pub kept_effects: Vec<String>,
-    /// Effects of the other branch's final model.
-    pub other_effects: Vec<String>,
-    /// Held-out χ² gain of the kept branch's final model over the other's (≥ 0).
-    pub final_gain: f64,
-    /// Its z (paired windows).
-    pub final_z: f64,
-}
-
-/// The selection's result: every candidate tried on the kept branch (the accepted ones with
-/// their refitted state), its final model, and the forks taken.
-#[derive(Debug, Clone)]
-pub struct Selection {
-    /// Candidates of all rounds.
-    pub tried: Vec<Tried>,
-    /// The final model.
-    pub fin: ModelState,
-    /// Forks, by round.
-    pub forks: Vec<Fork>,
-}
-
-/// The greedy selection from `base`; `progress` gets a line per candidate. A round whose best
-/// candidate has a named rival it does not predict significantly better than ([`close_rival`])
-/// forks, at most [`SelectCtx::max_forks`] times along a branch: both are accepted in branches
-/// of their own, and the branch whose final model predicts the held-out windows better is kept,
-/// so that the order of two close rivals does not decide which effects are named.
-pub fn select(ctx: &SelectCtx, base: ModelState, progress: &dyn Observer) -> Selection {
-    let mut sel = rounds_from(ctx, Vec::new(), base, 1, ctx.max_forks, progress);
-    sel.forks.sort_by_key(|f| f.round);
-    sel
-}
-
-/// The rounds from `start` on, from the model `cur` with the candidates `tried` of the rounds
-/// before; `forks` forks left.
-fn rounds_from(
-    ctx: &SelectCtx,
-    mut tried: Vec<Tried>,
-    mut cur: ModelState,
-    start: usize,
-    forks: usize,
-    progress: &dyn Observer,
-) -> Selection {
-    for round in start..=ctx.max_rounds {
-        let Some(mut judged) = judge_round(ctx, &cur, round, progress) else {
-            break;
-        };
-        let z_crit = judged[0].z_crit;
-        let passed = choose_members(ctx, &mut judged, z_crit);
-        let Some(bi) = choose_named(ctx, &judged, &passed, z_crit) else {
-            for t in &mut judged {
-                t.state = None;
-            }
-            tried.extend(judged);
-            break;
-        };
-        if forks > 0 {
-            if let Some((ri, z)) = close_rival(ctx, &judged, &passed, bi, z_crit) {
-                let at = RoundFork {
-                    round,
-                    pair: (bi, ri),
-                    z,
-                    forks: forks - 1,
-                };
-                return fork(ctx, tried, judged, at, progress);
-            }
-        }
-        cur = accept(ctx, &mut judged, bi);
-        tried.extend(judged);
-    }
-    Selection {
-        tried,
-        fin: cur,
-        forks: Vec::new(),
-    }
-}
-
-/// Where a selection forks: the round, its candidates (accepted, rival), their held-out z and
-/// the forks left to each branch.
-struct RoundFork {
-    round: usize,
-    pair: (usize, usize),
-    z: f64,
-    forks: usize,
-}
-
-/// Both branches of a fork at `at` (the round's candidates `judged`, after the rounds `tried`),
-/// each run to its end; the one whose final model predicts the held-out windows better is kept.
-fn fork(
-    ctx: &SelectCtx,
-    tried: Vec<Tried>,
-    judged: Vec<Tried>,
-    at: RoundFork,
-    progress: &dyn Observer,
-) -> Selection {
-    let name = |k: usize| judged[k].candidate.effect.id.to_string();
-    let branch = |k: usize| {
-        stage(
-            progress,
-            &format!(
-                "round {}: {} and {} not told apart (held-out z {:.2}): branch accepting {}",
-                at.round,
-                name(at.pair.0),
-                name(at.pair.1),
-                at.z,
-                name(k)
-            ),
-        );
-        let mut round = judged.clone();
-        let cur = accept(ctx, &mut round, k);
-        let mut t = tried.clone();
-        t.extend(round);
-        rounds_from(ctx, t, cur, at.round + 1, at.forks, progress)
-    };
-    let a = branch(at.pair.0);
-    let b = branch(at.pair.1);
-    let cmp = compare(&a.fin.held, &b.fin.held, ctx.wins, ctx.runs);
-    let ((mut kept, ki), (other, oi), sign) = if cmp.gain > 0.0 {
-        ((b, at.pair.1), (a, at.pair.0), 1.0)
-    } else {
-        ((a, at.pair.0), (b, at.pair.1), -1.0)
-    };
-    let effects = |s: &Selection| s.fin.effects.iter().map(|e| e.id.to_string()).collect();
-    let f = Fork {
-        round: at.round,
-        kept: name(ki),
-        other: name(oi),
-        round_z: at.z,
-        kept_effects: effects(&kept),
-        other_effects: effects(&other),
-        final_gain: sign * cmp.gain,
-        final_z: sign * cmp.z,
-    };
-    stage(
-        progress,
-        &format!(
-            "round {}: kept the branch accepting {} ({}) over {} ({}): held-out χ² gain {:.1}, z {:.2}",
-            f.round,
-            f.kept,
-            f.kept_effects.join(" + "),
-            f.other,
-            f.other_effects.join(" + "),
-            f.final_gain,
-            f.final_z
-        ),
-    );
-    kept.forks.push(f);
-    kept
-}
-
 /// `round[k]` accepted: the model refitted to convergence; the other candidates' states dropped.
-fn accept(ctx: &SelectCtx, round: &mut [Tried], k: usize) -> ModelState {
+pub fn accept(ctx: &SelectCtx, round: &mut [Tried], k: usize) -> ModelState {
     round[k].accepted = true;
     let cur = converge(ctx, round[k].state.as_ref().expect("evaluated"));
     for (j, t) in round.iter_mut().enumerate() {
@@ -667,7 +504,7 @@ fn accept(ctx: &SelectCtx, round: &mut [Tried], k: usize) -> ModelState {
 /// other catalog effects (not `unexplained`, whose choice against a named effect is
 /// [`choose_named`]'s), the one of largest gain that `round[bi]` does not predict the held-out
 /// windows significantly better than (paired z < `z_crit`), with that z.
-fn close_rival(
+pub fn close_rival(
     ctx: &SelectCtx,
     round: &[Tried],
     passed: &[usize],
@@ -694,10 +531,11 @@ fn close_rival(
 /// The candidates of `round` proposed for `cur`, each screened and judged by simulation (in
 /// parallel, their lines printed afterwards in the proposer's order, so the output does not
 /// depend on the number of threads). `None` when nothing is proposed.
-fn judge_round(
+pub fn judge_round(
     ctx: &SelectCtx,
     cur: &ModelState,
     round: usize,
+    label: &str,
     progress: &dyn Observer,
 ) -> Option<Vec<Tried>> {
     let lat = cur.fit_latency.then(|| cur.latency());
@@ -735,19 +573,19 @@ fn judge_round(
             member_z: None,
             dropped: None,
         };
-        report_tried(&t, progress);
+        report_tried(&t, label, progress);
         out.push(t);
     }
     Some(out)
 }
 
 /// The progress lines of a judged candidate.
-fn report_tried(t: &Tried, progress: &dyn Observer) {
+fn report_tried(t: &Tried, label: &str, progress: &dyn Observer) {
     let c = &t.candidate;
     stage(
         progress,
         &format!(
-            "round {}: judged {} ({}) by simulation on held-out runs",
+            "round {}{label}: judged {} ({}) by simulation on held-out runs",
             t.round,
             c.effect.id,
             c.terms
@@ -784,7 +622,12 @@ fn report_tried(t: &Tried, progress: &dyn Observer) {
 /// equally well are told apart by the name they give it, and a named effect is the explanation
 /// (a tilted set-up's bearing load: the load family and −sgn β̇ sin(α + β) gained χ² 1921 and
 /// 1932 at z 5.79 and 5.80; docs/diagnosis.md, Known weaknesses). `None` when nothing passed.
-fn choose_named(ctx: &SelectCtx, round: &[Tried], passed: &[usize], z_crit: f64) -> Option<usize> {
+pub fn choose_named(
+    ctx: &SelectCtx,
+    round: &[Tried],
+    passed: &[usize],
+    z_crit: f64,
+) -> Option<usize> {
     let gain = |k: usize| round[k].cmp.map_or(f64::NEG_INFINITY, |c| c.gain);
     let best_of = |named: Option<bool>| {
         passed
@@ -814,7 +657,7 @@ fn choose_named(ctx: &SelectCtx, round: &[Tried], passed: &[usize], z_crit: f64)
 /// only one passes: starting from the smallest significant member, a larger member replaces it
 /// when it predicts the held-out windows significantly better than it (the same rule, z ≥
 /// `z_crit`, on the paired windows of the two). Indices into `round`.
-fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<usize> {
+pub fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<usize> {
     let significant = |t: &Tried| {
         t.cmp.is_some_and(|c| c.z >= z_crit)
             && t.added_z.is_some_and(|z| z >= z_crit)

@@ -1,0 +1,283 @@
+//! The selection over rounds ([`super::select`]'s rounds) as a beam of at most two branches.
+//!
+//! Each round accepts the best significant candidate of the current model. When a named rival of
+//! another effect is not significantly worse than it ([`close_rival`]), the greedy choice between
+//! them would rest on a difference the data do not support, and what later rounds add rests on
+//! that choice. The selection then forks once: each of the two is accepted in a branch of its
+//! own and the rounds go on in both, in step. After each later round a branch whose model
+//! predicts the held-out windows significantly worse than the other's (the paired z of
+//! [`compare`] at the fork round's threshold) is left; when both run to their end, the one whose
+//! final model predicts the held-out windows better is kept.
+
+use super::judge::{compare, Comparison};
+use super::select::{
+    accept, choose_members, choose_named, close_rival, judge_round, ModelState, SelectCtx, Tried,
+};
+use crate::progress::{stage, Observer};
+
+/// A round whose accepted candidate and a named rival could not be told apart, and how the
+/// branch of each ended ([`select`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Fork {
+    /// The round.
+    pub round: usize,
+    /// The effect accepted in that round on the kept branch.
+    pub kept: String,
+    /// The effect accepted in that round on the other branch.
+    pub other: String,
+    /// Held-out z of the larger-gain candidate of the two against the other in their round
+    /// (below the round's threshold: no significant difference).
+    pub round_z: f64,
+    /// Effects of the kept branch's final model.
+    pub kept_effects: Vec<String>,
+    /// Effects of the other branch's model when it was left (its final model when both ran to
+    /// their end).
+    pub other_effects: Vec<String>,
+    /// Held-out χ² gain of the kept branch's model over the other's at that point (≥ 0).
+    pub final_gain: f64,
+    /// Its z (paired windows).
+    pub final_z: f64,
+    /// The round after which the other branch was left for predicting significantly worse
+    /// (`None`: both ran to their end).
+    pub pruned_after: Option<usize>,
+}
+
+/// The selection's result: every candidate tried on the kept branch (the accepted ones with
+/// their refitted state), its final model, and the fork taken (at most one).
+#[derive(Debug, Clone)]
+pub struct Selection {
+    /// Candidates of all rounds.
+    pub tried: Vec<Tried>,
+    /// The final model.
+    pub fin: ModelState,
+    /// Forks.
+    pub forks: Vec<Fork>,
+}
+
+/// A branch of the selection.
+struct Branch {
+    tried: Vec<Tried>,
+    cur: ModelState,
+    /// The effect this branch accepted at the fork (empty before it).
+    label: String,
+    /// No candidate was accepted in its last round.
+    ended: bool,
+}
+
+/// Where the selection forked.
+struct ForkAt {
+    round: usize,
+    z: f64,
+    z_crit: f64,
+}
+
+/// A branch left for predicting significantly worse than the other, after `round`.
+struct Pruned {
+    branch: Branch,
+    cmp: Comparison,
+    round: usize,
+}
+
+/// The selection from `base` (see the module); `progress` gets a line per candidate.
+pub fn select(ctx: &SelectCtx, base: ModelState, progress: &dyn Observer) -> Selection {
+    let mut branches = vec![Branch {
+        tried: Vec::new(),
+        cur: base,
+        label: String::new(),
+        ended: false,
+    }];
+    let mut at: Option<ForkAt> = None;
+    let mut pruned: Option<Pruned> = None;
+    for round in 1..=ctx.max_rounds {
+        let mut next = Vec::with_capacity(2);
+        for b in branches {
+            if b.ended {
+                next.push(b);
+            } else {
+                next.extend(advance(ctx, b, round, &mut at, progress));
+            }
+        }
+        branches = next;
+        if let Some(f) = at.as_ref().filter(|f| f.round < round) {
+            pruned = pruned.or_else(|| prune(ctx, &mut branches, f.z_crit, round, progress));
+        }
+        if branches.iter().all(|b| b.ended) {
+            break;
+        }
+    }
+    finish(ctx, branches, at, pruned, progress)
+}
+
+/// One round of branch `b`: its candidates judged, then the best accepted (one branch), it and
+/// its close rival accepted in a branch each (two; only while `at` is unset), or nothing
+/// accepted (the branch ends).
+fn advance(
+    ctx: &SelectCtx,
+    mut b: Branch,
+    round: usize,
+    at: &mut Option<ForkAt>,
+    progress: &dyn Observer,
+) -> Vec<Branch> {
+    let label = if b.label.is_empty() {
+        String::new()
+    } else {
+        format!(" (branch {})", b.label)
+    };
+    let Some(mut judged) = judge_round(ctx, &b.cur, round, &label, progress) else {
+        b.ended = true;
+        return vec![b];
+    };
+    let z_crit = judged[0].z_crit;
+    let passed = choose_members(ctx, &mut judged, z_crit);
+    let Some(bi) = choose_named(ctx, &judged, &passed, z_crit) else {
+        for t in &mut judged {
+            t.state = None;
+        }
+        b.tried.extend(judged);
+        b.ended = true;
+        return vec![b];
+    };
+    let rival = (ctx.fork_close_rivals && at.is_none())
+        .then(|| close_rival(ctx, &judged, &passed, bi, z_crit))
+        .flatten();
+    let Some((ri, z)) = rival else {
+        b.cur = accept(ctx, &mut judged, bi);
+        b.tried.extend(judged);
+        return vec![b];
+    };
+    let name = |k: usize| judged[k].candidate.effect.id.to_string();
+    stage(
+        progress,
+        &format!(
+            "round {round}: {} and {} not told apart (held-out z {z:.2} < {z_crit:.2}): a branch for each",
+            name(bi),
+            name(ri)
+        ),
+    );
+    *at = Some(ForkAt { round, z, z_crit });
+    [bi, ri]
+        .into_iter()
+        .map(|k| {
+            let mut r = judged.clone();
+            let cur = accept(ctx, &mut r, k);
+            let mut tried = b.tried.clone();
+            tried.extend(r);
+            Branch {
+                tried,
+                cur,
+                label: name(k),
+                ended: false,
+            }
+        })
+        .collect()
+}
+
+/// Of two branches, the one whose model predicts the held-out windows significantly worse than
+/// the other's (paired z ≥ `z_crit`) is taken out and returned.
+fn prune(
+    ctx: &SelectCtx,
+    branches: &mut Vec<Branch>,
+    z_crit: f64,
+    round: usize,
+    progress: &dyn Observer,
+) -> Option<Pruned> {
+    if branches.len() != 2 {
+        return None;
+    }
+    let c = compare(
+        &branches[0].cur.held,
+        &branches[1].cur.held,
+        ctx.wins,
+        ctx.runs,
+    );
+    let loser = if c.z >= z_crit {
+        0
+    } else if -c.z >= z_crit {
+        1
+    } else {
+        return None;
+    };
+    let branch = branches.remove(loser);
+    stage(
+        progress,
+        &format!(
+            "after round {round}: the branch of {} predicts the held-out windows significantly \
+             worse than that of {} (z {:.2} ≥ {z_crit:.2}) and is left",
+            branch.label,
+            branches[0].label,
+            c.z.abs()
+        ),
+    );
+    Some(Pruned {
+        branch,
+        cmp: c,
+        round,
+    })
+}
+
+/// The kept branch's selection, with the fork's record.
+fn finish(
+    ctx: &SelectCtx,
+    mut branches: Vec<Branch>,
+    at: Option<ForkAt>,
+    pruned: Option<Pruned>,
+    progress: &dyn Observer,
+) -> Selection {
+    let (kept, fork) = match (at, pruned) {
+        (Some(at), Some(p)) => {
+            let kept = branches.pop().expect("the branch left after pruning");
+            let f = record(&at, &kept, &p.branch, &p.cmp, Some(p.round));
+            (kept, Some(f))
+        }
+        (Some(at), None) if branches.len() == 2 => {
+            let b = branches.pop().expect("two branches");
+            let a = branches.pop().expect("two branches");
+            let c = compare(&a.cur.held, &b.cur.held, ctx.wins, ctx.runs);
+            let (kept, other) = if c.gain > 0.0 { (b, a) } else { (a, b) };
+            let f = record(&at, &kept, &other, &c, None);
+            (kept, Some(f))
+        }
+        _ => (branches.pop().expect("a branch"), None),
+    };
+    if let Some(f) = &fork {
+        stage(
+            progress,
+            &format!(
+                "kept the branch of {} ({}) over that of {} ({}): held-out χ² gain {:.1}, z {:.2}",
+                f.kept,
+                f.kept_effects.join(" + "),
+                f.other,
+                f.other_effects.join(" + "),
+                f.final_gain,
+                f.final_z
+            ),
+        );
+    }
+    Selection {
+        tried: kept.tried,
+        fin: kept.cur,
+        forks: fork.into_iter().collect(),
+    }
+}
+
+/// The fork's record: `kept` over `other`, `c` their comparison (either way round).
+fn record(
+    at: &ForkAt,
+    kept: &Branch,
+    other: &Branch,
+    c: &Comparison,
+    pruned_after: Option<usize>,
+) -> Fork {
+    let effects = |b: &Branch| b.cur.effects.iter().map(|e| e.id.to_string()).collect();
+    Fork {
+        round: at.round,
+        kept: kept.label.clone(),
+        other: other.label.clone(),
+        round_z: at.z,
+        kept_effects: effects(kept),
+        other_effects: effects(other),
+        final_gain: c.gain.abs(),
+        final_z: c.z.abs(),
+        pruned_after,
+    }
+}
