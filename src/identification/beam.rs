@@ -3,11 +3,12 @@
 //! Each round accepts the best significant candidate of the current model. When a named rival of
 //! another effect is not significantly worse than it ([`close_rival`]), the greedy choice between
 //! them would rest on a difference the data do not support, and what later rounds add rests on
-//! that choice. The selection then forks once: each of the two is accepted in a branch of its
-//! own and the rounds go on in both, in step. After each later round a branch whose model
-//! predicts the held-out windows significantly worse than the other's (the paired z of
-//! [`compare`] at the fork round's threshold) is left; when both run to their end, the one whose
-//! final model predicts the held-out windows better is kept.
+//! that choice. The selection then forks: each of the two is accepted in a branch of its own and
+//! the rounds go on in both, in step. After each later round a branch whose model predicts the
+//! held-out windows significantly worse than the other's (the paired z of [`compare`] at the fork
+//! round's threshold) is left; when both run to their end, the one whose final model predicts
+//! the held-out windows better is kept. At most two branches: a fork only where one branch is
+//! left (before any fork, or after the other was left).
 
 use super::judge::{compare, Comparison};
 use super::select::{
@@ -43,7 +44,7 @@ pub struct Fork {
 }
 
 /// The selection's result: every candidate tried on the kept branch (the accepted ones with
-/// their refitted state), its final model, and the fork taken (at most one).
+/// their refitted state), its final model, and the forks taken on the way to it.
 #[derive(Debug, Clone)]
 pub struct Selection {
     /// Candidates of all rounds.
@@ -71,11 +72,10 @@ struct ForkAt {
     z_crit: f64,
 }
 
-/// A branch left for predicting significantly worse than the other, after `round`.
+/// A branch left for predicting significantly worse than the other.
 struct Pruned {
     branch: Branch,
     cmp: Comparison,
-    round: usize,
 }
 
 /// The selection from `base` (see the module); `progress` gets a line per candidate.
@@ -86,31 +86,35 @@ pub fn select(ctx: &SelectCtx, base: ModelState, progress: &dyn Observer) -> Sel
         label: String::new(),
         ended: false,
     }];
-    let mut at: Option<ForkAt> = None;
-    let mut pruned: Option<Pruned> = None;
+    let mut open: Option<ForkAt> = None;
+    let mut forks = Vec::new();
     for round in 1..=ctx.max_rounds {
         let mut next = Vec::with_capacity(2);
         for b in branches {
             if b.ended {
                 next.push(b);
             } else {
-                next.extend(advance(ctx, b, round, &mut at, progress));
+                next.extend(advance(ctx, b, round, &mut open, progress));
             }
         }
         branches = next;
-        if let Some(f) = at.as_ref().filter(|f| f.round < round) {
-            pruned = pruned.or_else(|| prune(ctx, &mut branches, f.z_crit, round, progress));
+        if let Some(at) = open.as_ref().filter(|f| f.round < round) {
+            if let Some(p) = prune(ctx, &mut branches, at.z_crit, round, progress) {
+                let kept = &branches[0];
+                forks.push(record(at, kept, &p.branch, &p.cmp, Some(round)));
+                open = None;
+            }
         }
         if branches.iter().all(|b| b.ended) {
             break;
         }
     }
-    finish(ctx, branches, at, pruned, progress)
+    finish(ctx, branches, open, forks, progress)
 }
 
 /// One round of branch `b`: its candidates judged, then the best accepted (one branch), it and
-/// its close rival accepted in a branch each (two; only while `at` is unset), or nothing
-/// accepted (the branch ends).
+/// its close rival accepted in a branch each (two; only while no fork is `open`, i.e. `b` is the
+/// only branch), or nothing accepted (the branch ends).
 fn advance(
     ctx: &SelectCtx,
     mut b: Branch,
@@ -208,55 +212,52 @@ fn prune(
             c.z.abs()
         ),
     );
-    Some(Pruned {
-        branch,
-        cmp: c,
-        round,
-    })
+    Some(Pruned { branch, cmp: c })
 }
 
-/// The kept branch's selection, with the fork's record.
+/// The kept branch's selection with the forks' records: of two branches left at the end (an
+/// `open` fork), the one whose final model predicts the held-out windows better.
 fn finish(
     ctx: &SelectCtx,
     mut branches: Vec<Branch>,
-    at: Option<ForkAt>,
-    pruned: Option<Pruned>,
+    open: Option<ForkAt>,
+    mut forks: Vec<Fork>,
     progress: &dyn Observer,
 ) -> Selection {
-    let (kept, fork) = match (at, pruned) {
-        (Some(at), Some(p)) => {
-            let kept = branches.pop().expect("the branch left after pruning");
-            let f = record(&at, &kept, &p.branch, &p.cmp, Some(p.round));
-            (kept, Some(f))
-        }
-        (Some(at), None) if branches.len() == 2 => {
+    let kept = match (open, branches.len()) {
+        (Some(at), 2) => {
             let b = branches.pop().expect("two branches");
             let a = branches.pop().expect("two branches");
             let c = compare(&a.cur.held, &b.cur.held, ctx.wins, ctx.runs);
             let (kept, other) = if c.gain > 0.0 { (b, a) } else { (a, b) };
-            let f = record(&at, &kept, &other, &c, None);
-            (kept, Some(f))
+            forks.push(record(&at, &kept, &other, &c, None));
+            kept
         }
-        _ => (branches.pop().expect("a branch"), None),
+        _ => branches.pop().expect("a branch"),
     };
-    if let Some(f) = &fork {
+    for f in &forks {
         stage(
             progress,
             &format!(
-                "kept the branch of {} ({}) over that of {} ({}): held-out χ² gain {:.1}, z {:.2}",
+                "round {}: kept the branch of {} ({}) over that of {} ({}): held-out χ² gain \
+                 {:.1}, z {:.2}{}",
+                f.round,
                 f.kept,
                 f.kept_effects.join(" + "),
                 f.other,
                 f.other_effects.join(" + "),
                 f.final_gain,
-                f.final_z
+                f.final_z,
+                f.pruned_after
+                    .map(|r| format!(", after round {r}"))
+                    .unwrap_or_default()
             ),
         );
     }
     Selection {
         tried: kept.tried,
         fin: kept.cur,
-        forks: fork.into_iter().collect(),
+        forks,
     }
 }
 

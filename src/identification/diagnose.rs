@@ -6,8 +6,9 @@
 //! 3. **mismatch** ([`super::mismatch::locate`]): where the base model fails, in words.
 //! 4. **propose** ([`super::propose`]): the weak form proposes every catalog family's best member
 //!    and the best dictionary terms.
-//! 5. **judge** ([`super::select`], [`super::judge`]): each candidate is refitted by simulation and
-//!    judged by its prediction of held-out runs; greedy over rounds. Then the breakaway friction
+//! 5. **judge** ([`super::beam`], [`super::select`], [`super::judge`]): each candidate is refitted
+//!    by simulation and judged by its prediction of held-out runs; rounds, forked once on close
+//!    rivals, and the backward check ([`super::backward`]). Then the breakaway friction
 //!    ([`super::breakaway`]) and the nominal consistency ([`super::nominal`]).
 //! 6. **report** ([`report`]): findings, rejected candidates, predictions for the figures.
 
@@ -44,9 +45,9 @@ pub struct DiagnoseOptions {
     pub weak: WeakOptions,
     /// Most effects accepted by the judge (rounds).
     pub max_effects: usize,
-    /// Fork the selection once on close rivals: a round whose accepted candidate does not predict
-    /// the held-out windows significantly better than a named rival runs on in a branch for each
-    /// ([`super::beam`]).
+    /// Fork the selection on close rivals: a round whose accepted candidate does not predict the
+    /// held-out windows significantly better than a named rival runs on in a branch for each, at
+    /// most two at a time ([`super::beam`]).
     pub fork_close_rivals: bool,
     /// BIC decrease that makes a mismatch fingerprint significant.
     pub bic_threshold: f64,

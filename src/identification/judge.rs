@@ -39,7 +39,9 @@
 //! - **Greedy over rounds.** Each round evaluates all remaining candidates (each on top of the
 //!   accepted ones), accepts the one with the largest held-out gain Σ d_w among the significant
 //!   (a dictionary term gives way to a catalog effect it does not predict significantly better:
-//!   [`super::select`]), and repeats; the order in which candidates are listed never decides.
+//!   [`super::select`]), and repeats; the order in which candidates are listed never decides. A
+//!   round whose accepted candidate a named rival is not significantly worse than forks (a
+//!   branch for each, the better kept: [`super::beam`]).
 
 use super::preprocess::CleanRun;
 use super::shooting::{par_map, SimFit, SimModel, Win};
