@@ -29,12 +29,12 @@ pub struct Fork {
     /// Held-out z of the larger-gain candidate of the two against the other in their round
     /// (below the round's threshold: no significant difference).
     pub round_z: f64,
-    /// Effects of the kept branch's final model.
+    /// Effects of the kept branch's model when the fork was decided (its final model when both
+    /// branches ran to their end).
     pub kept_effects: Vec<String>,
-    /// Effects of the other branch's model when it was left (its final model when both ran to
-    /// their end).
+    /// Effects of the other branch's model then.
     pub other_effects: Vec<String>,
-    /// Held-out χ² gain of the kept branch's model over the other's at that point (≥ 0).
+    /// Held-out χ² gain of the kept branch's model over the other's then (≥ 0).
     pub final_gain: f64,
     /// Its z (paired windows).
     pub final_z: f64,

@@ -307,9 +307,49 @@ pub fn markdown(r: &Report, title: &str) -> String {
             serde_json::to_string(&fi.evidence).unwrap_or_default()
         ));
     }
+    s.push_str(&forks_markdown(r.fits.as_ref()));
     if let Some(rem) = &r.remaining {
         s.push_str(&remainder_markdown(rem));
     }
+    s
+}
+
+/// The selection's forks (`fits.selection_forks`, [`super::beam::Fork`]) as a section of
+/// report.md; empty without forks.
+fn forks_markdown(fits: Option<&serde_json::Value>) -> String {
+    let forks: Vec<super::beam::Fork> = fits
+        .and_then(|f| serde_json::from_value(f["selection_forks"].clone()).ok())
+        .unwrap_or_default();
+    if forks.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "## Close rivals
+
+",
+    );
+    for f in &forks {
+        let when = match f.pruned_after {
+            Some(r) => format!("after round {r}, its model predicting significantly worse"),
+            None => "at the end, by the final models".to_string(),
+        };
+        s.push_str(&format!(
+            "- Round {}: `{}` and `{}` could not be told apart by their held-out predictions (z = {:.2}), \
+             so the selection went on with each. The branch of `{}` ({}) was kept over that of \
+             `{}` ({}), {when}: held-out χ² gain {:.1}, z = {:.2}.\n",
+            f.round,
+            f.kept,
+            f.other,
+            f.round_z,
+            f.kept,
+            f.kept_effects.join(" + "),
+            f.other,
+            f.other_effects.join(" + "),
+            f.final_gain,
+            f.final_z
+        ));
+    }
+    s.push('\n');
     s
 }
 
@@ -417,4 +457,56 @@ fn remainder_markdown(rem: &Remainder) -> String {
     }
     s.push('\n');
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(fits: Option<serde_json::Value>) -> Report {
+        Report {
+            schema: SCHEMA.into(),
+            baseline: Baseline {
+                params: BTreeMap::new(),
+                rms_rad: 0.01,
+                runs: Vec::new(),
+            },
+            mismatch: Vec::new(),
+            findings: Vec::new(),
+            verdict: "none".into(),
+            fits,
+            remaining: None,
+        }
+    }
+
+    #[test]
+    fn the_forks_section_reads_the_forks_of_the_fits() {
+        let fork = super::super::beam::Fork {
+            round: 1,
+            kept: "sensor_latency".into(),
+            other: "corotating_drag".into(),
+            round_z: 1.31,
+            kept_effects: vec!["sensor_latency".into(), "static_torque".into()],
+            other_effects: vec!["corotating_drag".into(), "static_torque".into()],
+            final_gain: 30227.5,
+            final_z: 3.16,
+            pruned_after: None,
+        };
+        let md = markdown(
+            &report(Some(serde_json::json!({ "selection_forks": [fork] }))),
+            "t",
+        );
+        assert!(md.contains("## Close rivals"), "{md}");
+        assert!(
+            md.contains(
+                "The branch of `sensor_latency` (sensor_latency + static_torque) was kept over \
+                 that of `corotating_drag` (corotating_drag + static_torque), at the end"
+            ),
+            "{md}"
+        );
+        assert!(md.contains("z = 1.31"), "{md}");
+        for fits in [None, Some(serde_json::json!({ "selection_forks": [] }))] {
+            assert!(!markdown(&report(fits), "t").contains("Close rivals"));
+        }
+    }
 }
