@@ -98,15 +98,19 @@ pub fn select(ctx: &SelectCtx, base: ModelState, progress: &dyn Observer) -> Sel
             }
         }
         branches = next;
+        let done = round == ctx.max_rounds || branches.iter().all(|b| b.ended);
+        if done {
+            break;
+        }
+        // a fork still open after a later round: the branch significantly worse is left (at the
+        // end, `finish` compares the final models)
         if let Some(at) = open.as_ref().filter(|f| f.round < round) {
             if let Some(p) = prune(ctx, &mut branches, at.z_crit, round, progress) {
-                let kept = &branches[0];
+                let kept = &mut branches[0];
                 forks.push(record(at, kept, &p.branch, &p.cmp, Some(round)));
+                kept.label.clear();
                 open = None;
             }
-        }
-        if branches.iter().all(|b| b.ended) {
-            break;
         }
     }
     finish(ctx, branches, open, forks, progress)
@@ -153,16 +157,18 @@ fn advance(
     stage(
         progress,
         &format!(
-            "round {round}: {} and {} not told apart (held-out z {z:.2} < {z_crit:.2}): a branch for each",
+            "round {round}: {} and {} not told apart (held-out z {z:.2} < {z_crit:.2}): a \
+             branch for each",
             name(bi),
             name(ri)
         ),
     );
     *at = Some(ForkAt { round, z, z_crit });
-    [bi, ri]
+    [(bi, ri), (ri, bi)]
         .into_iter()
-        .map(|k| {
+        .map(|(k, o)| {
             let mut r = judged.clone();
+            r[o].forked = true;
             let cur = accept(ctx, &mut r, k);
             let mut tried = b.tried.clone();
             tried.extend(r);
@@ -215,8 +221,9 @@ fn prune(
     Some(Pruned { branch, cmp: c })
 }
 
-/// The kept branch's selection with the forks' records: of two branches left at the end (an
-/// `open` fork), the one whose final model predicts the held-out windows better.
+/// The kept branch's selection with the forks' records (`forks`, those decided by pruning): of
+/// two branches left at the end (an `open` fork), the one whose final model predicts the
+/// held-out windows better.
 fn finish(
     ctx: &SelectCtx,
     mut branches: Vec<Branch>,
@@ -235,7 +242,7 @@ fn finish(
         }
         _ => branches.pop().expect("a branch"),
     };
-    for f in &forks {
+    for f in forks.iter().filter(|f| f.pruned_after.is_none()) {
         stage(
             progress,
             &format!(

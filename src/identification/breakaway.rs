@@ -243,6 +243,7 @@ pub fn width_member(
         added_z,
         member_z: None,
         dropped: None,
+        forked: false,
     };
     Some((tried, alternate))
 }

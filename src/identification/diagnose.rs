@@ -7,9 +7,9 @@
 //! 4. **propose** ([`super::propose`]): the weak form proposes every catalog family's best member
 //!    and the best dictionary terms.
 //! 5. **judge** ([`super::beam`], [`super::select`], [`super::judge`]): each candidate is refitted
-//!    by simulation and judged by its prediction of held-out runs; rounds, forked once on close
-//!    rivals, and the backward check ([`super::backward`]). Then the breakaway friction
-//!    ([`super::breakaway`]) and the nominal consistency ([`super::nominal`]).
+//!    by simulation and judged by its prediction of held-out runs; rounds, forked on close rivals
+//!    (at most two branches at a time), and the backward check ([`super::backward`]). Then the
+//!    breakaway friction ([`super::breakaway`]) and the nominal consistency ([`super::nominal`]).
 //! 6. **report** ([`report`]): findings, rejected candidates, predictions for the figures.
 
 use super::beam::{select, Fork};

@@ -588,6 +588,10 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                     Some(_) if t.member_z.is_some_and(|z| z < t.z_crit) => format!(
                         "a smaller member of the family predicts as well (held-out z of this \
                          member against it {:.2} < {:.2})", t.member_z.unwrap_or(0.0), t.z_crit),
+                    Some(_) if t.forked => "a close rival of the accepted candidate: accepted on \
+                        the other branch of the fork of its round, the branch that was left \
+                        (fits.selection_forks)"
+                        .to_string(),
                     Some(m) if gave_way(t, m.gain, tried) => "significant and gained more, but a \
                         dictionary term gives way to a catalog effect of the round that it does not \
                         predict significantly better than (the accepted one)"

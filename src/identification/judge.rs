@@ -36,7 +36,7 @@
 //!   chance (a corotating drag of 0.012 ± 0.011 s⁻¹ gained χ² 37 at z = 3.7 on a set with only
 //!   its shaft angles off, 27 of it in one driven run); an effect whose fitted size is consistent
 //!   with zero cannot be what improved the prediction.
-//! - **Greedy over rounds.** Each round evaluates all remaining candidates (each on top of the
+//! - **Rounds.** Each round evaluates all remaining candidates (each on top of the
 //!   accepted ones), accepts the one with the largest held-out gain Σ d_w among the significant
 //!   (a dictionary term gives way to a catalog effect it does not predict significantly better:
 //!   [`super::select`]), and repeats; the order in which candidates are listed never decides. A

@@ -3,9 +3,8 @@
 //!
 //! The diagnosis is a pipeline ([`diagnose`]): clean ([`preprocess`], [`ringdown`]) → fit base
 //! ([`regression`], [`shooting`]) → mismatch ([`mismatch`]) → propose ([`propose`], [`catalog`])
-//! → judge by simulation on held-out runs ([`beam`], [`select`], [`judge`], [`breakaway`], [`backward`],
-//! [`nominal`]) →
-//! report ([`findings`], [`report`]).
+//! → judge by simulation on held-out runs ([`beam`], [`select`], [`judge`], [`breakaway`],
+//! [`backward`], [`nominal`]) → report ([`findings`], [`report`]).
 //!
 //! - [`spec`]: a model as terms and coefficients, mapped to the simulated gear ([`model`]).
 //! - [`predict`]: short-horizon predictions over windows.

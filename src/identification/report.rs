@@ -323,19 +323,18 @@ fn forks_markdown(fits: Option<&serde_json::Value>) -> String {
     if forks.is_empty() {
         return String::new();
     }
-    let mut s = String::from(
-        "## Close rivals
-
-",
-    );
+    let mut s = String::from("## Close rivals\n\n");
     for f in &forks {
         let when = match f.pruned_after {
-            Some(r) => format!("after round {r}, its model predicting significantly worse"),
+            Some(r) => format!(
+                "after round {r}, when the other branch's model predicted the held-out windows \
+                 significantly worse"
+            ),
             None => "at the end, by the final models".to_string(),
         };
         s.push_str(&format!(
-            "- Round {}: `{}` and `{}` could not be told apart by their held-out predictions (z = {:.2}), \
-             so the selection went on with each. The branch of `{}` ({}) was kept over that of \
+            "- Round {}: `{}` and `{}` could not be told apart by their held-out predictions \
+             (z = {:.2}), so the selection went on with each. The branch of `{}` ({}) was kept over that of \
              `{}` ({}), {when}: held-out χ² gain {:.1}, z = {:.2}.\n",
             f.round,
             f.kept,

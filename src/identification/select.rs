@@ -83,6 +83,9 @@ pub struct Tried {
     pub member_z: Option<f64>,
     /// Accepted in its round and dropped by the backward check ([`super::backward`]).
     pub dropped: Option<super::backward::Dropped>,
+    /// Accepted on the other branch of a fork in its round, the branch that was left
+    /// ([`super::beam`]).
+    pub forked: bool,
 }
 
 /// What the selection needs.
@@ -500,8 +503,8 @@ pub fn accept(ctx: &SelectCtx, round: &mut [Tried], k: usize) -> ModelState {
     cur
 }
 
-/// The named rival of the accepted `round[bi]`: among the significant candidates `passed` of
-/// other catalog effects (not `unexplained`, whose choice against a named effect is
+/// The named rival of the accepted `round[bi]`, a catalog effect (`None` for a dictionary term):
+/// among the significant candidates `passed` of other catalog effects (not `unexplained`, whose choice against a named effect is
 /// [`choose_named`]'s), the one of largest gain that `round[bi]` does not predict the held-out
 /// windows significantly better than (paired z < `z_crit`), with that z.
 pub fn close_rival(
@@ -511,6 +514,9 @@ pub fn close_rival(
     bi: usize,
     z_crit: f64,
 ) -> Option<(usize, f64)> {
+    if round[bi].candidate.effect.id == "unexplained" {
+        return None;
+    }
     let chosen = round[bi].state.as_ref()?;
     let gain = |k: usize| round[k].cmp.map_or(f64::NEG_INFINITY, |c| c.gain);
     passed
@@ -572,6 +578,7 @@ pub fn judge_round(
             state: st,
             member_z: None,
             dropped: None,
+            forked: false,
         };
         report_tried(&t, label, progress);
         out.push(t);
