@@ -195,9 +195,7 @@ pub fn run_case(
         .map(|s| [s.timing_var_s2, s.timing_var_sigma_s2]);
     let forks = diag
         .as_ref()
-        .ok()
-        .and_then(|d| d.report.fits.as_ref())
-        .and_then(|f| serde_json::from_value(f["selection_forks"].clone()).ok())
+        .map(|d| d.report.selection_forks())
         .unwrap_or_default();
     let (verdict, findings, error) = match diag {
         Ok(d) => (

@@ -153,20 +153,25 @@ fn advance(
         b.tried.extend(judged);
         return vec![b];
     };
-    let name = |k: usize| judged[k].candidate.effect.id.to_string();
+    let names = [bi, ri].map(|k| judged[k].candidate.effect.id.to_string());
     stage(
         progress,
         &format!(
             "round {round}: {} and {} not told apart (held-out z {z:.2} < {z_crit:.2}): a \
              branch for each",
-            name(bi),
-            name(ri)
+            names[0], names[1]
         ),
     );
     *at = Some(ForkAt { round, z, z_crit });
-    [(bi, ri), (ri, bi)]
+    // only the two accepted keep their refitted states (`accept` drops the others' anyway)
+    for (k, t) in judged.iter_mut().enumerate() {
+        if k != bi && k != ri {
+            t.state = None;
+        }
+    }
+    [(bi, ri, 0), (ri, bi, 1)]
         .into_iter()
-        .map(|(k, o)| {
+        .map(|(k, o, n)| {
             let mut r = judged.clone();
             r[o].forked = true;
             let cur = accept(ctx, &mut r, k);
@@ -175,7 +180,7 @@ fn advance(
             Branch {
                 tried,
                 cur,
-                label: name(k),
+                label: names[n].clone(),
                 ended: false,
             }
         })
@@ -242,12 +247,13 @@ fn finish(
         }
         _ => branches.pop().expect("a branch"),
     };
+    // (a fork decided by pruning had its line then)
     for f in forks.iter().filter(|f| f.pruned_after.is_none()) {
         stage(
             progress,
             &format!(
                 "round {}: kept the branch of {} ({}) over that of {} ({}): held-out χ² gain \
-                 {:.1}, z {:.2}{}",
+                 {:.1}, z {:.2}",
                 f.round,
                 f.kept,
                 f.kept_effects.join(" + "),
@@ -255,9 +261,6 @@ fn finish(
                 f.other_effects.join(" + "),
                 f.final_gain,
                 f.final_z,
-                f.pruned_after
-                    .map(|r| format!(", after round {r}"))
-                    .unwrap_or_default()
             ),
         );
     }

@@ -416,9 +416,9 @@ pub fn window_geometry(
         // derivative with respect to the window's state (variational equations and saltation
         // matrices)
         let ext = &r.t[w.lo..(w.hi + super::predict::WINDOW).min(r.t.len())];
-        let WindowStates { states, jac } = simulate_states(&sys, ext[0], x, ext, model.tol, true)?;
+        let WindowStates { mut states, jac } = simulate_states(&sys, ext[0], x, ext, model.tol)?;
         let stuck: Vec<bool> = states.iter().map(|s| s.1 == 0.0).collect();
-        let s0 = states[..t.len()].to_vec();
+        states.truncate(t.len());
         let kept: Vec<usize> = (0..t.len()).filter(|&q| w.keep[q]).collect();
         let j = DMatrix::from_fn(kept.len(), 2, |i, c| jac[kept[i]][c]);
         let svd = j.svd(true, false);
@@ -439,7 +439,7 @@ pub fn window_geometry(
                 .collect(),
             hat,
             stuck,
-            sim: s0,
+            sim: states,
         })
     })
 }

@@ -307,24 +307,31 @@ pub fn markdown(r: &Report, title: &str) -> String {
             serde_json::to_string(&fi.evidence).unwrap_or_default()
         ));
     }
-    s.push_str(&forks_markdown(r.fits.as_ref()));
+    s.push_str(&forks_markdown(&r.selection_forks()));
     if let Some(rem) = &r.remaining {
         s.push_str(&remainder_markdown(rem));
     }
     s
 }
 
-/// The selection's forks (`fits.selection_forks`, [`super::beam::Fork`]) as a section of
-/// report.md; empty without forks.
-fn forks_markdown(fits: Option<&serde_json::Value>) -> String {
-    let forks: Vec<super::beam::Fork> = fits
-        .and_then(|f| serde_json::from_value(f["selection_forks"].clone()).ok())
-        .unwrap_or_default();
+impl Report {
+    /// The selection's forks (`fits.selection_forks`, [`super::beam::Fork`]); empty without.
+    pub fn selection_forks(&self) -> Vec<super::beam::Fork> {
+        self.fits
+            .as_ref()
+            .and_then(|f| serde_json::from_value(f["selection_forks"].clone()).ok())
+            .unwrap_or_default()
+    }
+}
+
+/// The selection's forks ([`Report::selection_forks`]) as a section of report.md; empty without
+/// forks.
+fn forks_markdown(forks: &[super::beam::Fork]) -> String {
     if forks.is_empty() {
         return String::new();
     }
     let mut s = String::from("## Close rivals\n\n");
-    for f in &forks {
+    for f in forks {
         let when = match f.pruned_after {
             Some(r) => format!(
                 "after round {r}, when the other branch's model predicted the held-out windows \
@@ -334,8 +341,8 @@ fn forks_markdown(fits: Option<&serde_json::Value>) -> String {
         };
         s.push_str(&format!(
             "- Round {}: `{}` and `{}` could not be told apart by their held-out predictions \
-             (z = {:.2}), so the selection went on with each. The branch of `{}` ({}) was kept over that of \
-             `{}` ({}), {when}: held-out χ² gain {:.1}, z = {:.2}.\n",
+             (z = {:.2}), so the selection went on with each. The branch of `{}` ({}) was kept \
+             over that of `{}` ({}), {when}: held-out χ² gain {:.1}, z = {:.2}.\n",
             f.round,
             f.kept,
             f.other,

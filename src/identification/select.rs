@@ -88,6 +88,14 @@ pub struct Tried {
     pub forked: bool,
 }
 
+impl Tried {
+    /// The held-out χ² gain of its comparison on all judging windows (−∞ without one: never the
+    /// largest).
+    pub fn gain(&self) -> f64 {
+        self.cmp.map_or(f64::NEG_INFINITY, |c| c.gain)
+    }
+}
+
 /// What the selection needs.
 #[derive(Debug, Clone, Copy)]
 pub struct SelectCtx<'a> {
@@ -504,9 +512,10 @@ pub fn accept(ctx: &SelectCtx, round: &mut [Tried], k: usize) -> ModelState {
 }
 
 /// The named rival of the accepted `round[bi]`, a catalog effect (`None` for a dictionary term):
-/// among the significant candidates `passed` of other catalog effects (not `unexplained`, whose choice against a named effect is
-/// [`choose_named`]'s), the one of largest gain that `round[bi]` does not predict the held-out
-/// windows significantly better than (paired z < `z_crit`), with that z.
+/// among the significant candidates `passed` of other catalog effects (not `unexplained`, whose
+/// choice against a named effect is [`choose_named`]'s), the one of largest gain that
+/// `round[bi]` does not predict the held-out windows significantly better than (paired z <
+/// `z_crit`), with that z.
 pub fn close_rival(
     ctx: &SelectCtx,
     round: &[Tried],
@@ -518,7 +527,7 @@ pub fn close_rival(
         return None;
     }
     let chosen = round[bi].state.as_ref()?;
-    let gain = |k: usize| round[k].cmp.map_or(f64::NEG_INFINITY, |c| c.gain);
+    let gain = |k: usize| round[k].gain();
     passed
         .iter()
         .copied()
@@ -635,7 +644,7 @@ pub fn choose_named(
     passed: &[usize],
     z_crit: f64,
 ) -> Option<usize> {
-    let gain = |k: usize| round[k].cmp.map_or(f64::NEG_INFINITY, |c| c.gain);
+    let gain = |k: usize| round[k].gain();
     let best_of = |named: Option<bool>| {
         passed
             .iter()
