@@ -320,6 +320,16 @@ pub fn judged_members(id: &str) -> bool {
     id == "static_torque"
 }
 
+/// Whether a family's members are alternatives that the weak form cannot be trusted to choose
+/// between, so that each member's best start is proposed and the held-out judge picks the one
+/// that predicts best (the whole and the radial bearing load of `load_dependent_friction`
+/// differ only by the force's component along the output shaft: on a full-size set of a radial
+/// load the weak form preferred the whole load by ΔBIC, whose refit then lost to a dictionary
+/// term; docs/diagnosis.md, "The catalog as families").
+pub fn alternative_members(id: &str) -> bool {
+    id == "load_dependent_friction"
+}
+
 /// Whether two catalog entries fill the same slot (one finding per slot): the same effect, and
 /// for `parameter_drift` the same drifting parameter.
 pub fn same_slot(a: &Effect, b: &Effect) -> bool {

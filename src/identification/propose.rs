@@ -2,7 +2,7 @@
 //! best dictionary terms, each with starting values for the refit by simulation. The weak form
 //! only proposes; [`super::judge`] decides by simulation on held-out runs.
 
-use super::catalog::{catalog, dictionary, judged_members, same_slot, Effect};
+use super::catalog::{alternative_members, catalog, dictionary, judged_members, same_slot, Effect};
 use super::model::{Geometry, Shape};
 use super::preprocess::CleanRun;
 use super::regression::{build, delta_bic, fit, Design, LinFit, Term, WeakOptions};
@@ -267,8 +267,8 @@ pub fn propose(
         let Some(c) = family_candidate(&d, current, &cur, e) else {
             continue;
         };
-        if judged_members(c.effect.id) {
-            // nested members: all proposed, the held-out judge picks (select.rs)
+        if judged_members(c.effect.id) || alternative_members(c.effect.id) {
+            // nested or alternative members: all proposed, the held-out judge picks (select.rs)
             out.push(c);
             continue;
         }
