@@ -105,6 +105,7 @@ pub fn judge(
     let mut ev = BTreeMap::new();
     ev.insert("heldout_z".into(), json!(cmp.z));
     ev.insert("heldout_z_cluster_by_run".into(), json!(cmp.z_cluster));
+    ev.insert("heldout_z_chi2".into(), json!(cmp.z_chi2));
     ev.insert("z_threshold".into(), json!(z_crit));
     ev.insert("heldout_chi2_gain".into(), json!(cmp.gain));
     ev.insert("windows".into(), json!(cmp.windows));

@@ -392,6 +392,7 @@ pub fn judgement_evidence(
     ev.insert("round".into(), json!(t.round));
     ev.insert("heldout_z".into(), json!(cmp.z));
     ev.insert("heldout_z_cluster_by_run".into(), json!(cmp.z_cluster));
+    ev.insert("heldout_z_chi2".into(), json!(cmp.z_chi2));
     ev.insert("z_threshold".into(), json!(t.z_crit));
     ev.insert("added_parameters_z".into(), json!(t.added_z));
     ev.insert("heldout_chi2_gain".into(), json!(cmp.gain));
@@ -557,6 +558,7 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                 "delta_bic_weak_form": c.weak_dbic,
                 "heldout_z": t.cmp.map(|m| m.z),
                 "heldout_z_cluster_by_run": t.cmp.map(|m| m.z_cluster),
+                "heldout_z_chi2": t.cmp.map(|m| m.z_chi2),
                 "screening_z": t.screen.map(|m| m.z),
                 "z_threshold": t.z_crit,
                 "heldout_chi2_gain": t.cmp.map(|m| m.gain),
