@@ -680,22 +680,25 @@ fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
 
 /// The order of two close rivals does not decide what is named. A static torque of 12 s⁻²
 /// (6 s⁻² at 2β) and a 12 ms latency together (the campaign generator's `torque_and_latency` at
-/// level 2). Seed 3: in round 1 a corotating drag gains a held-out χ² of 595 k (z 3.80) and the
-/// latency 570 k (z 3.63), and the drag does not predict the held-out windows significantly
-/// better than the latency (paired z 1.31). The greedy rule accepted the drag; the latency then
-/// missed its threshold in round 3 (z 3.15 against 3.17) and the set was named
-/// `corotating_drag`. The selection now forks there (`beam::select`): the drag's branch ends
-/// with drag + torque, the latency's with latency + torque, and the latter's final model
-/// predicts the held-out windows better and is kept. Seed 2: `drive_steps` was accepted in
-/// round 1 and nothing after it (verdict `drive_steps`); `parameter_drift` ties with it, its
-/// branch accepts the latency in round 2, the branch of `drive_steps` then predicts
-/// significantly worse and is left, and the drift is dropped by the backward check at the end.
-/// Both sets are named right with the two true effects only; their sizes are within ±2σ on seed
-/// 3 and within ±3σ on seed 2 (the torque 11.75 ± 0.09 s⁻² for 12, 2.8σ; the latency within
-/// ±2σ).
+/// level 2). Seed 3: in round 1 a corotating drag and the latency reach the threshold with
+/// nearly equal held-out gains, and the drag does not predict the held-out windows
+/// significantly better than the latency. The greedy rule accepted the drag, which absorbed the
+/// latency, and the set was named `corotating_drag`. The selection now forks there
+/// (`beam::select`): the drag's branch ends with drag + torque, the latency's with latency +
+/// torque, and the latter's final model predicts the held-out windows better and is kept. Seed 2:
+/// with the greedy rule one candidate of a round-1 tie (`drive_steps` when the significance was
+/// tested on the raw χ² gains, docs/diagnosis.md) was accepted and neither true effect after it;
+/// the branch of its rival goes on to accept the latency and the torque, and what they make
+/// superfluous is dropped by the backward check at the end. On both sets: exactly one fork, in
+/// round 1, between two candidates of which neither predicts significantly better (|z| < 3);
+/// only the kept branch holds both true effects, and its final model predicts significantly
+/// better than the other branch's (z ≥ 3, also when the other branch was left early); the
+/// verdict names the two true effects and nothing else, their sizes within ±2σ on seed 3 and
+/// within ±3σ on seed 2 (the torque 11.75 ± 0.08 s⁻² for 12, 3.0σ; the latency within ±2σ).
 #[test]
 fn close_rivals_are_told_apart_by_their_branches() {
     let doc = level2_ci_seeds("torque_and_latency", vec![2, 3]);
+    let truth = ["sensor_latency".to_string(), "static_torque".to_string()];
     for c in &doc.cases {
         let lines = format!(
             "seed {}: verdict {}, findings {:?}, coverage {:?}, forks {:?}",
@@ -718,27 +721,18 @@ fn close_rivals_are_told_apart_by_their_branches() {
         );
         assert_eq!(c.forks.len(), 1, "{lines}");
         let f = &c.forks[0];
-        let (kept, other, pruned) = if c.seed == 2 {
-            ("parameter_drift", "drive_steps", Some(2))
-        } else {
-            ("sensor_latency", "corotating_drag", None)
-        };
-        assert_eq!(
-            (f.round, f.kept.as_str(), f.other.as_str(), f.pruned_after),
-            (1, kept, other, pruned),
+        assert_eq!(f.round, 1, "{lines}");
+        assert!(f.round_z.abs() < 3.0, "{lines}");
+        assert!(f.final_z >= 3.0, "{lines}");
+        let holds_both = |effects: &[String]| truth.iter().all(|t| effects.contains(t));
+        assert!(
+            holds_both(&f.kept_effects) && !holds_both(&f.other_effects),
             "{lines}"
         );
-        assert!(f.round_z < 3.0, "{lines}");
-        if c.seed == 2 {
-            // left after round 2 for predicting significantly worse
-            assert!(f.final_z >= 3.0, "{lines}");
-        } else {
+        if c.seed == 3 {
             assert_eq!(
-                (&f.kept_effects[..], &f.other_effects[..]),
-                (
-                    &["sensor_latency".to_string(), "static_torque".to_string()][..],
-                    &["corotating_drag".to_string(), "static_torque".to_string()][..]
-                ),
+                (f.kept.as_str(), f.other.as_str()),
+                ("sensor_latency", "corotating_drag"),
                 "{lines}"
             );
         }
