@@ -400,12 +400,8 @@ mod tests {
         assert_eq!(added_parameters_z(&f, &[0, 1]), 0.0);
     }
 
-    /// A window a candidate cannot simulate counts as its loss (χ² of the current model plus
-    /// 4 per frame), one the current model cannot simulate as the candidate's win; windows
-    /// neither simulates are left out. Dropping the failed windows would turn this candidate's
-    /// loss into a gain.
-    #[test]
-    fn windows_a_model_cannot_simulate_are_its_losses() {
+    /// A ring-down run (σ_camera = 0.01 rad) and `n` windows of 20 frames on it.
+    fn one_run_of_windows(n: usize) -> (CleanRun, Vec<Win>) {
         let run = CleanRun {
             t: vec![],
             alpha: vec![],
@@ -419,7 +415,7 @@ mod tests {
             alpha_rate: 0.0,
             ringdown: true,
         };
-        let wins: Vec<Win> = (0..12)
+        let wins = (0..n)
             .map(|k| Win {
                 run: 0,
                 lo: 20 * k,
@@ -427,6 +423,16 @@ mod tests {
                 keep: vec![true; 20],
             })
             .collect();
+        (run, wins)
+    }
+
+    /// A window a candidate cannot simulate counts as its loss (χ² of the current model plus
+    /// 4 per frame), one the current model cannot simulate as the candidate's win; windows
+    /// neither simulates are left out. Dropping the failed windows would turn this candidate's
+    /// loss into a gain.
+    #[test]
+    fn windows_a_model_cannot_simulate_are_its_losses() {
+        let (run, wins) = one_run_of_windows(12);
         let before = HeldOut {
             chi2: (0..12)
                 .map(|k| (k != 11).then_some(20.0 + k as f64))
@@ -461,27 +467,7 @@ mod tests {
     /// the raw χ² gains, does not hide the many windows that gain a little.
     #[test]
     fn the_log_score_z_sees_a_local_gain_that_swamps_the_raw_variance() {
-        let run = CleanRun {
-            t: vec![],
-            alpha: vec![],
-            beta: vec![],
-            v: vec![],
-            dt: 0.01,
-            outliers: 0,
-            sigma_beta: 0.01,
-            sigma_camera: 0.01,
-            v_gain: 1.0,
-            alpha_rate: 0.0,
-            ringdown: true,
-        };
-        let wins: Vec<Win> = (0..40)
-            .map(|k| Win {
-                run: 0,
-                lo: 20 * k,
-                hi: 20 * k + 20,
-                keep: vec![true; 20],
-            })
-            .collect();
+        let (run, wins) = one_run_of_windows(40);
         // window 0 gains 980 (the effect's stick phase), windows 1..40 gain 2 or lose 1 in turn
         let before = |c: f64| HeldOut {
             chi2: (0..40)
