@@ -133,7 +133,7 @@ pub fn backward(
             )
         });
         let cmp = compare(&reduced.held, held, ctx.wins, ctx.runs);
-        let drop = cmp.z < tried[i].z_crit;
+        let drop = !cmp.improves(tried[i].z_crit);
         stage(
             progress,
             &format!(

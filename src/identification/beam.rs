@@ -205,9 +205,9 @@ fn prune(
         ctx.wins,
         ctx.runs,
     );
-    let loser = if c.z >= z_crit {
+    let loser = if c.improves(z_crit) {
         0
-    } else if -c.z >= z_crit {
+    } else if c.worsens(z_crit) {
         1
     } else {
         return None;

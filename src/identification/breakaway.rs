@@ -91,7 +91,7 @@ pub fn judge(
     };
     let cmp = compare(&st.held, &held, wins, runs);
     let z_crit = z_threshold(SLOT_MEMBERS);
-    let stands = cmp.z >= z_crit;
+    let stands = cmp.improves(z_crit);
     let e = catalog().into_iter().find(|e| e.id == "static_friction")?;
     let mut p = BTreeMap::new();
     p.insert("eta_sliding".to_string(), all.eta);
@@ -232,7 +232,7 @@ pub fn width_member(
         .as_ref()
         .map(|s| compare(&fin.held, &s.held, ctx.wins, ctx.runs));
     let added_z = st.as_ref().map(|s| added_parameters_z(&s.fit, &[nc]));
-    let accepted = cmp.is_some_and(|c| c.z >= z_crit) && added_z.is_some_and(|z| z >= z_crit);
+    let accepted = cmp.is_some_and(|c| c.improves(z_crit)) && added_z.is_some_and(|z| z >= z_crit);
     let tried = Tried {
         round,
         candidate: cands[k].clone(),

@@ -513,7 +513,7 @@ pub fn rivals(t: &Tried, tried: &[Tried]) -> Vec<String> {
         .filter(|o| o.candidate.effect.id != t.candidate.effect.id)
         .filter_map(|o| {
             let c = o.cmp?;
-            (c.z >= o.z_crit).then(|| {
+            c.improves(o.z_crit).then(|| {
                 format!(
                     "{} ({}): held-out z = {:.1}, χ² gain {:.0}",
                     o.candidate.effect.id,

@@ -32,8 +32,9 @@
 //!   it also counts the legitimate run-to-run variation of a real effect (a latency grows with the
 //!   drive frequency) as noise.
 //! - **Threshold fixed a priori.** With m candidates tried in a round, one-sided at the
-//!   family-wise level α = 0.01 with a Bonferroni correction: z ≥ max(3, Φ⁻¹(1 − α/m)). Nothing is
-//!   tuned to test sets.
+//!   family-wise level α = 0.01 with a Bonferroni correction: z ≥ max(3, Φ⁻¹(1 − α/m)), and the
+//!   held-out gain Σ d_w positive ([`Comparison::improves`]: a model whose summed held-out χ² is
+//!   worse never stands). Nothing is tuned to test sets.
 //! - **The parameters added must differ from zero.** A held-out gain counts only when the
 //!   parameters the candidate adds are themselves significantly non-zero in its refit
 //!   ([`added_parameters_z`]: the Wald statistic of the new coefficients, and of the latency when
@@ -184,6 +185,20 @@ fn paired(before: &HeldOut, after: &HeldOut, w: &Win, k: usize) -> Option<(f64, 
         (Some(b), None) => Some((b, b + loss, false)),
         (None, Some(a)) => Some((a + loss, a, false)),
         (None, None) => None,
+    }
+}
+
+impl Comparison {
+    /// Whether the new model predicts the held-out windows significantly better: z ≥ `z_crit`
+    /// on the log scores and a positive held-out χ² gain Σ d_w (a model whose summed held-out
+    /// χ² is worse never stands, however many windows it improves).
+    pub fn improves(&self, z_crit: f64) -> bool {
+        self.z >= z_crit && self.gain > 0.0
+    }
+    /// Whether the new model predicts the held-out windows significantly worse (the mirror of
+    /// [`Comparison::improves`]).
+    pub fn worsens(&self, z_crit: f64) -> bool {
+        -self.z >= z_crit && self.gain < 0.0
     }
 }
 
@@ -458,6 +473,8 @@ mod tests {
         // 8 × 5 − 2 × 80 + 80
         assert!((c.gain - (40.0 - 160.0 + 80.0)).abs() < 1e-12, "{}", c.gain);
         assert!(c.gain < 0.0);
+        // a summed held-out χ² that is worse never stands, whatever the threshold
+        assert!(!c.improves(f64::NEG_INFINITY));
         // the rms compare only windows both predicted (0..8)
         let ss: f64 = (0..8).map(|k| 20.0 + k as f64).sum::<f64>() * 1e-4;
         assert!((c.rms_before - (ss / 160.0).sqrt()).abs() < 1e-15);
@@ -509,6 +526,7 @@ mod tests {
         let v = s.iter().map(|x| (x - m).powi(2)).sum::<f64>() * 40.0 / 39.0;
         assert!((c.z - s.iter().sum::<f64>() / v.sqrt()).abs() < 1e-12);
         assert!(c.z > c.z_chi2);
+        assert!(c.improves(c.z) && !c.improves(c.z + 1e-9) && !c.worsens(-c.z - 1.0));
         let scaled = compare(&before(3.0), &after(3.0), &wins, &[run]);
         assert!((scaled.z - c.z).abs() < 1e-12);
         assert!((scaled.z_chi2 - c.z_chi2).abs() < 1e-12);

@@ -537,8 +537,8 @@ pub fn close_rival(
         })
         .filter_map(|k| {
             let s = round[k].state.as_ref()?;
-            let z = compare(&s.held, &chosen.held, ctx.wins, ctx.runs).z;
-            (z < z_crit).then_some((k, z))
+            let c = compare(&s.held, &chosen.held, ctx.wins, ctx.runs);
+            (!c.improves(z_crit)).then_some((k, c.z))
         })
         .max_by(|a, b| gain(a.0).total_cmp(&gain(b.0)))
 }
@@ -661,7 +661,7 @@ pub fn choose_named(
         return Some(best);
     };
     match (&round[named].state, &round[best].state) {
-        (Some(a), Some(b)) if compare(&a.held, &b.held, ctx.wins, ctx.runs).z < z_crit => {
+        (Some(a), Some(b)) if !compare(&a.held, &b.held, ctx.wins, ctx.runs).improves(z_crit) => {
             Some(named)
         }
         _ => Some(best),
@@ -675,7 +675,7 @@ pub fn choose_named(
 /// `z_crit`, on the paired windows of the two). Indices into `round`.
 pub fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<usize> {
     let significant = |t: &Tried| {
-        t.cmp.is_some_and(|c| c.z >= z_crit)
+        t.cmp.is_some_and(|c| c.improves(z_crit))
             && t.added_z.is_some_and(|z| z >= z_crit)
             && t.state.is_some()
     };
@@ -701,9 +701,9 @@ pub fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<
             let (Some(a), Some(b)) = (&round[chosen].state, &round[k].state) else {
                 continue;
             };
-            let z = compare(&a.held, &b.held, ctx.wins, ctx.runs).z;
-            round[k].member_z = Some(z);
-            if z >= z_crit {
+            let c = compare(&a.held, &b.held, ctx.wins, ctx.runs);
+            round[k].member_z = Some(c.z);
+            if c.improves(z_crit) {
                 chosen = k;
             }
         }
