@@ -43,6 +43,20 @@ pub struct Fork {
     pub pruned_after: Option<usize>,
 }
 
+impl Fork {
+    /// "the branch of `kept` (its effects) was kept over that of `other` (its effects)": the
+    /// fork's outcome in words, for the progress line and report.md.
+    pub fn outcome(&self) -> String {
+        format!(
+            "the branch of `{}` ({}) was kept over that of `{}` ({})",
+            self.kept,
+            self.kept_effects.join(" + "),
+            self.other,
+            self.other_effects.join(" + ")
+        )
+    }
+}
+
 /// The selection's result: every candidate tried on the kept branch (the accepted ones with
 /// their refitted state), its final model, and the forks taken on the way to it.
 #[derive(Debug, Clone)]
@@ -252,13 +266,9 @@ fn finish(
         stage(
             progress,
             &format!(
-                "round {}: kept the branch of {} ({}) over that of {} ({}): held-out χ² gain \
-                 {:.1}, z {:.2}",
+                "round {}: {}: held-out χ² gain {:.1}, z {:.2}",
                 f.round,
-                f.kept,
-                f.kept_effects.join(" + "),
-                f.other,
-                f.other_effects.join(" + "),
+                f.outcome(),
                 f.final_gain,
                 f.final_z,
             ),

@@ -584,6 +584,9 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                     },
                     Some(m) if m.z < t.z_crit => format!(
                         "held-out improvement not significant (z = {:.2} < {:.2})", m.z, t.z_crit),
+                    Some(m) if !m.improves(t.z_crit) => format!(
+                        "most held-out windows improve (z = {:.2}), but the summed held-out χ² is \
+                         worse (gain {:.1})", m.z, m.gain),
                     Some(m) if t.added_z.is_some_and(|z| z < t.z_crit) => format!(
                         "held-out gain (z = {:.2}) with added parameters consistent with zero \
                          (Wald z = {:.2} < {:.2})", m.z, t.added_z.unwrap_or(0.0), t.z_crit),

@@ -339,18 +339,17 @@ fn forks_markdown(forks: &[super::beam::Fork]) -> String {
             ),
             None => "at the end, by the final models".to_string(),
         };
+        let outcome = f.outcome();
         s.push_str(&format!(
             "- Round {}: `{}` and `{}` could not be told apart by their held-out predictions \
-             (z = {:.2}), so the selection went on with each. The branch of `{}` ({}) was kept \
-             over that of `{}` ({}), {when}: held-out χ² gain {:.1}, z = {:.2}.\n",
+             (z = {:.2}), so the selection went on with each. {}{}, {when}: held-out χ² gain \
+             {:.1}, z = {:.2}.\n",
             f.round,
             f.kept,
             f.other,
             f.round_z,
-            f.kept,
-            f.kept_effects.join(" + "),
-            f.other,
-            f.other_effects.join(" + "),
+            outcome[..1].to_uppercase(),
+            &outcome[1..],
             f.final_gain,
             f.final_z
         ));
