@@ -488,13 +488,13 @@ fn cli_campaign_writes_its_outputs_and_resumes() {
 }
 
 /// What remains and where (report key `remaining`): on a set whose friction law lies outside
-/// every family (the bearing load of a tilted set-up, `tilted_load_friction` at level 2, seed 1,
-/// the CI set of `gearbif campaign --set ci --ringdowns 4 --driven 2 --turns 8`; the load family
-/// is named and explains part of it) the report finds a held-out mismatch above the camera noise
-/// (z = 3.44 with the code of 2026-11-26) and locates it in bins; on a control it says nothing is
-/// left. The set was a Lorentzian Stribeck decay until step 8 of the diagnosis refitted the
-/// Stribeck member with a width: that member now predicts it within noise (z = 1.88), and so do
-/// the campaign's `lorentz_stribeck` sets (0 of 15 above noise).
+/// every family (a Lorentzian Stribeck decay 1/(1 + (β̇/w)²), `lorentz_stribeck` at level 4,
+/// seed 1, the CI set of `gearbif campaign --set ci --ringdowns 4 --driven 2 --turns 8`; the
+/// Stribeck member of `static_friction` is named and explains part of it) the report finds a
+/// held-out mismatch above the camera noise (z = 3.77 with the code of 2026-11-26) and locates it
+/// in bins; on a control it says nothing is left. The set was a tilted set-up's bearing load
+/// (`tilted_load_friction`, level 2) until the load family fitted the weight's direction: the
+/// family now predicts it within noise (z = 1.52, was 3.44).
 #[test]
 fn remainder_is_located_out_of_family_and_absent_on_a_control() {
     let size = SetSize {
@@ -504,7 +504,7 @@ fn remainder_is_located_out_of_family_and_absent_on_a_control() {
         ..SetSize::ci()
     };
     let dir = std::env::temp_dir().join(format!("gearbif-remainder-{}", std::process::id()));
-    for (id, level, left) in [("tilted_load_friction", 2.0, true), ("none", 1.0, false)] {
+    for (id, level, left) in [("lorentz_stribeck", 4.0, true), ("none", 1.0, false)] {
         let c = build_case(
             effect(id).unwrap(),
             level,
@@ -646,7 +646,7 @@ fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
             accepted: true,
             state: Some(state),
             added_z: None,
-            member_z: None,
+            member: None,
             dropped: None,
             forked: false,
         };

@@ -139,7 +139,8 @@ pub const EFFECTS: &[EffectSpec] = &[
         reference: 0.5,
         unit: "1",
         form: "`vector_load_friction` with the set-up tilted by 30° about the output shaft (the \
-               weight not vertical in the frame of the magnets): a load geometry outside the family",
+               weight not vertical in the frame of the magnets; the family fits the weight's \
+               direction); headline: λ",
     },
     EffectSpec {
         id: "latency",
@@ -413,17 +414,15 @@ fn latency(latency_s: f64, d: &mut Draft) {
 }
 
 /// Friction η[(1 − λ) + λ |P(W + F)|/|W|] with λ = `s` capped at 1 and |W|/F₀ = `weight`
-/// ([`weight_over_force`]); `tilted`: the set-up tilted by 30° about the output shaft, a load
-/// geometry outside the family, with no headline (else headline λ).
+/// ([`weight_over_force`]); `tilted`: the set-up tilted by 30° about the output shaft (the
+/// weight's direction, a shape parameter of the family). Headline λ.
 fn load_friction(s: f64, weight: f64, tilted: bool, d: &mut Draft) {
     d.truth.load = Some(VectorLoad {
         fraction: s.min(1.0),
         weight_over_force: weight,
         tilt: if tilted { 30f64.to_radians() } else { 0.0 },
     });
-    if !tilted {
-        d.headline("load_dependent_friction", s.min(1.0), "1");
-    }
+    d.headline("load_dependent_friction", s.min(1.0), "1");
 }
 
 /// Friction η + Δη_s h(β̇/w) with Δη_s = `s`·η, w = 0.5 rad/s and the decay h of `shape`; the

@@ -303,4 +303,25 @@ mod tests {
         let tau = -a.sin() * b.cos() + m.delta() * a.cos() * b.sin();
         assert!((-dudb - tau).abs() < 1e-8, "{} vs {tau}", -dudb);
     }
+
+    /// The truth's radial load of a set-up tilted by ψ (its own force and tilt formulas) is the
+    /// diagnosis's load family at the weight (ρ cos ψ, ρ sin ψ): two implementations of the same
+    /// geometry agree, so a tilted bearing load lies inside the family.
+    #[test]
+    fn a_tilted_load_is_the_family_at_the_rotated_weight() {
+        use crate::identification::model::{load_shape, Geometry};
+        let m = TruthModel::base(300.0, 0.4, -0.7, 1.0, 20.0);
+        let geo = Geometry {
+            theta: m.theta,
+            phi: m.phi,
+        };
+        for k in 0..12 {
+            let (a, b) = (0.53 * k as f64, 1.7 - 0.61 * k as f64);
+            for (rho, psi) in [(0.7, 0.0), (2.3, 0.52), (1.1, -1.3), (4.0, 2.9)] {
+                let t = m.radial_load(a, b, rho, psi);
+                let f = load_shape(&geo, a, b, [rho * psi.cos(), rho * psi.sin()], true);
+                assert!((t - f).abs() < 1e-12, "{a} {b} {rho} {psi}: {t} vs {f}");
+            }
+        }
+    }
 }

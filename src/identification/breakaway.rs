@@ -242,7 +242,7 @@ pub fn width_member(
         accepted,
         state: st.filter(|_| accepted),
         added_z,
-        member_z: None,
+        member: None,
         dropped: None,
         forked: false,
     };

@@ -252,7 +252,7 @@ fn drift_members() -> Vec<Effect> {
 }
 
 /// The `static_torque` family: lab-fixed torques Σ_k (A_k sin kβ + B_k cos kβ) with harmonics
-/// k = 1..K, K = 1, 2, 3 (nested members; the held-out judge picks K, [`judged_members`]).
+/// k = 1..K, K = 1, 2, 3 (nested members; the held-out judge picks K, [`MemberChoice::Nested`]).
 fn static_torque_members() -> Vec<Effect> {
     let harmonics: [&[Term]; 3] = [
         &[Term::SinB, Term::CosB],
@@ -286,11 +286,12 @@ fn static_torque_members() -> Vec<Effect> {
 }
 
 /// The `load_dependent_friction` family: dry friction η + η_L L with the bearing load
-/// L = |F − ρ ẑ| (weight ρF₀ and dipole force F added as vectors) or its radial part
-/// |P(F − ρ ẑ)| (perpendicular to the output shaft), ρ fitted by simulation
-/// ([`super::model::load_shape`]). Written as η_t [(1 − λ) + λ L/ρ]: a fraction
-/// λ = η_L ρ / (η + η_L ρ) of the friction is load-dependent. ρ = 0 with the whole load is the
-/// dipole force alone.
+/// L = |F + W| (the dipole force F and the shaft's weight W = −ρ_z ẑ − ρ_n n̂ added as vectors)
+/// or its radial part |P(F + W)| (perpendicular to the output shaft), the weight's vertical and
+/// side components (units F₀) fitted by simulation: its size ρ = |W|/F₀ and its direction, the
+/// tilt ψ of the set-up about the output shaft ([`super::model::load_shape`]). Written as
+/// η_t [(1 − λ) + λ L/ρ]: a fraction λ = η_L ρ / (η + η_L ρ) of the friction is load-dependent.
+/// A zero weight with the whole load is the dipole force alone.
 fn load_friction_members() -> Vec<Effect> {
     [Term::LoadFric, Term::RadialLoadFric]
         .into_iter()
@@ -299,9 +300,14 @@ fn load_friction_members() -> Vec<Effect> {
             class: "friction",
             explanation: "dry friction grows with the bearing load, the shaft's weight and the \
                           magnetic force between the magnets added as vectors (the whole load, or \
-                          its radial part): η + η_L |(P)(F − ρ ẑ)|, a fraction λ of the friction \
-                          load-dependent",
-            terms: vec![t, Term::Shape(Shape::LoadWeight)],
+                          its radial part): η + η_L |(P)(F + W)|, a fraction λ of the friction \
+                          load-dependent, the weight W of fitted size and direction (the set-up's \
+                          tilt about the output shaft)",
+            terms: vec![
+                t,
+                Term::Shape(Shape::LoadWeight),
+                Term::Shape(Shape::LoadSide),
+            ],
             candidates: vec![
                 "bearing friction proportional to the radial load",
                 "bearing friction proportional to the total load (axial and radial)",
@@ -313,21 +319,30 @@ fn load_friction_members() -> Vec<Effect> {
         .collect()
 }
 
-/// Whether the members of a family are all proposed and the held-out judge picks among them
-/// (nested members: the smallest one that no larger member beats significantly), rather than
-/// the weak form's best member.
-pub fn judged_members(id: &str) -> bool {
-    id == "static_torque"
+/// How the member of a family that goes into a model is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MemberChoice {
+    /// The weak form's best member by ΔBIC is the family's one proposal.
+    WeakForm,
+    /// Nested members (`static_torque`'s harmonics 1..K): all proposed, and the held-out judge
+    /// keeps the smallest one that no larger member beats significantly.
+    Nested,
+    /// Alternative members that the weak form cannot be trusted to choose between: each
+    /// member's best start is proposed and the held-out judge keeps the one that predicts best
+    /// like any other candidates of the round (the whole and the radial bearing load of
+    /// `load_dependent_friction` differ only by the force's component along the output shaft:
+    /// on a full-size set of a radial load the weak form preferred the whole load by ΔBIC, whose
+    /// refit then lost to a dictionary term; docs/diagnosis.md, "The catalog as families").
+    Alternatives,
 }
 
-/// Whether a family's members are alternatives that the weak form cannot be trusted to choose
-/// between, so that each member's best start is proposed and the held-out judge picks the one
-/// that predicts best (the whole and the radial bearing load of `load_dependent_friction`
-/// differ only by the force's component along the output shaft: on a full-size set of a radial
-/// load the weak form preferred the whole load by ΔBIC, whose refit then lost to a dictionary
-/// term; docs/diagnosis.md, "The catalog as families").
-pub fn alternative_members(id: &str) -> bool {
-    id == "load_dependent_friction"
+/// How the members of the family `id` are chosen ([`MemberChoice`]).
+pub fn member_choice(id: &str) -> MemberChoice {
+    match id {
+        "static_torque" => MemberChoice::Nested,
+        "load_dependent_friction" => MemberChoice::Alternatives,
+        _ => MemberChoice::WeakForm,
+    }
 }
 
 /// Whether two catalog entries fill the same slot (one finding per slot): the same effect, and
@@ -564,7 +579,8 @@ fn power_law_drag_params(get: &dyn Fn(Term) -> Option<(f64, f64)>, p: &mut BTree
 }
 
 /// Load-dependent friction: η_L (whole or radial load; k = η_L/η relative to the base η
-/// `base_eta` when positive) and the fitted weight over force ρ.
+/// `base_eta` when positive) and the fitted weight's components (ρ_z, ρ_n) (its size and tilt,
+/// which need the covariance, are added in [`super::findings`]).
 fn load_friction_params(
     get: &dyn Fn(Term) -> Option<(f64, f64)>,
     base_eta: f64,
@@ -583,9 +599,14 @@ fn load_friction_params(
             p.insert("k_err".into(), s / base_eta);
         }
     }
-    if let Some((r, s)) = get(Term::Shape(Shape::LoadWeight)) {
-        p.insert("weight_over_force".into(), r);
-        p.insert("weight_over_force_err".into(), s);
+    for (shape, key) in [
+        (Shape::LoadWeight, "weight_vertical"),
+        (Shape::LoadSide, "weight_side"),
+    ] {
+        if let Some((r, s)) = get(Term::Shape(shape)) {
+            p.insert(key.into(), r);
+            p.insert(format!("{key}_err"), s);
+        }
     }
 }
 

@@ -167,10 +167,30 @@ pub fn params_of(effect: &Effect, st: &ModelState) -> BTreeMap<String, f64> {
                 p.insert("fraction".into(), l);
                 p.insert("fraction_err".into(), e);
             }
+            if let Some(w) = load_weight(st) {
+                p.insert("weight_over_force".into(), w.size.0);
+                p.insert("weight_over_force_err".into(), w.size.1);
+                if let Some((psi, s_psi)) = w.tilt_deg {
+                    p.insert("tilt_deg".into(), psi);
+                    p.insert("tilt_deg_err".into(), s_psi);
+                }
+            }
             p
         }
         _ => effect_params(effect, &map, base_values(&map)),
     }
+}
+
+/// A function of θ entries with its 1σ by first-order propagation through the refit's
+/// covariance: `grad` lists (θ index, ∂f/∂θ_index).
+fn first_order(st: &ModelState, value: f64, grad: &[(usize, f64)]) -> (f64, f64) {
+    let mut var = 0.0;
+    for &(a, ga) in grad {
+        for &(b, gb) in grad {
+            var += ga * gb * st.fit.cov[(a, b)];
+        }
+    }
+    (value, var.max(0.0).sqrt())
 }
 
 /// The drag family's coefficient in SI form, q_SI = q V^(−p) of −q_SI |β̇|^p sgn β̇
@@ -181,42 +201,86 @@ pub fn drag_coefficient(st: &ModelState) -> Option<(f64, f64)> {
     let (q, p) = (st.fit.theta[iq], st.fit.theta[ip]);
     let v = DRAG_REFERENCE_SPEED;
     let qs = q * v.powf(-p);
-    let grad = [(iq, v.powf(-p)), (ip, -qs * v.ln())];
-    let mut var = 0.0;
-    for &(a, ga) in &grad {
-        for &(b, gb) in &grad {
-            var += ga * gb * st.fit.cov[(a, b)];
-        }
-    }
-    Some((qs, var.max(0.0).sqrt()))
+    Some(first_order(st, qs, &[(iq, v.powf(-p)), (ip, -qs * v.ln())]))
 }
 
-/// The load-dependent fraction λ = η_L ρ / (η + η_L ρ) of the friction η + η_L L (catalog.rs,
-/// `load_dependent_friction`) with its 1σ from the refit's covariance (first order).
+/// The θ indices of the load family's weight components (ρ_z, ρ_n) (a missing side component
+/// is `None`: a vertical weight).
+fn weight_indices(st: &ModelState) -> Option<(usize, Option<usize>)> {
+    let at = |t: Term| st.terms.iter().position(|&x| x == t);
+    Some((
+        at(Term::Shape(Shape::LoadWeight))?,
+        at(Term::Shape(Shape::LoadSide)),
+    ))
+}
+
+/// The load family's weight: its size and direction, each as (value, 1σ).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoadWeight {
+    /// ρ = |W|/F₀.
+    pub size: (f64, f64),
+    /// The tilt ψ of the set-up about the output shaft, degrees (`None` when ρ = 0).
+    pub tilt_deg: Option<(f64, f64)>,
+}
+
+/// The load family's weight W = −ρ_z ẑ − ρ_n n̂ (catalog.rs, `load_dependent_friction`) as its
+/// size ρ = |W|/F₀ = √(ρ_z² + ρ_n²) and its direction, the tilt ψ = atan2(ρ_n, ρ_z) of the
+/// set-up about the output shaft, each with its 1σ from the refit's covariance (first order).
+pub fn load_weight(st: &ModelState) -> Option<LoadWeight> {
+    let (iz, i_n) = weight_indices(st)?;
+    let th = &st.fit.theta;
+    let (z, n) = (th[iz], i_n.map_or(0.0, |k| th[k]));
+    let rho = z.hypot(n);
+    if !rho.is_finite() {
+        return None;
+    }
+    if rho == 0.0 {
+        return Some(LoadWeight {
+            size: (0.0, st.fit.err[iz]),
+            tilt_deg: None,
+        });
+    }
+    let mut g_rho = vec![(iz, z / rho)];
+    let mut g_psi = vec![(iz, -n / (rho * rho))];
+    if let Some(k) = i_n {
+        g_rho.push((k, n / rho));
+        g_psi.push((k, z / (rho * rho)));
+    }
+    let (psi, s_psi) = first_order(st, n.atan2(z), &g_psi);
+    Some(LoadWeight {
+        size: first_order(st, rho, &g_rho),
+        tilt_deg: Some((psi.to_degrees(), s_psi.to_degrees())),
+    })
+}
+
+/// The load-dependent fraction λ = η_L ρ / (η + η_L ρ) of the friction η + η_L L, ρ = |W|/F₀
+/// (catalog.rs, `load_dependent_friction`) with its 1σ from the refit's covariance (first
+/// order).
 pub fn load_fraction(st: &ModelState) -> Option<(f64, f64)> {
     let at = |t: Term| st.terms.iter().position(|&x| x == t);
     let i_eta = at(Term::Eta)?;
     let i_load = at(Term::LoadFric).or(at(Term::RadialLoadFric))?;
-    let i_rho = at(Term::Shape(Shape::LoadWeight))?;
+    let (iz, i_n) = weight_indices(st)?;
     let th = &st.fit.theta;
-    let (eta, el, rho) = (th[i_eta], th[i_load], th[i_rho]);
+    let (eta, el) = (th[i_eta], th[i_load]);
+    let (z, side) = (th[iz], i_n.map_or(0.0, |k| th[k]));
+    let rho = z.hypot(side);
     let n = el * rho;
     let d = eta + n;
     if !(rho > 0.0 && d > 0.0) {
         return None;
     }
-    let grad = [
+    // ∂λ/∂ρ, carried to the components by ∂ρ/∂ρ_z = ρ_z/ρ, ∂ρ/∂ρ_n = ρ_n/ρ
+    let dl_drho = el * eta / (d * d);
+    let mut grad = vec![
         (i_eta, -n / (d * d)),
         (i_load, rho * eta / (d * d)),
-        (i_rho, el * eta / (d * d)),
+        (iz, dl_drho * z / rho),
     ];
-    let mut var = 0.0;
-    for &(a, ga) in &grad {
-        for &(b, gb) in &grad {
-            var += ga * gb * st.fit.cov[(a, b)];
-        }
+    if let Some(k) = i_n {
+        grad.push((k, dl_drho * side / rho));
     }
-    Some((n / d, var.max(0.0).sqrt()))
+    Some(first_order(st, n / d, &grad))
 }
 
 /// The headline `size` of `effect` in the final model `fin` with its σ taken from the profiles of
@@ -565,7 +629,7 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                 "heldout_rms_before_rad": t.cmp.map(|m| m.rms_before),
                 "heldout_rms_after_rad": t.cmp.map(|m| m.rms_after),
                 "windows_failed": t.cmp.map(|m| m.failed_after),
-                "member_z_against_smaller": t.member_z,
+                "member_z_against_smaller": t.member.map(|c| c.z),
                 "added_parameters_z": t.added_z,
                 "dropped_wald_z": t.dropped.map(|d| d.wald_z),
                 "dropped_heldout_z": t.dropped.map(|d| d.heldout_z),
@@ -590,9 +654,9 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                     Some(m) if t.added_z.is_some_and(|z| z < t.z_crit) => format!(
                         "held-out gain (z = {:.2}) with added parameters consistent with zero \
                          (Wald z = {:.2} < {:.2})", m.z, t.added_z.unwrap_or(0.0), t.z_crit),
-                    Some(_) if t.member_z.is_some_and(|z| z < t.z_crit) => format!(
-                        "a smaller member of the family predicts as well (held-out z of this \
-                         member against it {:.2} < {:.2})", t.member_z.unwrap_or(0.0), t.z_crit),
+                    Some(_) if smaller_member_reason(t).is_some() => {
+                        smaller_member_reason(t).unwrap_or_default()
+                    }
                     Some(_) if t.forked => "a close rival of the accepted candidate: accepted on \
                         the other branch of the fork of its round, the branch that was left \
                         (fits.selection_forks)"
@@ -607,6 +671,18 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
             })
         })
         .collect()
+}
+
+/// The reason a significant member of a nested family was rejected when the smaller member
+/// chosen before it predicts as well: its comparison against that member does not improve on it
+/// ([`super::judge::Comparison::improves`]: z below the threshold, or a worse summed χ²).
+fn smaller_member_reason(t: &Tried) -> Option<String> {
+    let c = t.member.filter(|c| !c.improves(t.z_crit))?;
+    Some(format!(
+        "a smaller member of the family predicts as well (held-out z of this member against it \
+         {:.2}, threshold {:.2}; summed held-out χ² gain {:.1})",
+        c.z, t.z_crit, c.gain
+    ))
 }
 
 #[cfg(test)]
@@ -667,13 +743,35 @@ mod tests {
         let theta = vec![1.25, 20.0, -287.0, 66.0, 11.5];
         let err = vec![0.01, 0.12, 0.17, 0.10, 0.43];
         let n = terms.len();
-        let st = ModelState {
+        let st = state(terms, theta, err, nalgebra::DMatrix::zeros(n, n));
+        let e = super::super::catalog::catalog()
+            .into_iter()
+            .find(|e| e.id == "static_friction")
+            .unwrap();
+        let p = params_of(&e, &st);
+        assert_eq!(p["eta_static_excess"], 11.5);
+        assert_eq!(p["excess_relative"], 11.5 / 20.0);
+        assert_eq!(p["excess_relative_err"], 0.43 / 20.0);
+        assert!(!p.contains_key("stribeck_width") && !p.contains_key("stribeck_power"));
+        let size = headline_size(&e, &p).unwrap();
+        assert_eq!((size.value, size.sigma), (11.5 / 20.0, 0.43 / 20.0));
+    }
+
+    /// A final model with θ, its σ and covariance (no residuals or windows).
+    fn state(
+        terms: Vec<Term>,
+        theta: Vec<f64>,
+        err: Vec<f64>,
+        cov: nalgebra::DMatrix<f64>,
+    ) -> ModelState {
+        let n = terms.len();
+        ModelState {
             terms,
             fit_latency: false,
             fit: SimFit {
                 theta,
                 err,
-                cov: nalgebra::DMatrix::zeros(n, n),
+                cov,
                 jac: nalgebra::DMatrix::zeros(0, n),
                 resid: Vec::new(),
                 used: Vec::new(),
@@ -689,17 +787,66 @@ mod tests {
                 chi2_fit: Vec::new(),
             },
             effects: Vec::new(),
+        }
+    }
+
+    /// The load family's fraction λ, weight ρ and tilt ψ with their first-order σ: the values
+    /// from their definitions, the σ against J C Jᵀ with J by central differences of the same
+    /// definitions written here, on a correlated covariance.
+    #[test]
+    fn load_fraction_weight_and_tilt_propagate_the_covariance() {
+        let terms = vec![
+            Term::Eta,
+            Term::RadialLoadFric,
+            Term::Shape(Shape::LoadWeight),
+            Term::Shape(Shape::LoadSide),
+        ];
+        let theta = vec![11.0, 5.0, 1.9, 1.1];
+        let l = nalgebra::DMatrix::<f64>::from_row_slice(
+            4,
+            4,
+            &[
+                0.4, 0.0, 0.0, 0.0, 0.1, 0.2, 0.0, 0.0, -0.05, 0.03, 0.15, 0.0, 0.02, -0.04, 0.06,
+                0.1,
+            ],
+        );
+        let cov = &l * l.transpose();
+        let err = (0..4).map(|k| cov[(k, k)].sqrt()).collect::<Vec<f64>>();
+        let st = state(terms, theta.clone(), err, cov.clone());
+        let defs: [fn(&[f64]) -> f64; 3] = [
+            |t| t[1] * t[2].hypot(t[3]) / (t[0] + t[1] * t[2].hypot(t[3])),
+            |t| t[2].hypot(t[3]),
+            |t| t[3].atan2(t[2]).to_degrees(),
+        ];
+        let sigma = |f: fn(&[f64]) -> f64| {
+            let j: Vec<f64> = (0..4)
+                .map(|k| {
+                    let (mut up, mut dn) = (theta.clone(), theta.clone());
+                    up[k] += 1e-6;
+                    dn[k] -= 1e-6;
+                    (f(&up) - f(&dn)) / 2e-6
+                })
+                .collect();
+            let mut v = 0.0;
+            for a in 0..4 {
+                for b in 0..4 {
+                    v += j[a] * j[b] * cov[(a, b)];
+                }
+            }
+            (f(&theta), v.sqrt())
         };
-        let e = super::super::catalog::catalog()
+        let (lam, s_lam) = load_fraction(&st).unwrap();
+        let w = load_weight(&st).unwrap();
+        let ((rho, s_rho), (psi, s_psi)) = (w.size, w.tilt_deg.unwrap());
+        for ((v, s), f) in [(lam, s_lam), (rho, s_rho), (psi, s_psi)]
             .into_iter()
-            .find(|e| e.id == "static_friction")
-            .unwrap();
-        let p = params_of(&e, &st);
-        assert_eq!(p["eta_static_excess"], 11.5);
-        assert_eq!(p["excess_relative"], 11.5 / 20.0);
-        assert_eq!(p["excess_relative_err"], 0.43 / 20.0);
-        assert!(!p.contains_key("stribeck_width") && !p.contains_key("stribeck_power"));
-        let size = headline_size(&e, &p).unwrap();
-        assert_eq!((size.value, size.sigma), (11.5 / 20.0, 0.43 / 20.0));
+            .zip(defs)
+        {
+            let (v_fd, s_fd) = sigma(f);
+            assert!((v - v_fd).abs() < 1e-12 * v.abs().max(1.0), "{v} vs {v_fd}");
+            assert!((s - s_fd).abs() < 1e-6 * s_fd, "{s} vs {s_fd}");
+        }
+        // tilt 30.07°: the weight's direction from its components
+        assert!((psi - 1.1f64.atan2(1.9).to_degrees()).abs() < 1e-12);
     }
 }

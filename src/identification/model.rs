@@ -63,9 +63,14 @@ pub enum Shape {
     /// Exponent p of the power-law drag −q |β̇|^p sgn β̇ (`power_law_drag`; p = 2 is the
     /// quadratic drag).
     DragExponent,
-    /// Weight-to-force ratio ρ = |W|/F₀ of the load-dependent friction's bearing load
-    /// |F − ρ ẑ| ([`load_shape`]; ρ = 0 is the dipole force alone).
+    /// Vertical component ρ_z of the shaft's weight in units of F₀ (W = −ρ_z ẑ − ρ_n n̂) in the
+    /// load-dependent friction's bearing load |F + W| ([`load_shape`]; ρ_z = ρ_n = 0 is the dipole
+    /// force alone).
     LoadWeight,
+    /// Horizontal component ρ_n of the shaft's weight in units of F₀, along n̂ = ẑ × ê, ê the
+    /// output shaft's axis ([`load_shape`]): a set-up tilted by ψ about the output shaft has
+    /// (ρ_z, ρ_n) = |W|/F₀ (cos ψ, sin ψ).
+    LoadSide,
     /// Width w of the Stribeck decay of the breakaway excess, Δη_s exp(−(|β̇|/w)^δ) in the
     /// sliding friction (`static_friction`; w → 0 is the excess at rest only).
     StribeckWidth,
@@ -79,7 +84,8 @@ impl Shape {
     pub fn name(&self) -> &'static str {
         match self {
             Shape::DragExponent => "drag_exponent",
-            Shape::LoadWeight => "load_weight_over_force",
+            Shape::LoadWeight => "load_weight_vertical",
+            Shape::LoadSide => "load_weight_side",
             Shape::StribeckWidth => "stribeck_width",
             Shape::StribeckPower => "stribeck_power",
         }
@@ -89,7 +95,7 @@ impl Shape {
     pub fn range(&self) -> (f64, f64) {
         match self {
             Shape::DragExponent => (0.5, 4.0),
-            Shape::LoadWeight => (-50.0, 50.0),
+            Shape::LoadWeight | Shape::LoadSide => (-50.0, 50.0),
             Shape::StribeckWidth => (1e-3, 20.0),
             Shape::StribeckPower => (0.5, 4.0),
         }
@@ -129,8 +135,9 @@ pub struct Coefficients {
     pub corot: f64,
     /// Load-dependent dry friction η_L, s⁻² per unit bearing load ([`load_shape`]).
     pub eta_load: f64,
-    /// Weight-to-force ratio ρ of the bearing load (0: the dipole force alone).
-    pub load_weight: f64,
+    /// The shaft's weight in units of F₀ in the bearing load, (ρ_z, ρ_n) of W = −ρ_z ẑ − ρ_n n̂
+    /// ([`load_shape`]; 0: the dipole force alone).
+    pub load_weight: [f64; 2],
     /// Only the radial part of the bearing load (perpendicular to the output shaft) counts.
     pub load_radial: bool,
     /// Input compliance χ = I/k_in, s²: the input magnet sits at α + χ τ_in(α, β), τ_in the
@@ -236,18 +243,24 @@ pub fn dipole_force(geo: &Geometry, alpha: f64, beta: f64) -> [f64; 3] {
 
 /// |F| / (3 μ0 m1 m2 / (4π r⁴)): the magnitude of the dipole–dipole force ([`dipole_force`]).
 pub fn force_shape(geo: &Geometry, alpha: f64, beta: f64) -> f64 {
-    load_shape(geo, alpha, beta, 0.0, false)
+    load_shape(geo, alpha, beta, [0.0; 2], false)
 }
 
 /// The bearing load of the load-dependent friction family in units of F₀ = 3 μ0 m1 m2/(4π r⁴):
-/// |F − ρ ẑ| (the shaft's weight ρF₀ and the dipole force added as vectors), or with `radial`
-/// |P(F − ρ ẑ)|, P the projection perpendicular to the output shaft axis (cos Φ, sin Φ, 0) (a
-/// radial bearing). ρ = 0 without projection is [`force_shape`].
-pub fn load_shape(geo: &Geometry, alpha: f64, beta: f64, rho: f64, radial: bool) -> f64 {
+/// |F + W| (the dipole force and the shaft's weight added as vectors), or with `radial`
+/// |P(F + W)|, P the projection perpendicular to the output shaft's axis ê = (cos Φ, sin Φ, 0) (a
+/// radial bearing). The weight W = −ρ_z ẑ − ρ_n n̂, `weight` = (ρ_z, ρ_n), lies in the plane
+/// perpendicular to ê (n̂ = ẑ × ê = (−sin Φ, cos Φ, 0)): a set-up tilted by ψ about the output
+/// shaft has (ρ_z, ρ_n) = ρ (cos ψ, sin ψ), ρ = |W|/F₀. A zero weight without projection is
+/// [`force_shape`].
+pub fn load_shape(geo: &Geometry, alpha: f64, beta: f64, weight: [f64; 2], radial: bool) -> f64 {
     let mut l = dipole_force(geo, alpha, beta);
-    l[2] -= rho;
+    let (sp, cp) = geo.phi.sin_cos();
+    let [rz, rn] = weight;
+    l[0] += rn * sp;
+    l[1] -= rn * cp;
+    l[2] -= rz;
     if radial {
-        let (sp, cp) = geo.phi.sin_cos();
         let along = l[0] * cp + l[1] * sp;
         l[0] -= along * cp;
         l[1] -= along * sp;
@@ -399,8 +412,8 @@ impl AugmentedGear {
         let mut r = self.c.eta;
         if self.c.eta_load != 0.0 {
             let (lo, hi) = Shape::LoadWeight.range();
-            let rho = self.c.load_weight.clamp(lo, hi);
-            r += self.c.eta_load * load_shape(&self.geo, alpha, beta, rho, self.c.load_radial);
+            let w = self.c.load_weight.map(|x| x.clamp(lo, hi));
+            r += self.c.eta_load * load_shape(&self.geo, alpha, beta, w, self.c.load_radial);
         }
         for &(term, th) in &self.c.extra {
             match term {
@@ -740,7 +753,7 @@ mod tests {
 
     /// The load family's bearing load: ρ = 0 without projection is the force magnitude; the
     /// radial load is the force with its component along the output shaft removed, never larger
-    /// than the whole load; a weight ρ along −ẑ adds as a vector.
+    /// than the whole load; a weight with a vertical and a side component adds as a vector.
     #[test]
     fn load_shape_members() {
         let geo = Geometry {
@@ -752,14 +765,25 @@ mod tests {
             let (a, b) = (0.41 * k as f64, 2.0 - 0.37 * k as f64);
             let f = dipole_force(&geo, a, b);
             let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-            assert_eq!(load_shape(&geo, a, b, 0.0, false), force_shape(&geo, a, b));
+            assert_eq!(
+                load_shape(&geo, a, b, [0.0; 2], false),
+                force_shape(&geo, a, b)
+            );
             assert!((force_shape(&geo, a, b) - norm(f)).abs() < 1e-15);
             let w = [f[0], f[1], f[2] - 2.2];
-            assert!((load_shape(&geo, a, b, 2.2, false) - norm(w)).abs() < 1e-12);
+            assert!((load_shape(&geo, a, b, [2.2, 0.0], false) - norm(w)).abs() < 1e-12);
             let along = w[0] * e[0] + w[1] * e[1];
             let radial = norm([w[0] - along * e[0], w[1] - along * e[1], w[2]]);
-            assert!((load_shape(&geo, a, b, 2.2, true) - radial).abs() < 1e-12);
+            assert!((load_shape(&geo, a, b, [2.2, 0.0], true) - radial).abs() < 1e-12);
             assert!(radial <= norm(w) + 1e-15);
+            // a side component along n̂ = ẑ × ê, perpendicular to the shaft: the radial
+            // projection keeps it whole
+            let n = [-e[1], e[0], 0.0];
+            let ws = [f[0] - 1.3 * n[0], f[1] - 1.3 * n[1], f[2] - 2.2];
+            assert!((load_shape(&geo, a, b, [2.2, 1.3], false) - norm(ws)).abs() < 1e-12);
+            let along = ws[0] * e[0] + ws[1] * e[1];
+            let rs = norm([ws[0] - along * e[0], ws[1] - along * e[1], ws[2]]);
+            assert!((load_shape(&geo, a, b, [2.2, 1.3], true) - rs).abs() < 1e-12);
         }
     }
 }

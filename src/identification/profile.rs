@@ -52,13 +52,17 @@ pub struct ShapeProfile {
 
 /// The values a profile over `s` may visit, ascending: the weak-form grid of the family (always
 /// evaluated, [`start_grid`]) continued to the ends of the parameter's documented range
-/// ([`Shape::range`]; the load's weight ratio from 0, the Stribeck width from 0.02 rad/s: below
-/// it the decay is inside the stick phase).
+/// ([`Shape::range`]; the weight's vertical component from 0, its side component both ways, the
+/// Stribeck width from 0.02 rad/s: below it the decay is inside the stick phase).
 pub fn ladder(s: Shape) -> Vec<f64> {
     match s {
         Shape::DragExponent => vec![0.5, 0.8, 1.2, 1.5, 1.8, 2.0, 2.5, 3.0, 3.5, 4.0],
         Shape::LoadWeight => vec![
             0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 5.0, 8.0, 13.0, 20.0, 32.0, 50.0,
+        ],
+        Shape::LoadSide => vec![
+            -50.0, -32.0, -20.0, -13.0, -8.0, -5.0, -3.0, -2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0,
+            3.0, 5.0, 8.0, 13.0, 20.0, 32.0, 50.0,
         ],
         Shape::StribeckWidth => vec![
             0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.2, 2.0, 3.5, 6.0, 10.0, 20.0,
@@ -68,7 +72,9 @@ pub fn ladder(s: Shape) -> Vec<f64> {
 }
 
 /// The values of [`ladder`] evaluated on every profile: the weak-form grid of the family
-/// ([`super::propose`]); for δ the exponential, the Gaussian and values between and beyond.
+/// ([`super::propose`]; for the weight its magnitudes as the vertical component, and the side
+/// component up to a weight of 2 tilted by 30°); for δ the exponential, the Gaussian and values
+/// between and beyond.
 pub fn start_grid(s: Shape) -> Vec<f64> {
     match s {
         Shape::DragExponent => DRAG_EXPONENT_GRID
@@ -79,6 +85,7 @@ pub fn start_grid(s: Shape) -> Vec<f64> {
             .iter()
             .map(|&r| f64::from(r) / 10.0)
             .collect(),
+        Shape::LoadSide => vec![-1.0, -0.5, 0.0, 0.5, 1.0],
         Shape::StribeckWidth => STRIBECK_WIDTH_GRID
             .iter()
             .map(|&w| f64::from(w) / 100.0)
@@ -583,6 +590,7 @@ mod tests {
         for s in [
             Shape::DragExponent,
             Shape::LoadWeight,
+            Shape::LoadSide,
             Shape::StribeckWidth,
             Shape::StribeckPower,
         ] {

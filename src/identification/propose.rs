@@ -2,10 +2,12 @@
 //! best dictionary terms, each with starting values for the refit by simulation. The weak form
 //! only proposes; [`super::judge`] decides by simulation on held-out runs.
 
-use super::catalog::{alternative_members, catalog, dictionary, judged_members, same_slot, Effect};
+use super::catalog::{catalog, dictionary, member_choice, same_slot, Effect, MemberChoice};
 use super::model::{Geometry, Shape};
 use super::preprocess::CleanRun;
-use super::regression::{build, delta_bic, fit, Design, LinFit, Term, WeakOptions};
+use super::regression::{
+    build, delta_bic, fit, grid_weight, load_grid_term, Design, LinFit, Term, WeakOptions,
+};
 use super::spec::column_term;
 
 /// A candidate effect to judge.
@@ -131,8 +133,31 @@ fn candidate(
 /// viscous column of ζ).
 pub const DRAG_EXPONENT_GRID: [u8; 6] = [12, 15, 18, 20, 25, 30];
 
-/// Weight-to-force ratios ρ (× 10) of the load family's weak-form profile.
+/// Weight-to-force ratios ρ = |W|/F₀ (× 10) of the load family's weak-form profile.
 pub const LOAD_WEIGHT_GRID: [u8; 8] = [0, 5, 10, 15, 20, 30, 50, 80];
+
+/// Directions ψ of the weight (degrees from −ẑ about the output shaft: the tilt of the set-up)
+/// of the load family's weak-form profile. Half a turn: the gear's symmetry (α, β) → (−α, −β)
+/// reverses the dipole force's vertical component and keeps the others, so a weight at ψ and at
+/// 180° − ψ load the bearings alike on recordings that sample both signs.
+pub const LOAD_TILT_GRID: [i16; 7] = [-90, -60, -30, 0, 30, 60, 90];
+
+/// The weights (ρ_z, ρ_n) = ρ (cos ψ, sin ψ) of the load family's weak-form profile, ρ on
+/// [`LOAD_WEIGHT_GRID`] and ψ on [`LOAD_TILT_GRID`], in hundredths as their [`Term::LoadGrid`]
+/// columns hold them (ρ = 0 once).
+pub fn load_weight_grid() -> Vec<[f64; 2]> {
+    let mut v: Vec<[f64; 2]> = vec![[0.0; 2]];
+    for &r in &LOAD_WEIGHT_GRID[1..] {
+        for &psi in &LOAD_TILT_GRID {
+            let (s, c) = f64::from(psi).to_radians().sin_cos();
+            let rho = f64::from(r) / 10.0;
+            if let Term::LoadGrid(z, n, _) = load_grid_term([rho * c, rho * s], false) {
+                v.push(grid_weight(z, n));
+            }
+        }
+    }
+    v
+}
 
 /// Widths w (× 100, rad/s) of the Stribeck family's weak-form profile: output speeds from a
 /// tenth of a rad/s to the few rad/s of the driven runs.
@@ -156,7 +181,11 @@ fn grid_columns() -> Vec<Term> {
         );
     }
     for radial in [false, true] {
-        v.extend(LOAD_WEIGHT_GRID.iter().map(|&r| Term::LoadGrid(r, radial)));
+        v.extend(
+            load_weight_grid()
+                .into_iter()
+                .map(|w| load_grid_term(w, radial)),
+        );
     }
     v
 }
@@ -181,9 +210,9 @@ fn shape_grid(e: &Effect) -> Vec<Vec<(Shape, f64)>> {
             })
             .collect()
     } else if e.terms.contains(&Term::Shape(Shape::LoadWeight)) {
-        LOAD_WEIGHT_GRID
-            .iter()
-            .map(|&r| vec![(Shape::LoadWeight, f64::from(r) / 10.0)])
+        load_weight_grid()
+            .into_iter()
+            .map(|[z, n]| vec![(Shape::LoadWeight, z), (Shape::LoadSide, n)])
             .collect()
     } else {
         vec![vec![]]
@@ -267,7 +296,7 @@ pub fn propose(
         let Some(c) = family_candidate(&d, current, &cur, e) else {
             continue;
         };
-        if judged_members(c.effect.id) || alternative_members(c.effect.id) {
+        if member_choice(c.effect.id) != MemberChoice::WeakForm {
             // nested or alternative members: all proposed, the held-out judge picks (select.rs)
             out.push(c);
             continue;

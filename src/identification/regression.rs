@@ -44,12 +44,13 @@ pub enum Term {
     /// −(|β̇|/V)^p sgn β̇ with p = the value / 10 (V the drag family's reference speed): a
     /// weak-form column on the exponent grid of the drag family's profile (`power_law_drag`).
     PowDrag(u8),
-    /// −sgn β̇ · |P(F − ρẑ)| (radial bearing load, `load_dependent_friction` family; ρ from a
-    /// [`Term::Shape`] `LoadWeight` in the model, else 0).
+    /// −sgn β̇ · |P(F + W)| (radial bearing load, `load_dependent_friction` family; the weight W
+    /// from the [`Term::Shape`]s `LoadWeight` and `LoadSide` in the model, else 0).
     RadialLoadFric,
-    /// −sgn β̇ · bearing load at ρ = the value / 10, radial when the flag is set: a weak-form
-    /// column on the grid of the load family's profile.
-    LoadGrid(u8, bool),
+    /// −sgn β̇ · bearing load at the weight (ρ_z, ρ_n) = the values / 100 (radial when the flag
+    /// is set; [`super::model::load_shape`]): a weak-form column on the grid of the load
+    /// family's profile.
+    LoadGrid(i16, i16, bool),
     /// −sgn β̇ · exp(−(|β̇|/w)^δ): the breakaway excess carried into sliding by a Stribeck decay
     /// (`static_friction` family; w and δ from the [`Term::Shape`]s `StribeckWidth` and
     /// `StribeckPower`; the weak-form column without them: w = 0.5 rad/s, δ = 2).
@@ -186,10 +187,11 @@ impl Term {
                 f64::from(*w) / 100.0,
                 f64::from(*d) / 10.0
             ),
-            Term::LoadGrid(r, radial) => format!(
-                "-sgn(dbeta)|{}(F-{}z)|",
+            Term::LoadGrid(z, n, radial) => format!(
+                "-sgn(dbeta)|{}(F-{}z-{}n)|",
                 if *radial { "P" } else { "" },
-                f64::from(*r) / 10.0
+                f64::from(*z) / 100.0,
+                f64::from(*n) / 100.0
             ),
             Term::Corot => "-(dbeta-dalpha)".into(),
             Term::LoadFric => "-sgn(dbeta)h(alpha,beta)".into(),
@@ -224,6 +226,21 @@ impl Term {
             _ => false,
         }
     }
+}
+
+/// The shaft's weight (ρ_z, ρ_n) of a [`Term::LoadGrid`] column from its values in hundredths.
+pub fn grid_weight(z: i16, n: i16) -> [f64; 2] {
+    [f64::from(z) / 100.0, f64::from(n) / 100.0]
+}
+
+/// The [`Term::LoadGrid`] column of the load family at the weight `w` = (ρ_z, ρ_n), rounded to
+/// hundredths (`as i16` saturates: values beyond ±327 stay at the ends).
+pub fn load_grid_term(w: [f64; 2], radial: bool) -> Term {
+    Term::LoadGrid(
+        (100.0 * w[0]).round() as i16,
+        (100.0 * w[1]).round() as i16,
+        radial,
+    )
 }
 
 /// The base model's terms.
@@ -374,13 +391,13 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
         Term::Quad => (-v * v.abs(), false),
         Term::PowDrag(t) => (-drag(Some(f64::from(t) / 10.0), v).0, false),
         Term::Shape(_) => (0.0, false),
-        Term::RadialLoadFric => (load_shape(geo, al, b, 0.0, true), true),
+        Term::RadialLoadFric => (load_shape(geo, al, b, [0.0; 2], true), true),
         Term::StaticExcess => (stribeck(1.0, 0.5, None, v).0, true),
         Term::StribeckGrid(w, d) => (
             stribeck(1.0, f64::from(w) / 100.0, Some(f64::from(d) / 10.0), v).0,
             true,
         ),
-        Term::LoadGrid(r, radial) => (load_shape(geo, al, b, f64::from(r) / 10.0, radial), true),
+        Term::LoadGrid(z, n, radial) => (load_shape(geo, al, b, grid_weight(z, n), radial), true),
         Term::LoadFric => (force_shape(geo, al, b), true),
         Term::Cos(k, l) => ((k as f64 * al + l as f64 * b).cos(), false),
         Term::Sin(k, l) => ((k as f64 * al + l as f64 * b).sin(), false),
@@ -518,7 +535,8 @@ fn stick_phases(r: &CleanRun, opts: &WeakOptions) -> Vec<bool> {
 }
 
 /// The previous sample inside a window: (t, φ, v, term values).
-type Prev = (f64, f64, f64, Vec<(f64, bool)>);
+/// The previous sample of a window's trapezoid: time, φ, velocity and its index in the run.
+type Prev = (f64, f64, f64, usize);
 
 /// Builds the weak-form rows of `runs` for `terms`. `latency` (s) shifts α back by α̇·latency
 /// (a β recorded late by `latency`).
@@ -561,6 +579,17 @@ pub fn build(
         let h = opts.half_width * r.dt;
         let stuck = stick_phases(r, opts);
         let alpha: Vec<f64> = r.alpha.iter().map(|a| a - r.alpha_rate * latency).collect();
+        // every term at every sample, once: the windows overlap, so a sample enters several of
+        // them (row-major, p values per sample)
+        let values: Vec<(f64, bool)> = (0..n)
+            .flat_map(|i| {
+                let ctx = ctx_at(r.t[i]);
+                let (a, b, v) = (alpha[i], r.beta[i], r.v[i]);
+                terms
+                    .iter()
+                    .map(move |&term| term_value(term, geo, &ctx, a, b, v))
+            })
+            .collect();
         let mut lo = 0usize;
         let mut c = 0usize;
         while c < n {
@@ -617,12 +646,9 @@ pub fn build(
                 noise2 += (wq * ddphi).powi(2);
                 w0 += wq * phi;
                 w1b += wq * dphi * (b - bc);
-                let ctx = ctx_at(r.t[i]);
-                let vals: Vec<(f64, bool)> = terms
-                    .iter()
-                    .map(|&term| term_value(term, geo, &ctx, alpha[i], b, r.v[i]))
-                    .collect();
-                if let Some((tp, php, vp, valp)) = &prev {
+                let vals = &values[i * p..(i + 1) * p];
+                if let Some((tp, php, vp, ip)) = prev {
+                    let valp = &values[ip * p..(ip + 1) * p];
                     let dtt = r.t[i] - tp;
                     let (sp, si) = (vp.signum(), r.v[i].signum());
                     for k in 0..p {
@@ -641,7 +667,7 @@ pub fn build(
                         }
                     }
                 }
-                prev = Some((r.t[i], phi, r.v[i], vals));
+                prev = Some((r.t[i], phi, r.v[i], i));
             }
             if w0 <= 0.0 {
                 c += opts.stride;

@@ -4,7 +4,7 @@
 //! (its close rival too, in a branch of its own: [`super::beam`]). Every candidate tried is kept
 //! with its numbers. Also the refits of the final model (polish, profiles).
 
-use super::catalog::{judged_members, Effect};
+use super::catalog::{member_choice, Effect, MemberChoice};
 use super::judge::{added_parameters_z, compare, heldout, z_threshold, Comparison, Folds, HeldOut};
 use super::model::Geometry;
 use super::preprocess::CleanRun;
@@ -78,9 +78,9 @@ pub struct Tried {
     /// windows (`None` when it was not refitted on them).
     pub added_z: Option<f64>,
     /// For a significant member of a family whose members the judge picks (not the smallest):
-    /// the held-out z of this member against the smaller member chosen before it (the larger
-    /// member replaces it when z reaches the threshold).
-    pub member_z: Option<f64>,
+    /// the held-out comparison of this member against the smaller member chosen before it (the
+    /// larger member replaces it when it improves on it, [`Comparison::improves`]).
+    pub member: Option<Comparison>,
     /// Accepted in its round and dropped by the backward check ([`super::backward`]).
     pub dropped: Option<super::backward::Dropped>,
     /// Accepted on the other branch of a fork in its round, the branch that was left
@@ -585,7 +585,7 @@ pub fn judge_round(
             z_crit,
             accepted: false,
             state: st,
-            member_z: None,
+            member: None,
             dropped: None,
             forked: false,
         };
@@ -669,23 +669,24 @@ pub fn choose_named(
 }
 
 /// The candidates of a round that may be accepted: every significant one (held-out z ≥ `z_crit`),
-/// except that of a family whose members the judge picks ([`judged_members`], nested members)
+/// except that of a family of nested members ([`MemberChoice::Nested`])
 /// only one passes: starting from the smallest significant member, a larger member replaces it
 /// when it predicts the held-out windows significantly better than it (the same rule, z ≥
 /// `z_crit`, on the paired windows of the two). Indices into `round`.
 pub fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<usize> {
+    let nested = |id: &str| member_choice(id) == MemberChoice::Nested;
     let significant = |t: &Tried| {
         t.cmp.is_some_and(|c| c.improves(z_crit))
             && t.added_z.is_some_and(|z| z >= z_crit)
             && t.state.is_some()
     };
     let mut out: Vec<usize> = (0..round.len())
-        .filter(|&k| significant(&round[k]) && !judged_members(round[k].candidate.effect.id))
+        .filter(|&k| significant(&round[k]) && !nested(round[k].candidate.effect.id))
         .collect();
     let mut ids: Vec<&'static str> = round
         .iter()
         .map(|t| t.candidate.effect.id)
-        .filter(|id| judged_members(id))
+        .filter(|id| nested(id))
         .collect();
     ids.dedup();
     for id in ids {
@@ -702,7 +703,7 @@ pub fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<
                 continue;
             };
             let c = compare(&a.held, &b.held, ctx.wins, ctx.runs);
-            round[k].member_z = Some(c.z);
+            round[k].member = Some(c);
             if c.improves(z_crit) {
                 chosen = k;
             }

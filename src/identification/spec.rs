@@ -5,22 +5,23 @@
 
 use super::model::{Coefficients, ExtraTerm, Shape};
 use super::preprocess::CleanRun;
-use super::regression::{session_positions, DriftParam, Term};
+use super::regression::{grid_weight, load_grid_term, session_positions, DriftParam, Term};
 
 /// The column standing for `t` at the shape values `shapes`: a family's term with its shape
 /// parameter baked in (the drag's −β̇|β̇| becomes −(|β̇|/V)^p sgn β̇ on the grid of tenths, the
-/// load friction the load at ρ, the Stribeck excess the decay at w); other terms unchanged.
+/// load friction the load at the weight (ρ_z, ρ_n) in hundredths, the Stribeck excess the decay
+/// at w); other terms unchanged.
 pub fn column_term(t: Term, shapes: &[(Shape, f64)]) -> Term {
     let shape = |s: Shape| shapes.iter().find(|x| x.0 == s).map(|x| x.1);
     // `as u8` saturates: values beyond the grid's range stay at its ends
+    let weight = || match (shape(Shape::LoadWeight), shape(Shape::LoadSide)) {
+        (None, None) => None,
+        (z, n) => Some([z.unwrap_or(0.0), n.unwrap_or(0.0)]),
+    };
     match t {
         Term::Quad => shape(Shape::DragExponent).map(|p| Term::PowDrag((10.0 * p).round() as u8)),
-        Term::LoadFric => {
-            shape(Shape::LoadWeight).map(|r| Term::LoadGrid((10.0 * r).round() as u8, false))
-        }
-        Term::RadialLoadFric => {
-            shape(Shape::LoadWeight).map(|r| Term::LoadGrid((10.0 * r).round() as u8, true))
-        }
+        Term::LoadFric => weight().map(|w| load_grid_term(w, false)),
+        Term::RadialLoadFric => weight().map(|w| load_grid_term(w, true)),
         Term::StaticExcess => shape(Shape::StribeckWidth).map(|w| {
             let d = shape(Shape::StribeckPower).unwrap_or(super::model::STRIBECK_POWER);
             Term::StribeckGrid((100.0 * w).round() as u8, (10.0 * d).round() as u8)
@@ -35,7 +36,8 @@ pub fn column_term(t: Term, shapes: &[(Shape, f64)]) -> Term {
 pub fn set_shape(c: &mut Coefficients, s: Shape, v: f64) {
     match s {
         Shape::DragExponent => c.drag_exponent = Some(v),
-        Shape::LoadWeight => c.load_weight = v,
+        Shape::LoadWeight => c.load_weight[0] = v,
+        Shape::LoadSide => c.load_weight[1] = v,
         Shape::StribeckWidth => c.stribeck_width = v,
         Shape::StribeckPower => c.stribeck_power = Some(v),
     }
@@ -68,13 +70,13 @@ pub fn free_shapes(terms: &[Term], theta: &[f64]) -> (Vec<Term>, Vec<f64>) {
     for (&term, &x) in terms.iter().zip(theta) {
         let (base, shape) = match term {
             Term::PowDrag(p) => (Term::Quad, Some((Shape::DragExponent, f64::from(p) / 10.0))),
-            Term::LoadGrid(r, radial) => (
+            Term::LoadGrid(z, _, radial) => (
                 if radial {
                     Term::RadialLoadFric
                 } else {
                     Term::LoadFric
                 },
-                Some((Shape::LoadWeight, f64::from(r) / 10.0)),
+                Some((Shape::LoadWeight, f64::from(z) / 100.0)),
             ),
             Term::StribeckGrid(w, _) => (
                 Term::StaticExcess,
@@ -91,6 +93,10 @@ pub fn free_shapes(terms: &[Term], theta: &[f64]) -> (Vec<Term>, Vec<f64>) {
         if let Term::StribeckGrid(_, d) = term {
             t.push(Term::Shape(Shape::StribeckPower));
             v.push(f64::from(d) / 10.0);
+        }
+        if let Term::LoadGrid(_, n, _) = term {
+            t.push(Term::Shape(Shape::LoadSide));
+            v.push(f64::from(n) / 100.0);
         }
     }
     v.extend_from_slice(&theta[terms.len().min(theta.len())..]);
@@ -158,10 +164,10 @@ pub fn coefficients(terms: &[Term], coef: &[f64]) -> Coefficients {
                 c.eta_load = v;
                 c.load_radial = true;
             }
-            Term::LoadGrid(r, radial) => {
+            Term::LoadGrid(z, n, radial) => {
                 c.eta_load = v;
                 c.load_radial = radial;
-                c.load_weight = f64::from(r) / 10.0;
+                c.load_weight = grid_weight(z, n);
             }
             Term::StaticExcess => c.eta_static_excess = v,
             Term::StribeckGrid(w, d) => {
@@ -292,18 +298,19 @@ mod tests {
             Term::Shape(Shape::DragExponent),
             Term::RadialLoadFric,
             Term::Shape(Shape::LoadWeight),
+            Term::Shape(Shape::LoadSide),
             Term::StaticExcess,
             Term::Shape(Shape::StribeckWidth),
             Term::Shape(Shape::StribeckPower),
         ];
-        let coef = [20.0, 0.4, 1.5, 3.0, 2.2, 12.0, 1.5, 1.0];
+        let coef = [20.0, 0.4, 1.5, 3.0, 2.2, -0.65, 12.0, 1.5, 1.0];
         let (ft, fc) = fix_shapes(&terms, &coef);
         assert_eq!(
             ft,
             [
                 Term::Eta,
                 Term::PowDrag(15),
-                Term::LoadGrid(22, true),
+                Term::LoadGrid(220, -65, true),
                 Term::StribeckGrid(150, 10)
             ]
         );
@@ -313,7 +320,7 @@ mod tests {
         th.push(0.006);
         let (bt, bc) = free_shapes(&ft, &th);
         assert_eq!(bt, terms);
-        assert_eq!(bc[..8], coef);
-        assert_eq!(bc[8], 0.006);
+        assert_eq!(bc[..9], coef);
+        assert_eq!(bc[9], 0.006);
     }
 }
