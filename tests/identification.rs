@@ -334,7 +334,7 @@ fn paper_truth() -> (Coefficients, Geometry) {
 #[test]
 fn vector_load_friction_is_not_named_a_drag() {
     // all of the Coulomb friction proportional to |weight + dipole force| (radial part), the
-    // weight 2.2 F0: a load geometry the catalog does not have
+    // weight 2.2 F0, written here from the dipole–dipole force (not from the crate)
     let (c, geo) = paper_truth();
     let weight = 2.2;
     // friction 23 s⁻² at the mean load (≈ weight)

@@ -226,6 +226,9 @@ pub struct LoadWeight {
 /// The load family's weight W = −ρ_z ẑ − ρ_n n̂ (catalog.rs, `load_dependent_friction`) as its
 /// size ρ = |W|/F₀ = √(ρ_z² + ρ_n²) and its direction, the tilt ψ = atan2(ρ_n, ρ_z) of the
 /// set-up about the output shaft, each with its 1σ from the refit's covariance (first order).
+/// ψ is reported as fitted, in (−180°, 180°]: ψ and 180° − ψ load the bearings alike at states
+/// mirrored by the gear's symmetry (α, β) → (−α, −β), so on recordings that sample both a fit
+/// may land on either.
 pub fn load_weight(st: &ModelState) -> Option<LoadWeight> {
     let (iz, i_n) = weight_indices(st)?;
     let th = &st.fit.theta;
@@ -235,8 +238,10 @@ pub fn load_weight(st: &ModelState) -> Option<LoadWeight> {
         return None;
     }
     if rho == 0.0 {
+        // no direction at zero weight: the size's σ from both components' variances
+        let var = st.fit.err[iz].powi(2) + i_n.map_or(0.0, |k| st.fit.err[k].powi(2));
         return Some(LoadWeight {
-            size: (0.0, st.fit.err[iz]),
+            size: (0.0, var.sqrt()),
             tilt_deg: None,
         });
     }

@@ -1,8 +1,8 @@
 //! Profiles of the catalog families' shape parameters (docs/diagnosis.md, "Shape parameters:
 //! profiled, not crept to").
 //!
-//! A shape parameter (the drag exponent p, the load's weight-to-force ratio ρ, the Stribeck width
-//! w and shape δ) trades off with the family's coefficient and the base parameters along a curved
+//! A shape parameter (the drag exponent p, the load's weight components ρ_z and ρ_n, the Stribeck
+//! width w and shape δ) trades off with the family's coefficient and the base parameters along a curved
 //! valley of the windows' χ²: a Levenberg–Marquardt refit started at the weak-form grid value
 //! creeps along it and stops short (a drag exponent of 1.5 refitted from the quadratic member
 //! ended at 1.96 ± 0.02). Here the parameter is *profiled*: held at values of a coarse ladder over

@@ -188,10 +188,10 @@ impl Term {
                 f64::from(*d) / 10.0
             ),
             Term::LoadGrid(z, n, radial) => format!(
-                "-sgn(dbeta)|{}(F-{}z-{}n)|",
+                "-sgn(dbeta)|{}(F-{}z{:+}n)|",
                 if *radial { "P" } else { "" },
                 f64::from(*z) / 100.0,
-                f64::from(*n) / 100.0
+                -f64::from(*n) / 100.0
             ),
             Term::Corot => "-(dbeta-dalpha)".into(),
             Term::LoadFric => "-sgn(dbeta)h(alpha,beta)".into(),
@@ -534,7 +534,6 @@ fn stick_phases(r: &CleanRun, opts: &WeakOptions) -> Vec<bool> {
     stuck
 }
 
-/// The previous sample inside a window: (t, φ, v, term values).
 /// The previous sample of a window's trapezoid: time, φ, velocity and its index in the run.
 type Prev = (f64, f64, f64, usize);
 

@@ -636,8 +636,9 @@ fn report_tried(t: &Tried, label: &str, progress: &dyn Observer) {
 /// significantly better than that effect (the paired comparison of the two, z < `z_crit`; the rule
 /// of [`choose_members`] between nested members). Two candidates that explain the same mismatch
 /// equally well are told apart by the name they give it, and a named effect is the explanation
-/// (a tilted set-up's bearing load: the load family and −sgn β̇ sin(α + β) gained χ² 1921 and
-/// 1932 at z 5.79 and 5.80; docs/diagnosis.md, Known weaknesses). `None` when nothing passed.
+/// (a tilted set-up's bearing load before the load family fitted the weight's direction: the
+/// family and −sgn β̇ sin(α + β) gained χ² 1921 and 1932 at z 5.79 and 5.80; docs/diagnosis.md,
+/// Known weaknesses). `None` when nothing passed.
 pub fn choose_named(
     ctx: &SelectCtx,
     round: &[Tried],

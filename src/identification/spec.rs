@@ -13,11 +13,12 @@ use super::regression::{grid_weight, load_grid_term, session_positions, DriftPar
 /// at w); other terms unchanged.
 pub fn column_term(t: Term, shapes: &[(Shape, f64)]) -> Term {
     let shape = |s: Shape| shapes.iter().find(|x| x.0 == s).map(|x| x.1);
-    // `as u8` saturates: values beyond the grid's range stay at its ends
     let weight = || match (shape(Shape::LoadWeight), shape(Shape::LoadSide)) {
         (None, None) => None,
         (z, n) => Some([z.unwrap_or(0.0), n.unwrap_or(0.0)]),
     };
+    // `as u8` (and `as i16` in `load_grid_term`) saturates: values beyond the grid's range stay
+    // at its ends
     match t {
         Term::Quad => shape(Shape::DragExponent).map(|p| Term::PowDrag((10.0 * p).round() as u8)),
         Term::LoadFric => weight().map(|w| load_grid_term(w, false)),
