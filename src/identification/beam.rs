@@ -44,11 +44,11 @@ pub struct Fork {
 }
 
 impl Fork {
-    /// "the branch of `kept` (its effects) was kept over that of `other` (its effects)": the
-    /// fork's outcome in words, for the progress line and report.md.
+    /// "branch of `kept` (its effects) was kept over that of `other` (its effects)": the fork's
+    /// outcome in words, for the progress line and report.md (each puts its own article).
     pub fn outcome(&self) -> String {
         format!(
-            "the branch of `{}` ({}) was kept over that of `{}` ({})",
+            "branch of `{}` ({}) was kept over that of `{}` ({})",
             self.kept,
             self.kept_effects.join(" + "),
             self.other,
@@ -266,7 +266,7 @@ fn finish(
         stage(
             progress,
             &format!(
-                "round {}: {}: held-out χ² gain {:.1}, z {:.2}",
+                "round {}: the {}: held-out χ² gain {:.1}, z {:.2}",
                 f.round,
                 f.outcome(),
                 f.final_gain,

@@ -204,14 +204,15 @@ pub fn drag_coefficient(st: &ModelState) -> Option<(f64, f64)> {
     Some(first_order(st, qs, &[(iq, v.powf(-p)), (ip, -qs * v.ln())]))
 }
 
-/// The θ indices of the load family's weight components (ρ_z, ρ_n) (a missing side component
-/// is `None`: a vertical weight).
-fn weight_indices(st: &ModelState) -> Option<(usize, Option<usize>)> {
+/// The θ indices of the load family's weight components (ρ_z, ρ_n) and their values (the
+/// family carries both shapes: catalog.rs, `spec::free_shapes`).
+fn weight_components(st: &ModelState) -> Option<([usize; 2], [f64; 2])> {
     let at = |t: Term| st.terms.iter().position(|&x| x == t);
-    Some((
+    let k = [
         at(Term::Shape(Shape::LoadWeight))?,
-        at(Term::Shape(Shape::LoadSide)),
-    ))
+        at(Term::Shape(Shape::LoadSide))?,
+    ];
+    Some((k, k.map(|i| st.fit.theta[i])))
 }
 
 /// The load family's weight: its size and direction, each as (value, 1σ).
@@ -230,30 +231,23 @@ pub struct LoadWeight {
 /// mirrored by the gear's symmetry (α, β) → (−α, −β), so on recordings that sample both a fit
 /// may land on either.
 pub fn load_weight(st: &ModelState) -> Option<LoadWeight> {
-    let (iz, i_n) = weight_indices(st)?;
-    let th = &st.fit.theta;
-    let (z, n) = (th[iz], i_n.map_or(0.0, |k| th[k]));
+    let ([iz, i_n], [z, n]) = weight_components(st)?;
     let rho = z.hypot(n);
     if !rho.is_finite() {
         return None;
     }
     if rho == 0.0 {
         // no direction at zero weight: the size's σ from both components' variances
-        let var = st.fit.err[iz].powi(2) + i_n.map_or(0.0, |k| st.fit.err[k].powi(2));
+        let var = st.fit.err[iz].powi(2) + st.fit.err[i_n].powi(2);
         return Some(LoadWeight {
             size: (0.0, var.sqrt()),
             tilt_deg: None,
         });
     }
-    let mut g_rho = vec![(iz, z / rho)];
-    let mut g_psi = vec![(iz, -n / (rho * rho))];
-    if let Some(k) = i_n {
-        g_rho.push((k, n / rho));
-        g_psi.push((k, z / (rho * rho)));
-    }
-    let (psi, s_psi) = first_order(st, n.atan2(z), &g_psi);
+    let r2 = rho * rho;
+    let (psi, s_psi) = first_order(st, n.atan2(z), &[(iz, -n / r2), (i_n, z / r2)]);
     Some(LoadWeight {
-        size: first_order(st, rho, &g_rho),
+        size: first_order(st, rho, &[(iz, z / rho), (i_n, n / rho)]),
         tilt_deg: Some((psi.to_degrees(), s_psi.to_degrees())),
     })
 }
@@ -265,10 +259,8 @@ pub fn load_fraction(st: &ModelState) -> Option<(f64, f64)> {
     let at = |t: Term| st.terms.iter().position(|&x| x == t);
     let i_eta = at(Term::Eta)?;
     let i_load = at(Term::LoadFric).or(at(Term::RadialLoadFric))?;
-    let (iz, i_n) = weight_indices(st)?;
-    let th = &st.fit.theta;
-    let (eta, el) = (th[i_eta], th[i_load]);
-    let (z, side) = (th[iz], i_n.map_or(0.0, |k| th[k]));
+    let ([iz, i_n], [z, side]) = weight_components(st)?;
+    let (eta, el) = (st.fit.theta[i_eta], st.fit.theta[i_load]);
     let rho = z.hypot(side);
     let n = el * rho;
     let d = eta + n;
@@ -277,14 +269,12 @@ pub fn load_fraction(st: &ModelState) -> Option<(f64, f64)> {
     }
     // ∂λ/∂ρ, carried to the components by ∂ρ/∂ρ_z = ρ_z/ρ, ∂ρ/∂ρ_n = ρ_n/ρ
     let dl_drho = el * eta / (d * d);
-    let mut grad = vec![
+    let grad = [
         (i_eta, -n / (d * d)),
         (i_load, rho * eta / (d * d)),
         (iz, dl_drho * z / rho),
+        (i_n, dl_drho * side / rho),
     ];
-    if let Some(k) = i_n {
-        grad.push((k, dl_drho * side / rho));
-    }
     Some(first_order(st, n / d, &grad))
 }
 
@@ -619,6 +609,7 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
         .filter(|t| !t.accepted)
         .map(|t| {
             let c = &t.candidate;
+            let member_reason = smaller_member_reason(t);
             json!({
                 "round": t.round,
                 "effect": c.effect.id,
@@ -659,9 +650,7 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                     Some(m) if t.added_z.is_some_and(|z| z < t.z_crit) => format!(
                         "held-out gain (z = {:.2}) with added parameters consistent with zero \
                          (Wald z = {:.2} < {:.2})", m.z, t.added_z.unwrap_or(0.0), t.z_crit),
-                    Some(_) if smaller_member_reason(t).is_some() => {
-                        smaller_member_reason(t).unwrap_or_default()
-                    }
+                    Some(_) if member_reason.is_some() => member_reason.unwrap_or_default(),
                     Some(_) if t.forked => "a close rival of the accepted candidate: accepted on \
                         the other branch of the fork of its round, the branch that was left \
                         (fits.selection_forks)"
@@ -851,7 +840,5 @@ mod tests {
             assert!((v - v_fd).abs() < 1e-12 * v.abs().max(1.0), "{v} vs {v_fd}");
             assert!((s - s_fd).abs() < 1e-6 * s_fd, "{s} vs {s_fd}");
         }
-        // tilt 30.07°: the weight's direction from its components
-        assert!((psi - 1.1f64.atan2(1.9).to_degrees()).abs() < 1e-12);
     }
 }

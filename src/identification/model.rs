@@ -255,11 +255,14 @@ pub fn force_shape(geo: &Geometry, alpha: f64, beta: f64) -> f64 {
 /// [`force_shape`].
 pub fn load_shape(geo: &Geometry, alpha: f64, beta: f64, weight: [f64; 2], radial: bool) -> f64 {
     let mut l = dipole_force(geo, alpha, beta);
-    let (sp, cp) = geo.phi.sin_cos();
     let [rz, rn] = weight;
+    l[2] -= rz;
+    if rn == 0.0 && !radial {
+        return (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+    }
+    let (sp, cp) = geo.phi.sin_cos();
     l[0] += rn * sp;
     l[1] -= rn * cp;
-    l[2] -= rz;
     if radial {
         let along = l[0] * cp + l[1] * sp;
         l[0] -= along * cp;

@@ -5,9 +5,7 @@
 use super::catalog::{catalog, dictionary, member_choice, same_slot, Effect, MemberChoice};
 use super::model::{Geometry, Shape};
 use super::preprocess::CleanRun;
-use super::regression::{
-    build, delta_bic, fit, grid_weight, load_grid_term, Design, LinFit, Term, WeakOptions,
-};
+use super::regression::{build, delta_bic, fit, load_grid_term, Design, LinFit, Term, WeakOptions};
 use super::spec::column_term;
 
 /// A candidate effect to judge.
@@ -146,14 +144,13 @@ pub const LOAD_TILT_GRID: [i16; 7] = [-90, -60, -30, 0, 30, 60, 90];
 /// [`LOAD_WEIGHT_GRID`] and ψ on [`LOAD_TILT_GRID`], in hundredths as their [`Term::LoadGrid`]
 /// columns hold them (ρ = 0 once).
 pub fn load_weight_grid() -> Vec<[f64; 2]> {
+    let hundredths = |x: f64| (100.0 * x).round() / 100.0;
     let mut v: Vec<[f64; 2]> = vec![[0.0; 2]];
     for &r in &LOAD_WEIGHT_GRID[1..] {
+        let rho = f64::from(r) / 10.0;
         for &psi in &LOAD_TILT_GRID {
             let (s, c) = f64::from(psi).to_radians().sin_cos();
-            let rho = f64::from(r) / 10.0;
-            if let Term::LoadGrid(z, n, _) = load_grid_term([rho * c, rho * s], false) {
-                v.push(grid_weight(z, n));
-            }
+            v.push([hundredths(rho * c), hundredths(rho * s)]);
         }
     }
     v

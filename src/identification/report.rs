@@ -339,17 +339,15 @@ fn forks_markdown(forks: &[super::beam::Fork]) -> String {
             ),
             None => "at the end, by the final models".to_string(),
         };
-        let outcome = f.outcome();
         s.push_str(&format!(
             "- Round {}: `{}` and `{}` could not be told apart by their held-out predictions \
-             (z = {:.2}), so the selection went on with each. {}{}, {when}: held-out χ² gain \
+             (z = {:.2}), so the selection went on with each. The {}, {when}: held-out χ² gain \
              {:.1}, z = {:.2}.\n",
             f.round,
             f.kept,
             f.other,
             f.round_z,
-            outcome[..1].to_uppercase(),
-            &outcome[1..],
+            f.outcome(),
             f.final_gain,
             f.final_z
         ));
