@@ -23,10 +23,10 @@ fn bench(c: &mut Criterion) {
         ..SynthOptions::default()
     };
     let (set, _) = synthesize(&opts).unwrap();
-    let geo = Geometry {
-        theta: set.gear.theta_deg.to_radians(),
-        phi: set.gear.phi_deg.to_radians(),
-    };
+    let geo = Geometry::new(
+        set.gear.theta_deg.to_radians(),
+        set.gear.phi_deg.to_radians(),
+    );
     let driven = set.runs.iter().find(|r| !r.is_ringdown()).unwrap();
     let cd = clean(driven, None);
     let n = cd.t.len();

@@ -83,9 +83,9 @@ fn null_set_with_other_shaft_angles_of_the_same_delta_gives_none() {
     o.samples_per_turn = 45;
     let (mut set, t) = synthesize(&o).unwrap();
     let d_true = t.coefficients.delta();
-    let th = t.geometry.theta + 5f64.to_radians();
+    let th = t.geometry.theta() + 5f64.to_radians();
     // Φ with Δ(Θ, Φ) = Δ_true, by bisection near the true Φ
-    let (mut lo, mut hi) = (t.geometry.phi - 0.3, t.geometry.phi);
+    let (mut lo, mut hi) = (t.geometry.phi() - 0.3, t.geometry.phi());
     for _ in 0..80 {
         let m = 0.5 * (lo + hi);
         if (shaft_index(th, lo) - d_true) * (shaft_index(th, m) - d_true) <= 0.0 {
@@ -167,7 +167,7 @@ fn shafts_six_degrees_off_give_coupling_geometry_with_the_angles() {
     let mut o = small("none", 0.0, 27);
     o.noise_deg = 0.45;
     let (mut set, t) = synthesize(&o).unwrap();
-    let true_deg = t.geometry.theta.to_degrees();
+    let true_deg = t.geometry.theta().to_degrees();
     set.gear.theta_deg = true_deg + 6.0;
     set.gear.phi_deg = true_deg + 6.0;
     let d = run_set(&set);
@@ -192,13 +192,13 @@ fn shafts_six_degrees_off_give_coupling_geometry_with_the_angles() {
 /// F0 = 3 μ0 m1 m2/(4π r⁴). Written here from the dipole–dipole force, not from the crate.
 fn radial_load(geo: &Geometry, weight: f64, alpha: f64, beta: f64) -> f64 {
     let u1 = [
-        -alpha.cos() * geo.theta.sin(),
-        alpha.cos() * geo.theta.cos(),
+        -alpha.cos() * geo.theta().sin(),
+        alpha.cos() * geo.theta().cos(),
         alpha.sin(),
     ];
     let u2 = [
-        -beta.cos() * geo.phi.sin(),
-        beta.cos() * geo.phi.cos(),
+        -beta.cos() * geo.phi().sin(),
+        beta.cos() * geo.phi().cos(),
         beta.sin(),
     ];
     let x = [1.0, 0.0, 0.0];
@@ -210,7 +210,7 @@ fn radial_load(geo: &Geometry, weight: f64, alpha: f64, beta: f64) -> f64 {
         p[k] = m1x * u2[k] + m2x * u1[k] + (m12 - 5.0 * m1x * m2x) * x[k];
     }
     p[2] -= weight;
-    let axis = [geo.phi.cos(), geo.phi.sin(), 0.0];
+    let axis = [geo.phi().cos(), geo.phi().sin(), 0.0];
     let along = dot(&p, &axis);
     let perp: f64 = (0..3).map(|k| (p[k] - along * axis[k]).powi(2)).sum();
     perp.sqrt()
@@ -322,12 +322,9 @@ fn truth_set<S: DrivenOscillator>(
 }
 
 fn paper_truth() -> (Coefficients, Geometry) {
-    let geo = Geometry {
-        theta: 31f64.to_radians(),
-        phi: 31f64.to_radians(),
-    };
+    let geo = Geometry::new(31f64.to_radians(), 31f64.to_radians());
     let g = GearSetup::paper().coupling() / 6.45e-5;
-    let c = Coefficients::base(g, shaft_index(geo.theta, geo.phi), 1.1, 0.0);
+    let c = Coefficients::base(g, shaft_index(geo.theta(), geo.phi()), 1.1, 0.0);
     (c, geo)
 }
 

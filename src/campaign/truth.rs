@@ -311,10 +311,7 @@ mod tests {
     fn a_tilted_load_is_the_family_at_the_rotated_weight() {
         use crate::identification::model::{load_shape, Geometry};
         let m = TruthModel::base(300.0, 0.4, -0.7, 1.0, 20.0);
-        let geo = Geometry {
-            theta: m.theta,
-            phi: m.phi,
-        };
+        let geo = Geometry::new(m.theta, m.phi);
         for k in 0..12 {
             let (a, b) = (0.53 * k as f64, 1.7 - 0.61 * k as f64);
             for (rho, psi) in [(0.7, 0.0), (2.3, 0.52), (1.1, -1.3), (4.0, 2.9)] {

@@ -298,10 +298,7 @@ pub fn fit_base(
     progress: &dyn Observer,
 ) -> Result<BaseModel> {
     let setup = &set.gear;
-    let geo0 = Geometry {
-        theta: setup.theta_deg.to_radians(),
-        phi: setup.phi_deg.to_radians(),
-    };
+    let geo0 = Geometry::new(setup.theta_deg.to_radians(), setup.phi_deg.to_radians());
     stage(progress, "equation-error rows (weak form), base fit");
     // every catalog and dictionary term (base terms first): the mismatch tests use them
     let mut terms: Vec<Term> = BASE_TERMS.to_vec();
@@ -999,17 +996,15 @@ pub fn refine_geometry(nominal: &Geometry, delta_fit: f64) -> Geometry {
     let mut best = (f64::INFINITY, 0.0);
     for k in -1500..=1500 {
         let s = (k as f64 * 0.01).to_radians();
-        let e =
-            (crate::model::gear::shaft_index(nominal.theta + s, nominal.phi + s) - delta_fit).abs();
+        let e = (crate::model::gear::shaft_index(nominal.theta() + s, nominal.phi() + s)
+            - delta_fit)
+            .abs();
         if e < best.0 {
             best = (e, s);
         }
     }
     if best.0 < 1e-3 {
-        Geometry {
-            theta: nominal.theta + best.1,
-            phi: nominal.phi + best.1,
-        }
+        Geometry::new(nominal.theta() + best.1, nominal.phi() + best.1)
     } else {
         *nominal
     }

@@ -209,29 +209,75 @@ impl Coefficients {
     }
 }
 
-/// The shaft geometry needed for the force shape h(α, β).
+/// The shaft geometry needed for the force shape h(α, β): the input and output shaft angles Θ
+/// and Φ, with their sines and cosines (computed once: the load-dependent friction evaluates the
+/// dipole force at every right-hand side).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Geometry {
+    theta: f64,
+    phi: f64,
+    shafts: ShaftTrig,
+}
+
+impl Geometry {
+    /// Shaft angles Θ (input) and Φ (output), rad.
+    pub fn new(theta: f64, phi: f64) -> Self {
+        let (st, ct) = theta.sin_cos();
+        let (sp, cp) = phi.sin_cos();
+        Self {
+            theta,
+            phi,
+            shafts: ShaftTrig { st, ct, sp, cp },
+        }
+    }
     /// Input shaft angle Θ, rad.
-    pub theta: f64,
+    pub fn theta(&self) -> f64 {
+        self.theta
+    }
     /// Output shaft angle Φ, rad.
-    pub phi: f64,
+    pub fn phi(&self) -> f64 {
+        self.phi
+    }
 }
 
 /// F / (3 μ0 m1 m2 / (4π r⁴)): the dipole–dipole force on the output magnet for unit moments at
 /// unit distance along x̂, F = (u1·x̂) u2 + (u2·x̂) u1 + (u1·u2) x̂ − 5 (u1·x̂)(u2·x̂) x̂ (shafts in
 /// the horizontal x-y plane, ẑ up).
 pub fn dipole_force(geo: &Geometry, alpha: f64, beta: f64) -> [f64; 3] {
-    let u1 = [
-        -alpha.cos() * geo.theta.sin(),
-        alpha.cos() * geo.theta.cos(),
-        alpha.sin(),
-    ];
-    let u2 = [
-        -beta.cos() * geo.phi.sin(),
-        beta.cos() * geo.phi.cos(),
-        beta.sin(),
-    ];
+    let shafts = geo.shafts;
+    bilinear_force(
+        shafts.input_moment(alpha.sin_cos()),
+        shafts.output_moment(beta.sin_cos()),
+    )
+}
+
+/// sin and cos of the shaft angles Θ and Φ, and the unit moments of the magnets they carry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct ShaftTrig {
+    st: f64,
+    ct: f64,
+    sp: f64,
+    cp: f64,
+}
+
+impl ShaftTrig {
+    /// u1 = (−cos α sin Θ, cos α cos Θ, sin α) from (sin α, cos α).
+    fn input_moment(&self, (sa, ca): (f64, f64)) -> [f64; 3] {
+        [-ca * self.st, ca * self.ct, sa]
+    }
+    /// u2 = (−cos β sin Φ, cos β cos Φ, sin β) from (sin β, cos β).
+    fn output_moment(&self, (sb, cb): (f64, f64)) -> [f64; 3] {
+        [-cb * self.sp, cb * self.cp, sb]
+    }
+    /// ∂u2/∂β from (sin β, cos β).
+    fn output_moment_beta(&self, (sb, cb): (f64, f64)) -> [f64; 3] {
+        [sb * self.sp, -sb * self.cp, cb]
+    }
+}
+
+/// The dipole force of [`dipole_force`] for the moments u1 and u2 (bilinear in them, so that
+/// F(u1, ∂u2/∂β) is ∂F/∂β).
+fn bilinear_force(u1: [f64; 3], u2: [f64; 3]) -> [f64; 3] {
     let d = u1[0] * u2[0] + u1[1] * u2[1] + u1[2] * u2[2];
     let mut f = [0.0; 3];
     for k in 0..3 {
@@ -254,21 +300,47 @@ pub fn force_shape(geo: &Geometry, alpha: f64, beta: f64) -> f64 {
 /// shaft has (ρ_z, ρ_n) = ρ (cos ψ, sin ψ), ρ = |W|/F₀. A zero weight without projection is
 /// [`force_shape`].
 pub fn load_shape(geo: &Geometry, alpha: f64, beta: f64, weight: [f64; 2], radial: bool) -> f64 {
-    let mut l = dipole_force(geo, alpha, beta);
-    let [rz, rn] = weight;
-    l[2] -= rz;
-    if rn == 0.0 && !radial {
-        return (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+    let at = LoadPoint {
+        shafts: geo.shafts,
+        alpha: alpha.sin_cos(),
+        beta: beta.sin_cos(),
+    };
+    at.load(weight, radial, false).0
+}
+
+/// The angles at which [`load_shape`] is evaluated, as sin and cos.
+#[derive(Debug, Clone, Copy)]
+struct LoadPoint {
+    shafts: ShaftTrig,
+    alpha: (f64, f64),
+    beta: (f64, f64),
+}
+
+impl LoadPoint {
+    /// The load |P(F + W)| of [`load_shape`] and, when `with_beta`, its β-derivative
+    /// (P L)·∂F/∂β / |P L| (P a projector, W constant; 0 where the load vanishes).
+    fn load(&self, weight: [f64; 2], radial: bool, with_beta: bool) -> (f64, f64) {
+        let u1 = self.shafts.input_moment(self.alpha);
+        let mut l = bilinear_force(u1, self.shafts.output_moment(self.beta));
+        let [rz, rn] = weight;
+        l[2] -= rz;
+        if rn != 0.0 || radial {
+            let ShaftTrig { sp, cp, .. } = self.shafts;
+            l[0] += rn * sp;
+            l[1] -= rn * cp;
+            if radial {
+                let along = l[0] * cp + l[1] * sp;
+                l[0] -= along * cp;
+                l[1] -= along * sp;
+            }
+        }
+        let norm = (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt();
+        if !with_beta || norm == 0.0 {
+            return (norm, 0.0);
+        }
+        let df = bilinear_force(u1, self.shafts.output_moment_beta(self.beta));
+        (norm, (l[0] * df[0] + l[1] * df[1] + l[2] * df[2]) / norm)
     }
-    let (sp, cp) = geo.phi.sin_cos();
-    l[0] += rn * sp;
-    l[1] -= rn * cp;
-    if radial {
-        let along = l[0] * cp + l[1] * sp;
-        l[0] -= along * cp;
-        l[1] -= along * sp;
-    }
-    (l[0] * l[0] + l[1] * l[1] + l[2] * l[2]).sqrt()
 }
 
 /// Reference speed V of the drag family, rad/s: the family's coefficient is the drag at V,
@@ -343,16 +415,32 @@ impl AugmentedGear {
         let (_, ta, tb) = tau(a);
         (a, c.compliance * tb / (1.0 - c.compliance * ta))
     }
-    fn smooth(&self, alpha: f64, beta: f64, omega: f64) -> (f64, f64, f64) {
+    /// a, ∂a/∂β, ∂a/∂ω at the recorded input angle `alpha` (`sc_beta` = (sin β, cos β)), and
+    /// (sin α, cos α) when the input magnet's angle is `alpha` itself (no offset, no compliance)
+    /// for the friction to reuse.
+    fn smooth(
+        &self,
+        alpha: f64,
+        beta: f64,
+        sc_beta: (f64, f64),
+        omega: f64,
+    ) -> ((f64, f64, f64), Option<(f64, f64)>) {
         let (a_in, da_dbeta) = self.input_angle(alpha, beta);
-        let (a, a_beta, a_omega, a_alpha) = self.smooth_at(a_in, beta, omega);
-        (a, a_beta + a_alpha * da_dbeta, a_omega)
+        let sc_in = a_in.sin_cos();
+        let (a, a_beta, a_omega, a_alpha) = self.smooth_at(a_in, sc_in, beta, sc_beta, omega);
+        let shared = (a_in == alpha).then_some(sc_in);
+        ((a, a_beta + a_alpha * da_dbeta, a_omega), shared)
     }
-    /// a, ∂a/∂β, ∂a/∂ω, ∂a/∂α at the input angle `alpha`.
-    fn smooth_at(&self, alpha: f64, beta: f64, omega: f64) -> (f64, f64, f64, f64) {
+    /// a, ∂a/∂β, ∂a/∂ω, ∂a/∂α at the input angle `alpha` (sin and cos of both angles given).
+    fn smooth_at(
+        &self,
+        alpha: f64,
+        (sa, ca): (f64, f64),
+        beta: f64,
+        (sb, cb): (f64, f64),
+        omega: f64,
+    ) -> (f64, f64, f64, f64) {
         let c = &self.c;
-        let (sa, ca) = alpha.sin_cos();
-        let (sb, cb) = beta.sin_cos();
         let a = -c.zeta * omega
             + c.c_sc * sa * cb
             + c.c_cs * ca * sb
@@ -411,25 +499,55 @@ impl AugmentedGear {
         }
         (a, a_beta, a_omega, a_alpha)
     }
-    fn friction(&self, alpha: f64, beta: f64) -> f64 {
-        let mut r = self.c.eta;
+    /// The dry friction η + η_L h(α, β) + Σ θ_k (friction harmonics) at (α, β), floored at 0,
+    /// and, when `with_beta`, its β-derivative (0 where the floor holds). `sc_beta` = (sin β,
+    /// cos β); `sc_alpha` (sin α, cos α) when the caller has it.
+    fn friction(
+        &self,
+        alpha: f64,
+        beta: f64,
+        sc_beta: (f64, f64),
+        sc_alpha: Option<(f64, f64)>,
+        with_beta: bool,
+    ) -> (f64, f64) {
+        let (mut r, mut r_beta) = (self.c.eta, 0.0);
         if self.c.eta_load != 0.0 {
             let (lo, hi) = Shape::LoadWeight.range();
             let w = self.c.load_weight.map(|x| x.clamp(lo, hi));
-            r += self.c.eta_load * load_shape(&self.geo, alpha, beta, w, self.c.load_radial);
+            let at = LoadPoint {
+                shafts: self.geo.shafts,
+                alpha: sc_alpha.unwrap_or_else(|| alpha.sin_cos()),
+                beta: sc_beta,
+            };
+            let (h, h_beta) = at.load(w, self.c.load_radial, with_beta);
+            r += self.c.eta_load * h;
+            r_beta += self.c.eta_load * h_beta;
         }
+        let (sb, cb) = sc_beta;
         for &(term, th) in &self.c.extra {
             match term {
-                ExtraTerm::FricCos => r += th * beta.cos(),
-                ExtraTerm::FricSin => r += th * beta.sin(),
+                ExtraTerm::FricCos => {
+                    r += th * cb;
+                    r_beta -= th * sb;
+                }
+                ExtraTerm::FricSin => {
+                    r += th * sb;
+                    r_beta += th * cb;
+                }
                 ExtraTerm::FricTrig { k, l, sin } => {
-                    let x = k as f64 * alpha + l as f64 * beta;
-                    r += th * if sin { x.sin() } else { x.cos() };
+                    let (sx, cx) = (k as f64 * alpha + l as f64 * beta).sin_cos();
+                    let (v, d) = if sin { (sx, cx) } else { (cx, -sx) };
+                    r += th * v;
+                    r_beta += th * l as f64 * d;
                 }
                 _ => {}
             }
         }
-        r.max(0.0)
+        if r > 0.0 {
+            (r, r_beta)
+        } else {
+            (0.0, 0.0)
+        }
     }
     /// The Stribeck part of the sliding friction ([`stribeck`]) at ω.
     fn stribeck_part(&self, omega: f64) -> (f64, f64) {
@@ -439,16 +557,6 @@ impl AugmentedGear {
             self.c.stribeck_power,
             omega,
         )
-    }
-    fn friction_varies(&self) -> bool {
-        self.c.eta_load != 0.0
-            || self.c.extra.iter().any(|&(t, th)| {
-                th != 0.0
-                    && matches!(
-                        t,
-                        ExtraTerm::FricCos | ExtraTerm::FricSin | ExtraTerm::FricTrig { .. }
-                    )
-            })
     }
 }
 
@@ -462,28 +570,32 @@ impl DrivenOscillator for AugmentedGear {
     }
     fn forces(&self, t: f64, beta: f64, omega: f64) -> Forces {
         let al = self.alpha(t);
+        let sc_beta = beta.sin_cos();
+        let ((a, _, _), sc_alpha) = self.smooth(al, beta, sc_beta, omega);
         Forces {
-            a: self.smooth(al, beta, omega).0,
-            r: (self.friction(al, beta) + self.stribeck_part(omega).0).max(0.0),
+            a,
+            r: (self.friction(al, beta, sc_beta, sc_alpha, false).0 + self.stribeck_part(omega).0)
+                .max(0.0),
         }
     }
     fn forces_jet(&self, t: f64, beta: f64, omega: f64, _params: bool) -> ForcesJet {
         let al = self.alpha(t);
-        let (a, a_beta, a_omega) = self.smooth(al, beta, omega);
+        let sc_beta = beta.sin_cos();
+        let ((a, a_beta, a_omega), sc_alpha) = self.smooth(al, beta, sc_beta, omega);
         let (sv, sv_omega) = self.stribeck_part(omega);
-        let r = (self.friction(al, beta) + sv).max(0.0);
+        let (fr, fr_beta) = self.friction(al, beta, sc_beta, sc_alpha, true);
+        let r = (fr + sv).max(0.0);
         let mut j = ForcesJet::new(a, r);
         j.a_beta = a_beta;
         j.a_omega = a_omega;
         j.r_omega = sv_omega;
-        if self.friction_varies() {
-            let h = 1e-6;
-            j.r_beta = (self.friction(al, beta + h) - self.friction(al, beta - h)) / (2.0 * h);
-        }
+        j.r_beta = fr_beta;
         j
     }
     fn static_friction(&self, t: f64, beta: f64) -> f64 {
-        self.friction(self.alpha(t), beta) + self.c.eta_static_excess.max(0.0)
+        let al = self.alpha(t);
+        let (fr, _) = self.friction(al, beta, beta.sin_cos(), None, false);
+        fr + self.c.eta_static_excess.max(0.0)
     }
 }
 
@@ -521,10 +633,7 @@ mod tests {
     use super::*;
     #[test]
     fn force_shape_is_symmetric_and_positive() {
-        let geo = Geometry {
-            theta: 0.5,
-            phi: 0.4,
-        };
+        let geo = Geometry::new(0.5, 0.4);
         for k in 0..20 {
             let (a, b) = (0.3 * k as f64, 1.1 - 0.2 * k as f64);
             let h = force_shape(&geo, a, b);
@@ -557,10 +666,7 @@ mod tests {
     fn driven_test_gear(c: Coefficients) -> AugmentedGear {
         AugmentedGear {
             c,
-            geo: Geometry {
-                theta: 0.5,
-                phi: 0.5,
-            },
+            geo: Geometry::new(0.5, 0.5),
             alpha0: 0.3,
             alpha_rate: 4.0,
         }
@@ -599,10 +705,7 @@ mod tests {
         use crate::integrator::{EventDriven, EventKind, FlowMethod, FlowOptions};
         use crate::model::release_function;
         let base = Coefficients::base(310.0, 0.18, 1.1, 23.0);
-        let geo = Geometry {
-            theta: 0.5,
-            phi: 0.5,
-        };
+        let geo = Geometry::new(0.5, 0.5);
         let release = |excess: f64| -> (f64, AugmentedGear) {
             let sys = AugmentedGear {
                 c: Coefficients {
@@ -675,6 +778,52 @@ mod tests {
         let j = s2.forces_jet(0.1, 0.7, 1.0, false);
         assert!((j.r - (20.0 + 2.0 * 0.7f64.cos())).abs() < 1e-12);
         assert!((j.r_beta + 2.0 * 0.7f64.sin()).abs() < 1e-6);
+    }
+
+    /// The friction's ∂r/∂β (analytic: the load's (P L)·∂F/∂β / |P L| and the harmonics'
+    /// derivatives) against central differences of r, for every member of the load family
+    /// (vertical, tilted and no weight; total and radial load) with friction harmonics on top.
+    #[test]
+    fn friction_beta_derivative_matches_differences() {
+        let mut c = Coefficients::base(300.0, 0.2, 1.0, 20.0);
+        c.eta_load = 6.0;
+        c.extra = [
+            (ExtraTerm::FricSin, -1.5),
+            (
+                ExtraTerm::FricTrig {
+                    k: 1,
+                    l: -2,
+                    sin: false,
+                },
+                0.8,
+            ),
+            Default::default(),
+            Default::default(),
+        ];
+        let h = 1e-6;
+        for (weight, radial) in [
+            ([0.0, 0.0], false),
+            ([2.2, 0.0], true),
+            ([1.4, -0.9], false),
+            ([0.6, 1.7], true),
+        ] {
+            let sys = driven_test_gear(Coefficients {
+                load_weight: weight,
+                load_radial: radial,
+                ..c
+            });
+            for k in 0..15 {
+                let (t, b) = (0.19 * k as f64, 0.83 * k as f64 - 4.0);
+                let j = sys.forces_jet(t, b, 1.0, false);
+                let fd = (sys.forces(t, b + h, 1.0).r - sys.forces(t, b - h, 1.0).r) / (2.0 * h);
+                assert!(
+                    (j.r_beta - fd).abs() < 1e-7 * (1.0 + fd.abs()),
+                    "{weight:?} {radial}: {} vs {fd}",
+                    j.r_beta
+                );
+                assert_eq!(j.r, sys.forces(t, b, 1.0).r);
+            }
+        }
     }
 
     /// The drag family's member p = 2 is the quadratic drag exactly (bit for bit); other
@@ -759,10 +908,7 @@ mod tests {
     /// than the whole load; a weight with a vertical and a side component adds as a vector.
     #[test]
     fn load_shape_members() {
-        let geo = Geometry {
-            theta: 0.55,
-            phi: 0.5,
-        };
+        let geo = Geometry::new(0.55, 0.5);
         let e = [geo.phi.cos(), geo.phi.sin(), 0.0];
         for k in 0..15 {
             let (a, b) = (0.41 * k as f64, 2.0 - 0.37 * k as f64);

@@ -499,10 +499,7 @@ mod tests {
         terms.extend([Term::Quad, Term::Shape(Shape::DragExponent)]);
         SimModel {
             runs: &[],
-            geo: Geometry {
-                theta: 0.5,
-                phi: 0.5,
-            },
+            geo: Geometry::new(0.5, 0.5),
             terms,
             latency: 0.0,
             fit_latency: false,

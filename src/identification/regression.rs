@@ -557,7 +557,7 @@ pub fn build(
         centre: Vec::new(),
     };
     const POW: i32 = 6;
-    let delta = crate::model::gear::shaft_index(geo.theta, geo.phi);
+    let delta = crate::model::gear::shaft_index(geo.theta(), geo.phi());
     let clocks = session_clocks(runs);
     let conds = run_conditions(runs);
     for (ri, r) in runs.iter().enumerate() {

@@ -77,10 +77,7 @@ pub fn simulate_model(p: &[f64], t0: f64, times: &[f64], tol: f64) -> Option<Vec
             st_b: kappa * beta0.sin(),
             ..Coefficients::default()
         },
-        geo: Geometry {
-            theta: 0.0,
-            phi: 0.0,
-        },
+        geo: Geometry::new(0.0, 0.0),
         alpha0: 0.0,
         alpha_rate: 0.0,
     };

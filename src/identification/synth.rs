@@ -228,10 +228,7 @@ fn draw_truth(opts: &SynthOptions, setup: &GearSetup, rng: &mut Rng) -> Result<S
             c_ss: -g * delta * se,
             ..extra
         },
-        geometry: Geometry {
-            theta: theta_true,
-            phi: phi_true,
-        },
+        geometry: Geometry::new(theta_true, phi_true),
         alpha_offset,
         latency,
         eta_per_run: vec![],
