@@ -499,9 +499,12 @@ impl AugmentedGear {
         }
         (a, a_beta, a_omega, a_alpha)
     }
-    /// The dry friction η + η_L h(α, β) + Σ θ_k (friction harmonics) at (α, β), floored at 0,
-    /// and, when `with_beta`, its β-derivative (0 where the floor holds). `sc_beta` = (sin β,
-    /// cos β); `sc_alpha` (sin α, cos α) when the caller has it.
+    /// The dry friction η + η_L L(α, β) + Σ θ_k (friction harmonics: cos β, sin β, cos or
+    /// sin(kα + lβ)) at (α, β), floored at 0, and, when `with_beta`, its β-derivative (0 where
+    /// the floor holds); L the bearing load of [`load_shape`] (the `load_dependent_friction`
+    /// family of docs/diagnosis.md, "The catalog as families"). α is the recorded input angle,
+    /// not the input magnet's (the coupling's, [`Self::input_angle`]). `sc_beta` = (sin β,
+    /// cos β); `sc_alpha` = (sin α, cos α) when the caller has it.
     fn friction(
         &self,
         alpha: f64,
@@ -797,19 +800,30 @@ mod tests {
                 },
                 0.8,
             ),
-            Default::default(),
-            Default::default(),
+            (ExtraTerm::FricCos, 1.1),
+            (
+                ExtraTerm::FricTrig {
+                    k: 2,
+                    l: 3,
+                    sin: true,
+                },
+                -0.6,
+            ),
         ];
         let h = 1e-6;
-        for (weight, radial) in [
-            ([0.0, 0.0], false),
-            ([2.2, 0.0], true),
-            ([1.4, -0.9], false),
-            ([0.6, 1.7], true),
-        ] {
+        let members = [
+            ([0.0, 0.0], false, 0.0),
+            ([2.2, 0.0], true, 0.0),
+            ([1.4, -0.9], false, 0.0),
+            ([0.6, 1.7], true, 0.0),
+            // an input offset: the coupling's input angle is not the friction's α
+            ([1.4, -0.9], true, 0.2),
+        ];
+        for (weight, radial, offset) in members {
             let sys = driven_test_gear(Coefficients {
                 load_weight: weight,
                 load_radial: radial,
+                alpha_offset: offset,
                 ..c
             });
             for k in 0..15 {
@@ -818,12 +832,16 @@ mod tests {
                 let fd = (sys.forces(t, b + h, 1.0).r - sys.forces(t, b - h, 1.0).r) / (2.0 * h);
                 assert!(
                     (j.r_beta - fd).abs() < 1e-7 * (1.0 + fd.abs()),
-                    "{weight:?} {radial}: {} vs {fd}",
+                    "{weight:?} {radial} {offset}: {} vs {fd}",
                     j.r_beta
                 );
                 assert_eq!(j.r, sys.forces(t, b, 1.0).r);
             }
         }
+        // the floor: a friction that would be negative is zero, and so is its derivative
+        let floored = driven_test_gear(Coefficients { eta: -50.0, ..c });
+        let j = floored.forces_jet(0.3, 0.7, 1.0, false);
+        assert_eq!((j.r, j.r_beta), (0.0, 0.0));
     }
 
     /// The drag family's member p = 2 is the quadratic drag exactly (bit for bit); other
@@ -909,7 +927,7 @@ mod tests {
     #[test]
     fn load_shape_members() {
         let geo = Geometry::new(0.55, 0.5);
-        let e = [geo.phi.cos(), geo.phi.sin(), 0.0];
+        let e = [geo.phi().cos(), geo.phi().sin(), 0.0];
         for k in 0..15 {
             let (a, b) = (0.41 * k as f64, 2.0 - 0.37 * k as f64);
             let f = dipole_force(&geo, a, b);
