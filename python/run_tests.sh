@@ -10,7 +10,7 @@
 # - `workspace` (default): the package selection, features and profile of the README's test
 #   command `cargo test --workspace --all-features`, so after that command every compiled
 #   dependency is shared and only PyO3, numpy (the crate), ndarray and the bindings are compiled
-#   here (60 s on 2 cores, against 201 s for `alone`, after a clean `cargo test`).
+#   here (36–59 s on 2 cores in `.ci/run` on a clean clone, against 201 s for `alone`).
 # - `alone`: the bindings' own package selection (what `maturin develop` builds; dev profile; the
 #   core without its CLI, plotting and diffsol features). PyO3's proc macros turn on other
 #   features of syn than `cargo test` does, hence new builds of serde_derive, serde and every
