@@ -5,7 +5,10 @@
 use super::catalog::{catalog, dictionary, member_choice, same_slot, Effect, MemberChoice};
 use super::model::{Geometry, Shape};
 use super::preprocess::CleanRun;
-use super::regression::{build, delta_bic, fit, load_grid_term, Design, LinFit, Term, WeakOptions};
+use super::regression::{
+    build, delta_bic, fit, grid_hundredths, grid_weight, load_grid_term, Design, LinFit, Term,
+    WeakOptions,
+};
 use super::spec::column_term;
 
 /// A candidate effect to judge.
@@ -144,13 +147,15 @@ pub const LOAD_TILT_GRID: [i16; 7] = [-90, -60, -30, 0, 30, 60, 90];
 /// [`LOAD_WEIGHT_GRID`] and ψ on [`LOAD_TILT_GRID`], in hundredths as their [`Term::LoadGrid`]
 /// columns hold them (ρ = 0 once).
 pub fn load_weight_grid() -> Vec<[f64; 2]> {
-    let hundredths = |x: f64| (100.0 * x).round() / 100.0;
     let mut v: Vec<[f64; 2]> = vec![[0.0; 2]];
     for &r in &LOAD_WEIGHT_GRID[1..] {
         let rho = f64::from(r) / 10.0;
         for &psi in &LOAD_TILT_GRID {
             let (s, c) = f64::from(psi).to_radians().sin_cos();
-            v.push([hundredths(rho * c), hundredths(rho * s)]);
+            v.push(grid_weight(
+                grid_hundredths(rho * c),
+                grid_hundredths(rho * s),
+            ));
         }
     }
     v

@@ -234,13 +234,15 @@ pub fn grid_weight(z: i16, n: i16) -> [f64; 2] {
 }
 
 /// The [`Term::LoadGrid`] column of the load family at the weight `w` = (ρ_z, ρ_n), rounded to
-/// hundredths (`as i16` saturates: values beyond ±327 stay at the ends).
+/// hundredths ([`grid_hundredths`]).
 pub fn load_grid_term(w: [f64; 2], radial: bool) -> Term {
-    Term::LoadGrid(
-        (100.0 * w[0]).round() as i16,
-        (100.0 * w[1]).round() as i16,
-        radial,
-    )
+    Term::LoadGrid(grid_hundredths(w[0]), grid_hundredths(w[1]), radial)
+}
+
+/// A weight component in the hundredths of a [`Term::LoadGrid`] column (`as i16` saturates:
+/// values beyond ±327 stay at the ends).
+pub fn grid_hundredths(x: f64) -> i16 {
+    (100.0 * x).round() as i16
 }
 
 /// The base model's terms.

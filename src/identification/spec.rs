@@ -69,35 +69,31 @@ pub fn fix_shapes(terms: &[Term], coef: &[f64]) -> (Vec<Term>, Vec<f64>) {
 pub fn free_shapes(terms: &[Term], theta: &[f64]) -> (Vec<Term>, Vec<f64>) {
     let (mut t, mut v) = (Vec::new(), Vec::new());
     for (&term, &x) in terms.iter().zip(theta) {
-        let (base, shape) = match term {
-            Term::PowDrag(p) => (Term::Quad, Some((Shape::DragExponent, f64::from(p) / 10.0))),
-            Term::LoadGrid(z, _, radial) => (
-                if radial {
+        let (base, shapes) = match term {
+            Term::PowDrag(p) => (Term::Quad, vec![(Shape::DragExponent, f64::from(p) / 10.0)]),
+            Term::LoadGrid(z, n, radial) => {
+                let [wz, wn] = grid_weight(z, n);
+                let base = if radial {
                     Term::RadialLoadFric
                 } else {
                     Term::LoadFric
-                },
-                Some((Shape::LoadWeight, f64::from(z) / 100.0)),
-            ),
-            Term::StribeckGrid(w, _) => (
+                };
+                (base, vec![(Shape::LoadWeight, wz), (Shape::LoadSide, wn)])
+            }
+            Term::StribeckGrid(w, d) => (
                 Term::StaticExcess,
-                Some((Shape::StribeckWidth, f64::from(w) / 100.0)),
+                vec![
+                    (Shape::StribeckWidth, f64::from(w) / 100.0),
+                    (Shape::StribeckPower, f64::from(d) / 10.0),
+                ],
             ),
-            other => (other, None),
+            other => (other, Vec::new()),
         };
         t.push(base);
         v.push(x);
-        if let Some((s, value)) = shape {
+        for (s, value) in shapes {
             t.push(Term::Shape(s));
             v.push(value);
-        }
-        if let Term::StribeckGrid(_, d) = term {
-            t.push(Term::Shape(Shape::StribeckPower));
-            v.push(f64::from(d) / 10.0);
-        }
-        if let Term::LoadGrid(_, n, _) = term {
-            t.push(Term::Shape(Shape::LoadSide));
-            v.push(f64::from(n) / 100.0);
         }
     }
     v.extend_from_slice(&theta[terms.len().min(theta.len())..]);
