@@ -758,24 +758,10 @@ mod tests {
         err: Vec<f64>,
         cov: nalgebra::DMatrix<f64>,
     ) -> ModelState {
-        let n = terms.len();
         ModelState {
             terms,
             fit_latency: false,
-            fit: SimFit {
-                theta,
-                err,
-                cov,
-                jac: nalgebra::DMatrix::zeros(0, n),
-                resid: Vec::new(),
-                used: Vec::new(),
-                states: Vec::new(),
-                rms_rad: 0.0,
-                rms_start_rad: 0.0,
-                samples: 0,
-                inflation: 1.0,
-                converged: true,
-            },
+            fit: SimFit::with_covariance(theta, err, cov),
             held: super::super::judge::HeldOut {
                 chi2: Vec::new(),
                 chi2_fit: Vec::new(),

@@ -369,20 +369,8 @@ mod tests {
     use super::*;
 
     fn fit_with(theta: Vec<f64>, cov: nalgebra::DMatrix<f64>) -> SimFit {
-        SimFit {
-            err: (0..theta.len()).map(|k| cov[(k, k)].sqrt()).collect(),
-            theta,
-            cov,
-            jac: nalgebra::DMatrix::zeros(0, 0),
-            resid: vec![],
-            used: vec![],
-            states: vec![],
-            rms_rad: 0.0,
-            rms_start_rad: 0.0,
-            samples: 0,
-            inflation: 1.0,
-            converged: true,
-        }
+        let err = (0..theta.len()).map(|k| cov[(k, k)].sqrt()).collect();
+        SimFit::with_covariance(theta, err, cov)
     }
 
     /// One parameter: the two-sided tail of z = b/σ; two independent ones: the χ²₂ tail

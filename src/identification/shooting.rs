@@ -239,6 +239,29 @@ impl SimModel<'_> {
     }
 }
 
+#[cfg(test)]
+impl SimFit {
+    /// A fit with only θ, its σ and its covariance set, for the unit tests of what reads them
+    /// (the Wald test, the reported sizes).
+    pub(crate) fn with_covariance(theta: Vec<f64>, err: Vec<f64>, cov: DMatrix<f64>) -> Self {
+        let n = theta.len();
+        Self {
+            theta,
+            err,
+            cov,
+            jac: DMatrix::zeros(0, n),
+            resid: Vec::new(),
+            used: Vec::new(),
+            states: Vec::new(),
+            rms_rad: 0.0,
+            rms_start_rad: 0.0,
+            samples: 0,
+            inflation: 1.0,
+            converged: true,
+        }
+    }
+}
+
 impl SimFit {
     /// The fitted state of each window of a list of `n` that the refit used.
     pub fn warm_starts(&self, n: usize) -> Vec<Option<[f64; 2]>> {
