@@ -106,7 +106,10 @@ impl Layout {
     }
 }
 
-/// Right-hand side of the augmented system with friction law φ(ω) (value `phi`, derivative `dphi`).
+/// Right-hand side of the augmented system with friction law φ(ω) (value `phi`, derivative
+/// `dphi`), on the branch `held` of a floored friction ([`DrivenOscillator::forces_held`]; `None`:
+/// the forces as they are).
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn augmented_rhs_law<S: DrivenOscillator + ?Sized>(
     sys: &S,
@@ -115,15 +118,22 @@ pub(super) fn augmented_rhs_law<S: DrivenOscillator + ?Sized>(
     y: &[f64],
     phi: f64,
     dphi: f64,
+    held: Option<bool>,
     out: &mut [f64],
 ) {
     if layout.ncols == 0 {
-        let f = sys.forces(t, y[0], y[1]);
+        let f = match held {
+            None => sys.forces(t, y[0], y[1]),
+            Some(floored) => sys.forces_held(t, y[0], y[1], floored),
+        };
         out[0] = y[1];
         out[1] = f.a - phi * f.r;
         return;
     }
-    let j = sys.forces_jet(t, y[0], y[1], layout.with_params);
+    let j = match held {
+        None => sys.forces_jet(t, y[0], y[1], layout.with_params),
+        Some(floored) => sys.forces_jet_held(t, y[0], y[1], layout.with_params, floored),
+    };
     out[0] = y[1];
     out[1] = j.a - phi * j.r;
     let db = j.a_beta - phi * j.r_beta;
@@ -151,5 +161,5 @@ pub(super) fn augmented_rhs<S: DrivenOscillator + ?Sized>(
     s: f64,
     out: &mut V,
 ) {
-    augmented_rhs_law(sys, layout, t, y, s, 0.0, out);
+    augmented_rhs_law(sys, layout, t, y, s, 0.0, None, out);
 }

@@ -8,6 +8,10 @@
 //! at each event the saltation matrix S = I + (F₊ − F₋)∇hᵀ/(∇h·F₋) multiplies Z: diag(1, a₊/a₋) at a
 //! crossing, diag(1, 0) at stick entry, I at a release with r_s = r (numerics.md). Stick phases are
 //! solved directly (the release time is a root of |a(t, β)| − r_s, no integration while stuck).
+//! A step rejected across the kink of a friction floored at zero
+//! ([`DrivenOscillator::friction_floor`]) is tried again on the branch of its start; the switch is
+//! located on the continuous extension, and the step taken again to it (saltation I: the field is
+//! continuous).
 
 use super::augmented::{augmented_rhs_law, param_col, z_beta, z_omega, Layout, NMAX};
 use super::bernstein;
@@ -128,6 +132,10 @@ struct Solver<'a, S: ?Sized, P, const N: usize> {
     /// ∂(β, ω)/∂(β₀, ω₀) at each sample (only with a sensitivity).
     sample_jacobians: Vec<Matrix2<f64>>,
     next_sample: usize,
+    /// The branch of a floored friction held over the current step
+    /// ([`DrivenOscillator::friction_floor`]): `Some(true)` floored, `Some(false)` not, `None`
+    /// when the system has no floor.
+    held: Option<bool>,
     pair: std::marker::PhantomData<P>,
 }
 
@@ -154,6 +162,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             samples: Vec::with_capacity(opts.sample_times.len()),
             sample_jacobians: Vec::new(),
             next_sample: 0,
+            held: None,
             pair: std::marker::PhantomData,
         }
     }
@@ -186,9 +195,28 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     }
 
     #[inline(always)]
-    fn rhs(&mut self, layout: Layout, t: f64, y: &[f64; N], s: f64, out: &mut [f64; N]) {
+    fn rhs<const H: bool>(
+        &mut self,
+        layout: Layout,
+        t: f64,
+        y: &[f64; N],
+        s: f64,
+        out: &mut [f64; N],
+    ) {
         self.stats.rhs_evals += 1;
-        augmented_rhs_law(self.sys, layout, t, y, s, 0.0, out);
+        // `H`: on the held branch of a floored friction (a compile-time switch: reading the
+        // branch at run time in every evaluation cost 17 % of a diagnosis's CPU)
+        let held = if H { self.held } else { None };
+        augmented_rhs_law(self.sys, layout, t, y, s, 0.0, held, out);
+    }
+
+    /// [`Self::rhs`] on the held branch when there is one.
+    fn rhs_any(&mut self, layout: Layout, t: f64, y: &[f64; N], s: f64, out: &mut [f64; N]) {
+        if self.held.is_some() {
+            self.rhs::<true>(layout, t, y, s, out);
+        } else {
+            self.rhs::<false>(layout, t, y, s, out);
+        }
     }
 
     fn record_event(&mut self, t: f64, beta: f64, kind: EventKind) {
@@ -219,7 +247,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
 
     /// The stages after the first-same-as-last one that only the continuous extension uses,
     /// over the first M components: the state alone (M = 2) or everything (M = N).
-    fn dense_stages<const M: usize>(
+    fn dense_stages<const M: usize, const H: bool>(
         &mut self,
         layout: Layout,
         t: f64,
@@ -231,14 +259,14 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         let tab = Self::TAB;
         for i in tab.fsal() + 1..tab.total() {
             let ys = combine::<N, M>(&tab.a[i], i, y, k, hs);
-            self.rhs(layout, t + tab.c[i] * hs, &ys, s, &mut k[i]);
+            self.rhs::<H>(layout, t + tab.c[i] * hs, &ys, s, &mut k[i]);
         }
     }
 
     /// One Runge–Kutta step of size `hs` from (t, y) on side `s`: the main stages, the solution
     /// y₁ (written to `yn`) and the scaled error norm. Also returns min s·ω over the stage
     /// arguments and max |ω̇| over the stages, for the test whether the step can reach Σ.
-    fn step(
+    fn step<const H: bool>(
         &mut self,
         t: f64,
         hs: f64,
@@ -255,7 +283,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         for i in 1..tab.stages {
             ys = combine::<N, N>(&tab.a[i], i, y, k, hs);
             wmin = wmin.min(s * ys[1]);
-            self.rhs(layout, t + tab.c[i] * hs, &ys, s, &mut k[i]);
+            self.rhs::<H>(layout, t + tab.c[i] * hs, &ys, s, &mut k[i]);
             dmax = dmax.max(k[i][1].abs());
         }
         if tab.last_stage_is_solution {
@@ -334,6 +362,9 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             last_rejected: false,
         };
         let mut guard = ZenoGuard::new(period);
+        // the step being tried ends where a floored friction switches; switches at the very
+        // start of a step in a row (a branch taken at ρ ≈ 0 the wrong way)
+        let (mut to_switch, mut flips) = (false, 0usize);
 
         while t < t1 {
             if self.stats.steps + self.stats.rejected > self.opts.max_steps {
@@ -354,29 +385,67 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 t = tr;
                 mode = Mode::from_side(s);
                 fsal = false;
+                self.held = None;
                 continue;
             }
 
             let s = mode.side();
             if !fsal {
-                self.rhs(self.layout(), t, &y, s, &mut k[0]);
+                self.rhs_any(self.layout(), t, &y, s, &mut k[0]);
                 fsal = true;
             }
             let tn = step_end(t, h, hmax, t1)?;
             let hs = tn - t;
             let mut yn = [0.0; N];
-            let info = self.step(t, hs, &y, s, &mut k, &mut yn);
+            let info = if self.held.is_some() {
+                self.step::<true>(t, hs, &y, s, &mut k, &mut yn)
+            } else {
+                self.step::<false>(t, hs, &y, s, &mut k, &mut yn)
+            };
             let hnew = match self.judge(&mut ctl, info.err, &yn, t, hs, period)? {
                 Verdict::Accept(hnew) => hnew,
                 Verdict::Retry(hretry) => {
+                    to_switch = false;
+                    // a rejected step across a switch of a floored friction is tried again at
+                    // its size on the branch of its start (the forces there are the same, and
+                    // so is the first stage)
+                    if self.held.is_none() {
+                        if let Some(floored) = self.straddled_floor(t, &y, tn, &yn) {
+                            self.held = Some(floored);
+                            continue;
+                        }
+                    }
                     h = hretry;
                     continue;
                 }
             };
-            self.stats.steps += 1;
             if !tab.last_stage_is_solution {
-                self.rhs(self.layout(), tn, &yn, s, &mut k[tab.fsal()]);
+                self.rhs_any(self.layout(), tn, &yn, s, &mut k[tab.fsal()]);
             }
+            // On a held branch: does the floor switch inside the step? Then the step is taken
+            // again to the switch (the held branch is smooth up to it), and the forces are
+            // released from the branch there; a switch at the very start means the branch was
+            // taken the wrong way at ρ ≈ 0: it changes at once and the step is taken again.
+            let at_switch = std::mem::take(&mut to_switch);
+            if let (Some(floored), false) = (self.held, at_switch) {
+                if let Some(th) = self.floor_switch(t, hs, &y, &yn, s, &mut k, floored) {
+                    self.stats.rejected += 1;
+                    if th > FLOOR_SWITCH_AT_START {
+                        h = th * hs;
+                        to_switch = true;
+                        continue;
+                    }
+                    if flips < 2 {
+                        flips += 1;
+                        self.held = Some(!floored);
+                        fsal = false;
+                        continue;
+                    }
+                }
+            }
+            flips = 0;
+            self.stats.steps += 1;
+            let was_held = self.held.is_some();
 
             // Can ω reach 0 inside the step? The continuous extension (with the extra dense
             // stages of a high-order pair) is formed and probed only when s·ω over the stage
@@ -391,9 +460,33 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 .is_some_and(|&ts| ts <= tn);
             let near_sigma = info.wmin <= tab.node_gap * hs * info.dmax;
             if near_sigma || sample_inside {
-                let crossing =
-                    self.dense_step(t, hs, tn, &y, &yn, s, &mut k, near_sigma, sample_inside);
+                let crossing = if was_held {
+                    self.dense_step::<true>(
+                        t,
+                        hs,
+                        tn,
+                        &y,
+                        &yn,
+                        s,
+                        &mut k,
+                        near_sigma,
+                        sample_inside,
+                    )
+                } else {
+                    self.dense_step::<false>(
+                        t,
+                        hs,
+                        tn,
+                        &y,
+                        &yn,
+                        s,
+                        &mut k,
+                        near_sigma,
+                        sample_inside,
+                    )
+                };
                 if let Some((tc, mut yc)) = crossing {
+                    self.held = None;
                     guard.record(
                         tc,
                         "events repeat without progress (degenerate contact with ω = 0)",
@@ -407,11 +500,17 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 }
             }
 
-            // no event: accept the whole step
+            // no event: accept the whole step; the forces as they are from its end (a step on a
+            // held branch ends at the switch or on the branch's own side, where they are equal)
+            self.held = None;
             y = yn;
             k[0] = k[tab.fsal()];
             t = tn;
             h = hnew;
+            if was_held && at_switch {
+                // the last stage's derivatives were those of the branch left behind
+                fsal = false;
+            }
         }
         Ok(self.finish(t, y, mode))
     }
@@ -479,7 +578,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     /// and (tc, y(tc)) with the Jacobian columns interpolated and ω = 0 (the arrival is not yet
     /// handled); without, the samples in (t, tn] and `None`.
     #[allow(clippy::too_many_arguments)]
-    fn dense_step(
+    fn dense_step<const H: bool>(
         &mut self,
         t: f64,
         hs: f64,
@@ -496,13 +595,13 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         let jac_at_samples = self.layout().ncols > 0 && sample_inside;
         if tab.dense_extra > 0 {
             if jac_at_samples {
-                self.dense_stages::<N>(self.layout(), t, hs, y, s, k);
+                self.dense_stages::<N, H>(self.layout(), t, hs, y, s, k);
             } else {
                 let state_only = Layout {
                     ncols: 0,
                     with_params: false,
                 };
-                self.dense_stages::<2>(state_only, t, hs, y, s, k);
+                self.dense_stages::<2, H>(state_only, t, hs, y, s, k);
             }
         }
         let state_coeffs = [
@@ -542,7 +641,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         // samples strictly before the event from the continuous extension
         self.samples_dense(t, hs, tc, &dense_state, dense_jac.as_ref(), false);
         if tab.dense_extra > 0 && self.layout().ncols > 0 && !jac_at_samples {
-            self.dense_stages::<N>(self.layout(), t, hs, y, s, k);
+            self.dense_stages::<N, H>(self.layout(), t, hs, y, s, k);
         }
         let mut yc = [0.0; N];
         yc[0] = dense_state(0, thc);
@@ -625,6 +724,93 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 Some((tr, s))
             }
         }
+    }
+
+    /// The branch at (t, y) of a floored friction ([`DrivenOscillator::friction_floor`]; `true`:
+    /// floored, ρ ≤ 0) when ρ lies on the other side at (tn, yn), else `None` (no floor, or no
+    /// switch between the ends).
+    #[cold]
+    #[inline(never)]
+    fn straddled_floor(&self, t: f64, y: &[f64; N], tn: f64, yn: &[f64; N]) -> Option<bool> {
+        let r0 = self.sys.friction_floor(t, y[0], y[1])?;
+        let r1 = self.sys.friction_floor(tn, yn[0], yn[1])?;
+        ((r0 <= 0.0) != (r1 <= 0.0)).then_some(r0 <= 0.0)
+    }
+
+    /// Where in an accepted step from (t, y) to (tn, yn), hs = tn − t, on side `s` the floor of
+    /// the friction switches away from the held branch (`floored`: ρ ≤ 0 held): `None` when ρ at
+    /// the step's end is still on it; else the first θ ∈ [0, 1] on the continuous extension of the
+    /// state with ρ on the other side (probes at eighths of the step, then Illinois regula falsi
+    /// to the last bits).
+    #[allow(clippy::too_many_arguments)]
+    #[cold]
+    #[inline(never)]
+    fn floor_switch(
+        &mut self,
+        t: f64,
+        hs: f64,
+        y: &[f64; N],
+        yn: &[f64; N],
+        s: f64,
+        k: &mut [[f64; N]; SMAX],
+        floored: bool,
+    ) -> Option<f64> {
+        let sys = self.sys;
+        // positive (or zero) on the held branch, negative beyond the switch
+        let held_side = |rho: f64| if floored { -rho } else { rho };
+        let switched = |e: f64| if floored { e < 0.0 } else { e <= 0.0 };
+        let e_end = held_side(sys.friction_floor(t + hs, yn[0], yn[1])?);
+        if !switched(e_end) {
+            return None;
+        }
+        let tab = Self::TAB;
+        if tab.dense_extra > 0 {
+            let state_only = Layout {
+                ncols: 0,
+                with_params: false,
+            };
+            self.dense_stages::<2, true>(state_only, t, hs, y, s, k);
+        }
+        let m = 4 + tab.dense_rows;
+        let coeffs = [
+            dense_coeffs(tab, 0, y, yn, k, hs),
+            dense_coeffs(tab, 1, y, yn, k, hs),
+        ];
+        let e = |th: f64| -> f64 {
+            let (b, w) = (nested(&coeffs[0][..m], th), nested(&coeffs[1][..m], th));
+            sys.friction_floor(t + th * hs, b, w).map_or(0.0, held_side)
+        };
+        let e_start = e(0.0).max(0.0);
+        let (mut lo, mut flo) = (0.0, e_start);
+        let (mut hi, mut fhi) = (1.0, e_end);
+        for j in 1..FLOOR_PROBES {
+            let th = j as f64 / FLOOR_PROBES as f64;
+            let ej = e(th);
+            if switched(ej) {
+                (hi, fhi) = (th, ej);
+                break;
+            }
+            (lo, flo) = (th, ej);
+        }
+        let mut root = Illinois::new(lo, flo, hi, fhi.min(0.0), 0.0);
+        for _ in 0..200 {
+            if root.hi() - root.lo() <= 4.0 * f64::EPSILON * root.hi().max(1e-300) {
+                break;
+            }
+            let Some(mid) = root.next_point() else {
+                break;
+            };
+            let em = e(mid);
+            root.update(
+                mid,
+                if switched(em) {
+                    em.min(0.0)
+                } else {
+                    em.max(f64::MIN_POSITIVE)
+                },
+            );
+        }
+        Some(root.hi())
     }
 
     /// The first θ ∈ (0, 1] of the step with s·ω(θ) ≤ 0 on the continuous extension (nested
@@ -800,6 +986,16 @@ fn step_end(t: f64, h: f64, hmax: f64, t1: f64) -> Result<f64> {
     }
     Ok(tn)
 }
+
+/// Probes per step of the search for a switch of the friction's floor
+/// ([`Solver::floor_switch`]): the first probe past the switch brackets it.
+const FLOOR_PROBES: usize = 8;
+
+/// A switch of the friction's floor within this fraction of a step from its start is taken at
+/// the start: the held branch was the wrong one at ρ ≈ 0, and the step is taken again on the
+/// other (its piece on the wrong branch, ≤ 10⁻⁶ of the step, leaves an error in ω of order
+/// |ρ̇| (10⁻⁶ h)²).
+const FLOOR_SWITCH_AT_START: f64 = 1e-6;
 
 /// Whether a step is accepted, with the next step size, or retried with a smaller one.
 enum Verdict {

@@ -90,7 +90,7 @@ fn reg_rhs<S: DrivenOscillator + ?Sized>(
     let ph = (y[1] / eps).tanh();
     let dph = (1.0 - ph * ph) / eps;
     let layout = Layout { ncols, with_params };
-    augmented_rhs_law(sys, layout, t, y, ph, dph, out);
+    augmented_rhs_law(sys, layout, t, y, ph, dph, None, out);
 }
 
 /// Jacobian-vector product of [`reg_rhs`]: exact in the Jacobian columns Z and for the state rows;

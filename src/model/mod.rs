@@ -234,6 +234,39 @@ pub trait DrivenOscillator: Send + Sync {
     /// The forces with their derivatives in state and (when `params` is true) parameters.
     fn forces_jet(&self, t: f64, beta: f64, omega: f64, params: bool) -> ForcesJet;
 
+    /// The switching function ρ(t, β, ω) of a dry friction floored at zero, r = max(ρ, 0) + (a
+    /// part that stays ≥ 0): r is continuous but has a kink where ρ changes sign. `None` (the
+    /// default) when r has no such floor. A step of the event-driven integrator that is rejected
+    /// with ρ on opposite sides at its ends is tried again on the branch of its start
+    /// ([`Self::forces_held`]) and ended where ρ changes sign, as a step is ended on Σ: a step
+    /// across the kink would be rejected over and over (docs/model.md, "A friction floored at
+    /// zero").
+    fn friction_floor(&self, t: f64, beta: f64, omega: f64) -> Option<f64> {
+        let _ = (t, beta, omega);
+        None
+    }
+
+    /// [`Self::forces`] on one branch of the floor of [`Self::friction_floor`]: `floored`, the
+    /// floored part of r is 0; else it is ρ, continued smoothly where ρ < 0. The default (no
+    /// floor) is [`Self::forces`].
+    fn forces_held(&self, t: f64, beta: f64, omega: f64, floored: bool) -> Forces {
+        let _ = floored;
+        self.forces(t, beta, omega)
+    }
+
+    /// [`Self::forces_jet`] on one branch of the floor ([`Self::forces_held`]).
+    fn forces_jet_held(
+        &self,
+        t: f64,
+        beta: f64,
+        omega: f64,
+        params: bool,
+        floored: bool,
+    ) -> ForcesJet {
+        let _ = floored;
+        self.forces_jet(t, beta, omega, params)
+    }
+
     /// The static friction bound r_s(t, β) that decides stick versus crossing on Σ.
     /// Defaults to the sliding friction at ω = 0.
     fn static_friction(&self, t: f64, beta: f64) -> f64 {
