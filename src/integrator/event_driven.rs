@@ -412,6 +412,9 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                     if self.held.is_none() {
                         if let Some(floored) = self.straddled_floor(t, &y, tn, &yn) {
                             self.held = Some(floored);
+                            // (the same forces at the start, but the first stage's derivatives
+                            // differ there when ρ = 0 exactly)
+                            fsal = false;
                             continue;
                         }
                     }
@@ -430,7 +433,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             if let (Some(floored), false) = (self.held, at_switch) {
                 if let Some(th) = self.floor_switch(t, hs, &y, &yn, s, &mut k, floored) {
                     self.stats.rejected += 1;
-                    if th > FLOOR_SWITCH_AT_START {
+                    if th > FLOOR_SWITCH_AT_START && t + th * hs > t {
                         h = th * hs;
                         to_switch = true;
                         continue;
@@ -445,7 +448,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             }
             flips = 0;
             self.stats.steps += 1;
-            let was_held = self.held.is_some();
+            let held = self.held;
 
             // Can ω reach 0 inside the step? The continuous extension (with the extra dense
             // stages of a high-order pair) is formed and probed only when s·ω over the stage
@@ -460,7 +463,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 .is_some_and(|&ts| ts <= tn);
             let near_sigma = info.wmin <= tab.node_gap * hs * info.dmax;
             if near_sigma || sample_inside {
-                let crossing = if was_held {
+                let crossing = if held.is_some() {
                     self.dense_step::<true>(
                         t,
                         hs,
@@ -500,15 +503,21 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 }
             }
 
-            // no event: accept the whole step; the forces as they are from its end (a step on a
-            // held branch ends at the switch or on the branch's own side, where they are equal)
-            self.held = None;
+            // no event: accept the whole step. A step to a switch hands over to the other
+            // branch for one step (at the switch ρ is 0 up to the local error, and the forces
+            // as they are would take their derivatives from either side by rounding); any other
+            // step on a held branch to the forces as they are. The first stage is evaluated
+            // again after a held step (it holds the derivatives of the branch left behind, or,
+            // after two flips in a row, of a branch taken past its switch).
+            self.held = match held {
+                Some(floored) if at_switch => Some(!floored),
+                _ => None,
+            };
             y = yn;
             k[0] = k[tab.fsal()];
             t = tn;
             h = hnew;
-            if was_held && at_switch {
-                // the last stage's derivatives were those of the branch left behind
+            if held.is_some() {
                 fsal = false;
             }
         }
@@ -734,14 +743,15 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     fn straddled_floor(&self, t: f64, y: &[f64; N], tn: f64, yn: &[f64; N]) -> Option<bool> {
         let r0 = self.sys.friction_floor(t, y[0], y[1])?;
         let r1 = self.sys.friction_floor(tn, yn[0], yn[1])?;
-        ((r0 <= 0.0) != (r1 <= 0.0)).then_some(r0 <= 0.0)
+        // from ρ = 0 exactly towards ρ > 0: the unfloored branch
+        ((r0 <= 0.0) != (r1 <= 0.0)).then_some(r0 < 0.0)
     }
 
     /// Where in an accepted step from (t, y) to (tn, yn), hs = tn − t, on side `s` the floor of
     /// the friction switches away from the held branch (`floored`: ρ ≤ 0 held): `None` when ρ at
-    /// the step's end is still on it; else the first θ ∈ [0, 1] on the continuous extension of the
-    /// state with ρ on the other side (probes at eighths of the step, then Illinois regula falsi
-    /// to the last bits).
+    /// the step's end is still on it (a step in which ρ leaves the branch and comes back is not
+    /// seen); else the first θ ∈ [0, 1] on the continuous extension of the state with ρ on the
+    /// other side (probes at eighths of the step, then Illinois regula falsi to the last bits).
     #[allow(clippy::too_many_arguments)]
     #[cold]
     #[inline(never)]
@@ -794,7 +804,10 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         }
         let mut root = Illinois::new(lo, flo, hi, fhi.min(0.0), 0.0);
         for _ in 0..200 {
-            if root.hi() - root.lo() <= 4.0 * f64::EPSILON * root.hi().max(1e-300) {
+            // (a switch at the start is taken there: no need to resolve it further)
+            if root.hi() - root.lo() <= 4.0 * f64::EPSILON * root.hi().max(1e-300)
+                || root.hi() <= FLOOR_SWITCH_AT_START
+            {
                 break;
             }
             let Some(mid) = root.next_point() else {
