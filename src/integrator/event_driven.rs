@@ -463,31 +463,24 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
                 .is_some_and(|&ts| ts <= tn);
             let near_sigma = info.wmin <= tab.node_gap * hs * info.dmax;
             if near_sigma || sample_inside {
-                let crossing = if held.is_some() {
-                    self.dense_step::<true>(
-                        t,
-                        hs,
-                        tn,
-                        &y,
-                        &yn,
-                        s,
-                        &mut k,
-                        near_sigma,
-                        sample_inside,
-                    )
+                // on the held branch if the step was taken on it
+                let dense_step = if held.is_some() {
+                    Self::dense_step::<true>
                 } else {
-                    self.dense_step::<false>(
-                        t,
-                        hs,
-                        tn,
-                        &y,
-                        &yn,
-                        s,
-                        &mut k,
-                        near_sigma,
-                        sample_inside,
-                    )
+                    Self::dense_step::<false>
                 };
+                let crossing = dense_step(
+                    &mut self,
+                    t,
+                    hs,
+                    tn,
+                    &y,
+                    &yn,
+                    s,
+                    &mut k,
+                    near_sigma,
+                    sample_inside,
+                );
                 if let Some((tc, mut yc)) = crossing {
                     self.held = None;
                     guard.record(
