@@ -60,6 +60,12 @@ impl Layout {
         Self { ncols, with_params }
     }
 
+    /// The state alone, no Jacobian columns.
+    pub const STATE: Layout = Layout {
+        ncols: 0,
+        with_params: false,
+    };
+
     /// Dimension of the augmented state.
     pub fn dim(&self) -> usize {
         2 + 2 * self.ncols

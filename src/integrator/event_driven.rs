@@ -172,10 +172,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     #[inline(always)]
     fn layout(&self) -> Layout {
         match N {
-            2 => Layout {
-                ncols: 0,
-                with_params: false,
-            },
+            2 => Layout::STATE,
             6 => Layout {
                 ncols: 2,
                 with_params: false,
@@ -205,7 +202,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     ) {
         self.stats.rhs_evals += 1;
         // `H`: on the held branch of a floored friction (a compile-time switch: reading the
-        // branch at run time in every evaluation cost 17 % of a diagnosis's CPU)
+        // branch at run time in every evaluation cost 17–20 % of a diagnosis's CPU, docs/performance.md)
         let held = if H { self.held } else { None };
         augmented_rhs_law(self.sys, layout, t, y, s, 0.0, held, out);
     }
@@ -599,11 +596,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             if jac_at_samples {
                 self.dense_stages::<N, H>(self.layout(), t, hs, y, s, k);
             } else {
-                let state_only = Layout {
-                    ncols: 0,
-                    with_params: false,
-                };
-                self.dense_stages::<2, H>(state_only, t, hs, y, s, k);
+                self.dense_stages::<2, H>(Layout::STATE, t, hs, y, s, k);
             }
         }
         let state_coeffs = [
@@ -768,11 +761,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
         }
         let tab = Self::TAB;
         if tab.dense_extra > 0 {
-            let state_only = Layout {
-                ncols: 0,
-                with_params: false,
-            };
-            self.dense_stages::<2, true>(state_only, t, hs, y, s, k);
+            self.dense_stages::<2, true>(Layout::STATE, t, hs, y, s, k);
         }
         let m = 4 + tab.dense_rows;
         let coeffs = [
@@ -795,28 +784,17 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             }
             (lo, flo) = (th, ej);
         }
-        let mut root = Illinois::new(lo, flo, hi, fhi.min(0.0), 0.0);
-        for _ in 0..200 {
-            // (a switch at the start is taken there: no need to resolve it further)
-            if root.hi() - root.lo() <= 4.0 * f64::EPSILON * root.hi().max(1e-300)
-                || root.hi() <= FLOOR_SWITCH_AT_START
-            {
-                break;
+        // (a switch at the start is taken there: no need to resolve it further)
+        let signed = |th: f64| {
+            let v = e(th);
+            if switched(v) {
+                v.min(0.0)
+            } else {
+                v.max(f64::MIN_POSITIVE)
             }
-            let Some(mid) = root.next_point() else {
-                break;
-            };
-            let em = e(mid);
-            root.update(
-                mid,
-                if switched(em) {
-                    em.min(0.0)
-                } else {
-                    em.max(f64::MIN_POSITIVE)
-                },
-            );
-        }
-        Some(root.hi())
+        };
+        let root = Illinois::new(lo, flo, hi, fhi.min(0.0), 0.0);
+        Some(refine(root, signed, FLOOR_SWITCH_AT_START))
     }
 
     /// The first θ ∈ (0, 1] of the step with s·ω(θ) ≤ 0 on the continuous extension (nested
@@ -861,17 +839,7 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
             // starts on Σ (just after an event) and the sign is wrong at once
             flo = 0.0;
         }
-        let mut root = Illinois::new(lo, flo, hi, fhi, 0.0);
-        for _ in 0..200 {
-            if root.hi() - root.lo() <= 4.0 * f64::EPSILON * root.hi().max(1e-300) {
-                break;
-            }
-            let Some(mid) = root.next_point() else {
-                break;
-            };
-            root.update(mid, e(mid));
-        }
-        Some(root.hi())
+        Some(refine(Illinois::new(lo, flo, hi, fhi, 0.0), e, 0.0))
     }
 
     /// Records the requested samples in (t, t_end) (or (t, t_end] when `inclusive`) from the
@@ -991,6 +959,24 @@ fn step_end(t: f64, h: f64, hmax: f64, t1: f64) -> Result<f64> {
         });
     }
     Ok(tn)
+}
+
+/// The bracket `root` of a root of `e` on a step's continuous extension (θ ∈ [0, 1]) refined by
+/// Illinois regula falsi to the last bits of θ, or until its high end is at most `at_start`;
+/// returns the high end (the first point past the root).
+fn refine(mut root: Illinois, e: impl Fn(f64) -> f64, at_start: f64) -> f64 {
+    for _ in 0..200 {
+        if root.hi() - root.lo() <= 4.0 * f64::EPSILON * root.hi().max(1e-300)
+            || root.hi() <= at_start
+        {
+            break;
+        }
+        let Some(mid) = root.next_point() else {
+            break;
+        };
+        root.update(mid, e(mid));
+    }
+    root.hi()
 }
 
 /// Probes per step of the search for a switch of the friction's floor
