@@ -547,14 +547,20 @@ fn level2_ci_campaign(effect: &str, seeds: u64) -> CampaignDoc {
 
 /// [`level2_ci_campaign`] on the seeds `seeds`.
 fn level2_ci_seeds(effect: &str, seeds: Vec<u64>) -> CampaignDoc {
+    ci_seeds(effect, 2.0, seeds)
+}
+
+/// A campaign of one effect at `level` on `ci` sets, the seeds `seeds`, no controls, the
+/// diagnosis's default options. The folder is removed afterwards.
+fn ci_seeds(effect: &str, level: f64, seeds: Vec<u64>) -> CampaignDoc {
     let out = std::env::temp_dir().join(format!(
-        "gearbif-campaign-{effect}-{}-{}",
+        "gearbif-campaign-{effect}-{level}-{}-{}",
         seeds.first().copied().unwrap_or(0),
         std::process::id()
     ));
     let spec = CampaignSpec {
         effects: vec![effect.into()],
-        levels: vec![2.0],
+        levels: vec![level],
         seeds,
         null_seeds: Vec::new(),
         set: SetSize::ci(),
@@ -649,6 +655,7 @@ fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
             member: None,
             dropped: None,
             forked: false,
+            joined: false,
         };
         let mut tried = vec![
             accepted(1, torque, z1, with_torque),
@@ -747,6 +754,110 @@ fn close_rivals_are_told_apart_by_their_branches() {
 /// 0) and named a `condition_dependence` of ζ instead (docs/diagnosis.md, Known weaknesses). One
 /// diagnosis: 72 s wall in the release build at load ≈ 5 (95 s CPU for the same set by `gearbif
 /// diagnose`).
+/// Close rivals each significant on top of the other are accepted together (`beam`, the joint
+/// check). On a set with a static torque and a sensor latency (`torque_and_latency`, level 1:
+/// 6 s⁻² and 6 ms, `ci` size, seed 4) the two tie in round 1; each refitted on top of the other
+/// is significant, so both are accepted in round 1 without a fork: the report lists the pair
+/// (`fits.selection_joints`) with both z above the round's threshold and the tie below it, the
+/// findings are the two effects, both accepted, and both sizes cover their truth within 3σ.
+/// On sets with the torque alone (`static_torque_2h`, level 2, seeds 1 and 2) the check itself
+/// (`beam::on_top_of_each_other`) refuses a pair: the Stribeck member of the breakaway family,
+/// which the weak form proposes both on the base model and on top of the torque, is not
+/// significant on top of it.
+#[test]
+fn close_rivals_each_significant_on_top_of_the_other_are_accepted_together() {
+    let doc = ci_seeds("torque_and_latency", 1.0, vec![4]);
+    let c = &doc.cases[0];
+    let lines = format!(
+        "verdict {}, findings {:?}, coverage {:?}, forks {:?}, joints {:?}",
+        c.verdict, c.findings, c.coverage, c.forks, c.joints
+    );
+    assert!(c.named_right, "{lines}");
+    assert!(c.forks.is_empty(), "{lines}");
+    assert_eq!(c.joints.len(), 1, "{lines}");
+    let j = &c.joints[0];
+    let mut pair = [j.first.as_str(), j.second.as_str()];
+    pair.sort();
+    assert_eq!(pair, ["sensor_latency", "static_torque"], "{lines}");
+    assert_eq!(j.round, 1, "{lines}");
+    assert!(j.round_z < j.z_crit, "{lines}");
+    assert!(
+        j.second_on_first.0 >= j.z_crit && j.first_on_second.0 >= j.z_crit,
+        "{lines}"
+    );
+    let mut found: Vec<&str> = c.findings.iter().map(|f| f.effect.as_str()).collect();
+    found.sort();
+    assert_eq!(found, ["sensor_latency", "static_torque"], "{lines}");
+    assert_eq!(c.coverage.len(), 2, "{lines}");
+    assert!(
+        c.coverage.iter().all(|e| e
+            .reported
+            .is_some_and(|(v, s)| (v - e.truth).abs() <= 3.0 * s)),
+        "{lines}"
+    );
+    refused_on_sets_with_the_torque_alone();
+}
+
+/// The negative half of the test above: the joint check refuses the pair of the torque and the
+/// Stribeck member where the recordings hold the torque alone.
+fn refused_on_sets_with_the_torque_alone() {
+    use gearbif::identification::beam::on_top_of_each_other;
+    use gearbif::identification::diagnose::{
+        fit_base, prepare, propose_ctx, select_ctx, DiagnoseOptions,
+    };
+    use gearbif::identification::judge::{z_threshold, Folds};
+    use gearbif::identification::propose::propose;
+    use gearbif::identification::select::{converge, evaluate, significant, Tried};
+    use gearbif::progress::Silent;
+    for seed in [1u64, 2] {
+        let spec = effect("static_torque_2h").unwrap();
+        let g = build_case(spec, 2.0, seed, &SetSize::ci(), &Rk4Filippov::default()).unwrap();
+        let opts = DiagnoseOptions::default();
+        let prep = prepare(&g.set, &opts, &Silent).unwrap();
+        let folds = Folds::new(&prep.runs, opts.folds);
+        let base = fit_base(&prep, &g.set, &opts, &folds, &Silent).unwrap();
+        let b = base.state.clone().expect("the base refit");
+        let pctx = propose_ctx(&prep.runs, &base, &opts);
+        let sctx = select_ctx(&pctx, &base, &folds, &opts);
+        let cands = propose(&pctx, &b.terms, None, &b.effects);
+        let z_crit = z_threshold(cands.len());
+        let pick = |id: &str, n: usize| {
+            cands
+                .iter()
+                .find(|c| c.effect.id == id && c.terms.len() == n)
+                .unwrap_or_else(|| panic!("seed {seed}: no {id} with {n} terms"))
+        };
+        let (torque, stribeck) = (pick("static_torque", 4), pick("static_friction", 3));
+        let on = |c| converge(&sctx, &evaluate(&sctx, &b, c).expect("the refit"));
+        let [stribeck_on_torque, torque_on_stribeck] = on_top_of_each_other(
+            &sctx,
+            (torque, &on(torque)),
+            (stribeck, &on(stribeck)),
+            (1, z_crit),
+        );
+        let z = |t: &Result<Tried, &str>| match t {
+            Ok(t) => format!(
+                "held-out z {:?}, Wald z {:?}",
+                t.cmp.map(|c| c.z),
+                t.added_z
+            ),
+            Err(e) => e.to_string(),
+        };
+        let lines = format!(
+            "static_torque_2h seed {seed}: the Stribeck member on the torque: {}; the torque on \
+             it: {} (threshold {z_crit:.2})",
+            z(&stribeck_on_torque),
+            z(&torque_on_stribeck)
+        );
+        eprintln!("{lines}");
+        assert!(stribeck_on_torque.is_ok(), "{lines}");
+        assert!(
+            !stribeck_on_torque.as_ref().is_ok_and(significant),
+            "{lines}"
+        );
+    }
+}
+
 #[test]
 fn a_large_latency_is_judged_on_the_driven_windows_it_explains() {
     let doc = level2_ci_seeds("latency", vec![4]);

@@ -78,6 +78,10 @@ pub struct CaseResult {
     /// candidates the held-out windows did not tell apart.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub forks: Vec<crate::identification::beam::Fork>,
+    /// Its close rivals accepted together (report key `fits.selection_joints`): rounds whose two
+    /// best named candidates were each significant on top of the other.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub joints: Vec<crate::identification::beam::Joint>,
     /// The error, if the diagnosis failed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,

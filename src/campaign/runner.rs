@@ -193,9 +193,9 @@ pub fn run_case(
         .and_then(|r| r.noise.as_ref())
         .and_then(|n| n.speed_noise.as_ref())
         .map(|s| [s.timing_var_s2, s.timing_var_sigma_s2]);
-    let forks = diag
+    let (forks, joints) = diag
         .as_ref()
-        .map(|d| d.report.selection_forks())
+        .map(|d| (d.report.selection_forks(), d.report.selection_joints()))
         .unwrap_or_default();
     let (verdict, findings, error) = match diag {
         Ok(d) => (
@@ -230,6 +230,7 @@ pub fn run_case(
         noise_at_rest,
         timing_jitter,
         forks,
+        joints,
         error,
     })
 }

@@ -9,11 +9,21 @@
 //! round's threshold) is left; when both run to their end, the one whose final model predicts
 //! the held-out windows better is kept. At most two branches: a fork only where one branch is
 //! left (before any fork, or after the other was left).
+//!
+//! Before forking, the joint check ([`joint`]): each of the two is refitted on top of the other
+//! and judged against it as any candidate is against the current model. When each is significant
+//! on top of the other, neither explains what the other does: both are accepted in the round
+//! (the rival as refitted on top of the accepted one) and the selection goes on without a fork.
+//! The order of their acceptance then decides nothing, and the rounds of two branches, which
+//! would each accept the other's effect next unless a third one gains more, are not spent.
 
 use super::judge::{compare, Comparison};
+use super::propose::Candidate;
 use super::select::{
-    accept, choose_members, choose_named, close_rival, judge_round, ModelState, SelectCtx, Tried,
+    accept, choose_members, choose_named, close_rival, converge, evaluate, judge_round,
+    proposed_on, report_tried, significant, tried, ModelState, SelectCtx, Tried,
 };
+use super::shooting::par_map;
 use crate::progress::{stage, Observer};
 
 /// A round whose accepted candidate and a named rival could not be told apart, and how the
@@ -57,6 +67,26 @@ impl Fork {
     }
 }
 
+/// A round whose accepted candidate and its close rival were each significant on top of the
+/// other, and were both accepted in it ([`joint`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Joint {
+    /// The round.
+    pub round: usize,
+    /// The effect accepted first (the larger held-out gain on the round's model).
+    pub first: String,
+    /// Its close rival, accepted on top of it.
+    pub second: String,
+    /// Held-out z of the first against the second in the round (below the round's threshold).
+    pub round_z: f64,
+    /// The round's threshold.
+    pub z_crit: f64,
+    /// Held-out z and χ² gain of the second refitted on top of the first, against the first.
+    pub second_on_first: (f64, f64),
+    /// The same for the first on top of the second.
+    pub first_on_second: (f64, f64),
+}
+
 /// The selection's result: every candidate tried on the kept branch (the accepted ones with
 /// their refitted state), its final model, and the forks taken on the way to it.
 #[derive(Debug, Clone)]
@@ -65,8 +95,17 @@ pub struct Selection {
     pub tried: Vec<Tried>,
     /// The final model.
     pub fin: ModelState,
+    /// How its close rivals were decided.
+    pub rivals: Rivals,
+}
+
+/// How the close rivals of a selection were decided: forks, and rivals accepted together.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Rivals {
     /// Forks.
     pub forks: Vec<Fork>,
+    /// Close rivals accepted together on the kept branch.
+    pub joints: Vec<Joint>,
 }
 
 /// A branch of the selection.
@@ -77,6 +116,8 @@ struct Branch {
     label: String,
     /// No candidate was accepted in its last round.
     ended: bool,
+    /// Close rivals accepted together on this branch.
+    joints: Vec<Joint>,
 }
 
 /// Where the selection forked.
@@ -99,6 +140,7 @@ pub fn select(ctx: &SelectCtx, base: ModelState, progress: &dyn Observer) -> Sel
         cur: base,
         label: String::new(),
         ended: false,
+        joints: Vec::new(),
     }];
     let mut open: Option<ForkAt> = None;
     let mut forks = Vec::new();
@@ -167,6 +209,34 @@ fn advance(
         b.tried.extend(judged);
         return vec![b];
     };
+    // the two accepted refitted to convergence (in parallel); only they keep their states
+    for (k, t) in judged.iter_mut().enumerate() {
+        if k != bi && k != ri {
+            t.state = None;
+        }
+    }
+    let conv = par_map(2, |n| {
+        let k = [bi, ri][n];
+        converge(ctx, judged[k].state.as_ref().expect("evaluated"))
+    });
+    let [sa, sb]: [ModelState; 2] = conv.try_into().expect("two states");
+    let check = JointCheck {
+        pair: (bi, ri),
+        states: (&sa, &sb),
+        round_z: z,
+        round,
+    };
+    if let Some((mut on_top, j)) = joint(ctx, &judged, &check, &label, progress) {
+        on_top.accepted = true;
+        judged[bi].accepted = true;
+        judged[ri].joined = true;
+        judged[ri].state = None;
+        b.cur = converge(ctx, on_top.state.as_ref().expect("evaluated"));
+        b.tried.extend(judged);
+        b.tried.push(on_top);
+        b.joints.push(j);
+        return vec![b];
+    }
     let names = [bi, ri].map(|k| judged[k].candidate.effect.id.to_string());
     stage(
         progress,
@@ -177,18 +247,13 @@ fn advance(
         ),
     );
     *at = Some(ForkAt { round, z, z_crit });
-    // only the two accepted keep their refitted states (`accept` drops the others' anyway)
-    for (k, t) in judged.iter_mut().enumerate() {
-        if k != bi && k != ri {
-            t.state = None;
-        }
-    }
-    [(bi, ri, 0), (ri, bi, 1)]
+    [(bi, ri, 0, sa), (ri, bi, 1, sb)]
         .into_iter()
-        .map(|(k, o, n)| {
+        .map(|(k, o, n, cur)| {
             let mut r = judged.clone();
             r[o].forked = true;
-            let cur = accept(ctx, &mut r, k);
+            r[k].accepted = true;
+            r[o].state = None;
             let mut tried = b.tried.clone();
             tried.extend(r);
             Branch {
@@ -196,9 +261,115 @@ fn advance(
                 cur,
                 label: names[n].clone(),
                 ended: false,
+                joints: b.joints.clone(),
             }
         })
         .collect()
+}
+
+/// The two close rivals of a round and their models ([`joint`]).
+struct JointCheck<'s> {
+    /// Indices into the round: the accepted candidate, its rival.
+    pair: (usize, usize),
+    /// The round's model with each of them, refitted to convergence.
+    states: (&'s ModelState, &'s ModelState),
+    /// Held-out z of the first against the second.
+    round_z: f64,
+    round: usize,
+}
+
+/// Each of two candidates of round `round` (threshold `z_crit`) on top of the other: `b`
+/// proposed again on top of `on_a`, the round's model with `a` accepted (refitted to
+/// convergence), and `a` on top of `on_b` ([`proposed_on`]), each refitted by simulation on all
+/// judging windows and compared with the model below it ([`tried`]; [`significant`] tells
+/// whether it would be accepted there). `[b on a, a on b]`; an error says why one could not be
+/// judged (with `{other}` for the other's name).
+pub fn on_top_of_each_other(
+    ctx: &SelectCtx,
+    (a, on_a): (&Candidate, &ModelState),
+    (b, on_b): (&Candidate, &ModelState),
+    (round, z_crit): (usize, f64),
+) -> [Result<Tried, &'static str>; 2] {
+    let on = [(on_a, b), (on_b, a)];
+    let both: Vec<Result<Tried, &str>> = par_map(2, |n| {
+        let (cur, like) = on[n];
+        let cand = proposed_on(ctx, cur, like)
+            .ok_or("is not proposed on top of {other} (its weak form gains nothing there)")?;
+        let st = evaluate(ctx, cur, &cand).ok_or("could not be refitted on top of {other}")?;
+        Ok(tried(ctx, cur, cand, (None, Some(st)), (round, z_crit)))
+    });
+    both.try_into().expect("two")
+}
+
+/// The joint check of the close rivals `c.pair` of a round (see the module;
+/// [`on_top_of_each_other`] at the round's threshold). When both are [`significant`]: the
+/// rival's record on top of the accepted one, to accept, and the joint's record. `None` (fork)
+/// when either is not, or cannot be proposed or refitted there.
+fn joint(
+    ctx: &SelectCtx,
+    round: &[Tried],
+    c: &JointCheck,
+    label: &str,
+    progress: &dyn Observer,
+) -> Option<(Tried, Joint)> {
+    let (bi, ri) = c.pair;
+    let z_crit = round[bi].z_crit;
+    let [second_on_first, first_on_second] = on_top_of_each_other(
+        ctx,
+        (&round[bi].candidate, c.states.0),
+        (&round[ri].candidate, c.states.1),
+        (c.round, z_crit),
+    );
+    let names = [bi, ri].map(|k| round[k].candidate.effect.id);
+    let z = |t: &Result<Tried, &str>| t.as_ref().ok().and_then(|t| t.cmp).map(|m| (m.z, m.gain));
+    let lines = [
+        (&second_on_first, names[1], names[0]),
+        (&first_on_second, names[0], names[1]),
+    ];
+    for (t, this, other) in lines {
+        match t {
+            Ok(t) => report_tried(
+                t,
+                &format!("{label} (joint check, on top of {other})"),
+                progress,
+            ),
+            Err(why) => stage(
+                progress,
+                &format!(
+                    "round {}{label} (joint check): {this} {}",
+                    c.round,
+                    why.replace("{other}", other)
+                ),
+            ),
+        }
+    }
+    let (Some(s), Some(f)) = (z(&second_on_first), z(&first_on_second)) else {
+        return None;
+    };
+    let together = [&second_on_first, &first_on_second]
+        .iter()
+        .all(|t| t.as_ref().is_ok_and(significant));
+    if !together {
+        return None;
+    }
+    stage(
+        progress,
+        &format!(
+            "round {}{label}: {} and {} not told apart (held-out z {:.2} < {z_crit:.2}), but \
+             each is significant on top of the other (z {:.2} and {:.2}): both accepted",
+            c.round, names[0], names[1], c.round_z, s.0, f.0
+        ),
+    );
+    let j = Joint {
+        round: c.round,
+        first: names[0].to_string(),
+        second: names[1].to_string(),
+        round_z: c.round_z,
+        z_crit,
+        second_on_first: s,
+        first_on_second: f,
+    };
+    second_on_first.ok().map(|t| (t, j))
 }
 
 /// Of two branches, the one whose model predicts the held-out windows significantly worse than
@@ -277,7 +448,10 @@ fn finish(
     Selection {
         tried: kept.tried,
         fin: kept.cur,
-        forks,
+        rivals: Rivals {
+            forks,
+            joints: kept.joints,
+        },
     }
 }
 

@@ -245,6 +245,7 @@ pub fn width_member(
         member: None,
         dropped: None,
         forked: false,
+        joined: false,
     };
     Some((tried, alternate))
 }

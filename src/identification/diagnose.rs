@@ -12,7 +12,7 @@
 //!    breakaway friction ([`super::breakaway`]) and the nominal consistency ([`super::nominal`]).
 //! 6. **report** ([`report`]): findings, rejected candidates, predictions for the figures.
 
-use super::beam::{select, Fork};
+use super::beam::{select, Rivals};
 use super::breakaway;
 use super::findings::{
     excess_profile_size, judged_finding, profiled_size, rejected, rivals, second_minimum_size,
@@ -394,7 +394,7 @@ pub fn diagnose(
     );
     let runs = &prep.runs;
     let mut tried: Vec<Tried> = Vec::new();
-    let mut forks: Vec<Fork> = Vec::new();
+    let mut decided = Rivals::default();
     let mut findings: Vec<Finding> = Vec::new();
     let mut final_state = base.state.clone();
     let mut excess = 0.0;
@@ -405,7 +405,7 @@ pub fn diagnose(
         let sel = select(&sctx, b.clone(), progress);
         let fin = sel.fin;
         tried = sel.tried;
-        forks = sel.forks;
+        decided = sel.rivals;
         stage(progress, "final model refitted to convergence");
         let (fin, profiles) = polish_final(&sctx, &fin, opts.profile_shapes);
         stage(
@@ -511,7 +511,7 @@ pub fn diagnose(
         excess,
         (mismatch, chi_run),
         findings,
-        (&tried, &forks),
+        (&tried, &decided),
         progress,
     )?;
     d.report.remaining = remains;
@@ -712,7 +712,7 @@ fn report(
     excess: f64,
     (mismatch, chi_run): (Vec<Mismatch>, Vec<f64>),
     findings: Vec<Finding>,
-    (tried, forks): (&[Tried], &[Fork]),
+    (tried, rivals): (&[Tried], &Rivals),
     progress: &dyn Observer,
 ) -> Result<Diagnosis> {
     let runs = &prep.runs;
@@ -806,7 +806,7 @@ fn report(
         &base,
         final_state.as_ref(),
         latency,
-        (tried, forks),
+        (tried, rivals),
     );
     // fingerprints: base equation-error residuals (the final model's on the same rows)
     let fingerprint = fingerprints(&base, final_state.as_ref(), runs, &opts.weak, latency);
@@ -882,7 +882,7 @@ fn fits_document(
     base: &BaseModel,
     final_state: Option<&ModelState>,
     latency: f64,
-    (tried, forks): (&[Tried], &[Fork]),
+    (tried, rivals): (&[Tried], &Rivals),
 ) -> serde_json::Value {
     let runs = &prep.runs;
     let final_map: BTreeMap<String, serde_json::Value> = final_state
@@ -901,7 +901,8 @@ fn fits_document(
         "augmented_coefficients": final_map,
         "latency_s": latency,
         "rejected_candidates": rejected(tried),
-        "selection_forks": forks,
+        "selection_forks": rivals.forks,
+        "selection_joints": rivals.joints,
         "judge": {
             "folds": if base.wins.is_empty() { 0 } else { opts.folds },
             "windows": base.wins.len(),

@@ -567,7 +567,7 @@ pub fn judged_finding(
 pub fn rivals(t: &Tried, tried: &[Tried]) -> Vec<String> {
     tried
         .iter()
-        .filter(|o| o.round == t.round && !o.accepted)
+        .filter(|o| o.round == t.round && !o.accepted && !o.joined)
         // the family's other members are not rivals: the judge chose among them
         .filter(|o| o.candidate.effect.id != t.candidate.effect.id)
         .filter_map(|o| {
@@ -651,6 +651,10 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                         "held-out gain (z = {:.2}) with added parameters consistent with zero \
                          (Wald z = {:.2} < {:.2})", m.z, t.added_z.unwrap_or(0.0), t.z_crit),
                     Some(_) if member_reason.is_some() => member_reason.unwrap_or_default(),
+                    Some(_) if t.joined => "a close rival of the accepted candidate, significant \
+                        on top of it and it on top of this one: accepted with it in the same round \
+                        as refitted on top of it (fits.selection_joints)"
+                        .to_string(),
                     Some(_) if t.forked => "a close rival of the accepted candidate: accepted on \
                         the other branch of the fork of its round, the branch that was left \
                         (fits.selection_forks)"

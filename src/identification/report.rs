@@ -307,7 +307,7 @@ pub fn markdown(r: &Report, title: &str) -> String {
             serde_json::to_string(&fi.evidence).unwrap_or_default()
         ));
     }
-    s.push_str(&forks_markdown(&r.selection_forks()));
+    s.push_str(&forks_markdown(&r.selection_forks(), &r.selection_joints()));
     if let Some(rem) = &r.remaining {
         s.push_str(&remainder_markdown(rem));
     }
@@ -324,13 +324,45 @@ impl Report {
     }
 }
 
-/// The selection's forks ([`Report::selection_forks`]) as a section of report.md; empty without
-/// forks.
-fn forks_markdown(forks: &[super::beam::Fork]) -> String {
-    if forks.is_empty() {
+impl Report {
+    /// The close rivals accepted together (`fits.selection_joints`, [`super::beam::Joint`]);
+    /// empty without.
+    pub fn selection_joints(&self) -> Vec<super::beam::Joint> {
+        self.fits
+            .as_ref()
+            .and_then(|f| serde_json::from_value(f["selection_joints"].clone()).ok())
+            .unwrap_or_default()
+    }
+}
+
+/// The selection's forks and joints ([`Report::selection_forks`], [`Report::selection_joints`])
+/// as a section of report.md; empty without either.
+fn forks_markdown(forks: &[super::beam::Fork], joints: &[super::beam::Joint]) -> String {
+    if forks.is_empty() && joints.is_empty() {
         return String::new();
     }
     let mut s = String::from("## Close rivals\n\n");
+    for j in joints {
+        s.push_str(&format!(
+            "- Round {}: `{}` and `{}` could not be told apart by their held-out predictions \
+             (z = {:.2}), but each predicts significantly better on top of the other (`{}` on \
+             `{}`: z = {:.2}, χ² gain {:.1}; `{}` on `{}`: z = {:.2}, χ² gain {:.1}; threshold \
+             {:.2}): both were accepted in the round.\n",
+            j.round,
+            j.first,
+            j.second,
+            j.round_z,
+            j.second,
+            j.first,
+            j.second_on_first.0,
+            j.second_on_first.1,
+            j.first,
+            j.second,
+            j.first_on_second.0,
+            j.first_on_second.1,
+            j.z_crit
+        ));
+    }
     for f in forks {
         let when = match f.pruned_after {
             Some(r) => format!(
@@ -508,8 +540,39 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("z = 1.31"), "{md}");
-        for fits in [None, Some(serde_json::json!({ "selection_forks": [] }))] {
+        for fits in [
+            None,
+            Some(serde_json::json!({ "selection_forks": [], "selection_joints": [] })),
+        ] {
             assert!(!markdown(&report(fits), "t").contains("Close rivals"));
         }
+    }
+
+    #[test]
+    fn the_close_rivals_section_lists_rivals_accepted_together() {
+        let joint = super::super::beam::Joint {
+            round: 1,
+            first: "static_torque".into(),
+            second: "sensor_latency".into(),
+            round_z: 1.08,
+            z_crit: 3.28,
+            second_on_first: (16.45, 29475.0),
+            first_on_second: (25.02, 32789.5),
+        };
+        let r = report(Some(
+            serde_json::json!({ "selection_joints": [joint.clone()] }),
+        ));
+        assert_eq!(r.selection_joints(), vec![joint]);
+        assert!(r.selection_forks().is_empty());
+        let md = markdown(&r, "t");
+        assert!(md.contains("## Close rivals"), "{md}");
+        assert!(
+            md.contains(
+                "`sensor_latency` on `static_torque`: z = 16.45, χ² gain 29475.0; \
+                 `static_torque` on `sensor_latency`: z = 25.02, χ² gain 32789.5; threshold \
+                 3.28): both were accepted in the round."
+            ),
+            "{md}"
+        );
     }
 }

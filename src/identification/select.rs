@@ -86,6 +86,10 @@ pub struct Tried {
     /// Accepted on the other branch of a fork in its round, the branch that was left
     /// ([`super::beam`]).
     pub forked: bool,
+    /// A close rival of the round's accepted candidate, significant on top of it and it on top of
+    /// this one: accepted with it in the same round, as refitted on top of it (the entry after
+    /// the round's, [`super::beam`]'s joint check).
+    pub joined: bool,
 }
 
 impl Tried {
@@ -438,7 +442,7 @@ fn added(cur: &ModelState, st: &ModelState) -> Vec<usize> {
 /// The accepted model of a round refitted to convergence (shapes held, windows not re-selected)
 /// with its held-out errors, so that the next round's candidates are judged against a model at
 /// its optimum ([`try_refit_state`]; `st` itself when the refit fails).
-fn converge(ctx: &SelectCtx, st: &ModelState) -> ModelState {
+pub fn converge(ctx: &SelectCtx, st: &ModelState) -> ModelState {
     try_refit_state(
         ctx,
         st,
@@ -570,33 +574,70 @@ pub fn judge_round(
     });
     let mut out = Vec::with_capacity(judged.len());
     for (c, (scr, st)) in cands.into_iter().zip(judged) {
-        let cmp = st
-            .as_ref()
-            .map(|s| compare(&cur.held, &s.held, ctx.wins, ctx.runs));
-        let added_z = st
-            .as_ref()
-            .map(|s| added_parameters_z(&s.fit, &added(cur, s)));
-        let t = Tried {
-            round,
-            candidate: c,
-            added_z,
-            cmp,
-            screen: scr,
-            z_crit,
-            accepted: false,
-            state: st,
-            member: None,
-            dropped: None,
-            forked: false,
-        };
+        let t = tried(ctx, cur, c, (scr, st), (round, z_crit));
         report_tried(&t, label, progress);
         out.push(t);
     }
     Some(out)
 }
 
+/// The record of `c` tried on top of `cur` in round `round` (threshold `z_crit`): its screening
+/// `scr` and its refit `st` on all judging windows, compared with `cur`.
+pub fn tried(
+    ctx: &SelectCtx,
+    cur: &ModelState,
+    c: Candidate,
+    (scr, st): (Option<Comparison>, Option<ModelState>),
+    (round, z_crit): (usize, f64),
+) -> Tried {
+    let cmp = st
+        .as_ref()
+        .map(|s| compare(&cur.held, &s.held, ctx.wins, ctx.runs));
+    let added_z = st
+        .as_ref()
+        .map(|s| added_parameters_z(&s.fit, &added(cur, s)));
+    Tried {
+        round,
+        candidate: c,
+        added_z,
+        cmp,
+        screen: scr,
+        z_crit,
+        accepted: false,
+        state: st,
+        member: None,
+        dropped: None,
+        forked: false,
+        joined: false,
+    }
+}
+
+/// Whether `t` may be accepted at its round's threshold: its held-out prediction improves
+/// significantly ([`Comparison::improves`]) and the parameters it adds are significant in its
+/// refit (Wald z ≥ the threshold).
+pub fn significant(t: &Tried) -> bool {
+    significant_at(t, t.z_crit)
+}
+
+/// [`significant`] at the threshold `z_crit`.
+fn significant_at(t: &Tried, z_crit: f64) -> bool {
+    t.cmp.is_some_and(|c| c.improves(z_crit))
+        && t.added_z.is_some_and(|z| z >= z_crit)
+        && t.state.is_some()
+}
+
+/// The candidate `like` (a member of a family, with its terms) as proposed for `cur`: the same
+/// effect and terms, its weak-form start computed on top of `cur` (`None` when the proposer no
+/// longer proposes it there).
+pub fn proposed_on(ctx: &SelectCtx, cur: &ModelState, like: &Candidate) -> Option<Candidate> {
+    let lat = cur.fit_latency.then(|| cur.latency());
+    propose(ctx.propose, &cur.terms, lat, &cur.effects)
+        .into_iter()
+        .find(|c| c.effect.id == like.effect.id && c.terms == like.terms)
+}
+
 /// The progress lines of a judged candidate.
-fn report_tried(t: &Tried, label: &str, progress: &dyn Observer) {
+pub fn report_tried(t: &Tried, label: &str, progress: &dyn Observer) {
     let c = &t.candidate;
     stage(
         progress,
@@ -676,13 +717,8 @@ pub fn choose_named(
 /// `z_crit`, on the paired windows of the two). Indices into `round`.
 pub fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<usize> {
     let nested = |id: &str| member_choice(id) == MemberChoice::Nested;
-    let significant = |t: &Tried| {
-        t.cmp.is_some_and(|c| c.improves(z_crit))
-            && t.added_z.is_some_and(|z| z >= z_crit)
-            && t.state.is_some()
-    };
     let mut out: Vec<usize> = (0..round.len())
-        .filter(|&k| significant(&round[k]) && !nested(round[k].candidate.effect.id))
+        .filter(|&k| significant_at(&round[k], z_crit) && !nested(round[k].candidate.effect.id))
         .collect();
     let mut ids: Vec<&'static str> = round
         .iter()
@@ -692,7 +728,7 @@ pub fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<
     ids.dedup();
     for id in ids {
         let mut members: Vec<usize> = (0..round.len())
-            .filter(|&k| round[k].candidate.effect.id == id && significant(&round[k]))
+            .filter(|&k| round[k].candidate.effect.id == id && significant_at(&round[k], z_crit))
             .collect();
         members.sort_by_key(|&k| round[k].candidate.terms.len());
         let Some(&first) = members.first() else {
