@@ -1,4 +1,5 @@
-//! The backward check (stage 5c of the pipeline): the rounds add one effect each, and an
+//! The backward check (stage 5c of the pipeline): the rounds add one effect each (two when close
+//! rivals are accepted together, [`super::beam`]), and an
 //! effect accepted early may have absorbed part of a mismatch that a later effect explains
 //! better. On a full-size Lorentzian breakaway set (`lorentz_stribeck`, level 1, seed 1,
 //! docs/diagnosis.md), before the candidates' nested start ([`super::select`]), round 1 accepted

@@ -10,18 +10,23 @@
 //! the held-out windows better is kept. At most two branches: a fork only where one branch is
 //! left (before any fork, or after the other was left).
 //!
-//! Before forking, the joint check ([`joint`]): each of the two is refitted on top of the other
-//! and judged against it as any candidate is against the current model. When each is significant
-//! on top of the other, neither explains what the other does: both are accepted in the round
-//! (the rival as refitted on top of the accepted one) and the selection goes on without a fork.
-//! The order of their acceptance then decides nothing, and the rounds of two branches, which
-//! would each accept the other's effect next unless a third one gains more, are not spent.
+//! Before forking, the joint check ([`on_top_of_each_other`]): the members of each one's slot
+//! are proposed on top of the model with the other, refitted and judged against it as any
+//! candidate is against the current model, the member that would be accepted chosen as in a
+//! round. When each is significant on top of the other, neither explains what the other does:
+//! both are accepted in the round (the rival's member as chosen on top of the accepted one) and
+//! the selection goes on without a fork. The order of their acceptance then decides nothing,
+//! and the rounds of two branches are not spent. (Each branch's next round would judge the
+//! other effect the same way, at that round's threshold, among all the candidates proposed
+//! there; a third effect that gains more there is judged in the next round on top of both.) A
+//! joint needs room for two more effects ([`SelectCtx::max_effects`]); without it the round
+//! forks.
 
 use super::judge::{compare, Comparison};
 use super::propose::Candidate;
 use super::select::{
     accept, choose_members, choose_named, close_rival, converge, evaluate, judge_round,
-    proposed_on, report_tried, significant, tried, ModelState, SelectCtx, Tried,
+    proposed_on, report_tried, tried, ModelState, SelectCtx, Tried,
 };
 use super::shooting::par_map;
 use crate::progress::{stage, Observer};
@@ -68,7 +73,7 @@ impl Fork {
 }
 
 /// A round whose accepted candidate and its close rival were each significant on top of the
-/// other, and were both accepted in it ([`joint`]).
+/// other, and were both accepted in it ([`on_top_of_each_other`]).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Joint {
     /// The round.
@@ -77,18 +82,24 @@ pub struct Joint {
     pub first: String,
     /// Its close rival, accepted on top of it.
     pub second: String,
+    /// The first's member (its terms), as chosen in the round.
+    pub first_terms: Vec<String>,
+    /// The second's member, as chosen on top of the first.
+    pub second_terms: Vec<String>,
     /// Held-out z of the first against the second in the round (below the round's threshold).
     pub round_z: f64,
     /// The round's threshold.
     pub z_crit: f64,
-    /// Held-out z and χ² gain of the second refitted on top of the first, against the first.
+    /// Held-out z and χ² gain of the second's chosen member refitted on top of the first,
+    /// against the model with the first.
     pub second_on_first: (f64, f64),
     /// The same for the first on top of the second.
     pub first_on_second: (f64, f64),
 }
 
 /// The selection's result: every candidate tried on the kept branch (the accepted ones with
-/// their refitted state), its final model, and the forks taken on the way to it.
+/// their refitted state), its final model, and how the close rivals on the way to it were
+/// decided.
 #[derive(Debug, Clone)]
 pub struct Selection {
     /// Candidates of all rounds.
@@ -144,7 +155,7 @@ pub fn select(ctx: &SelectCtx, base: ModelState, progress: &dyn Observer) -> Sel
     }];
     let mut open: Option<ForkAt> = None;
     let mut forks = Vec::new();
-    for round in 1..=ctx.max_rounds {
+    for round in 1..=ctx.max_effects {
         let mut next = Vec::with_capacity(2);
         for b in branches {
             if b.ended {
@@ -154,7 +165,7 @@ pub fn select(ctx: &SelectCtx, base: ModelState, progress: &dyn Observer) -> Sel
             }
         }
         branches = next;
-        let done = round == ctx.max_rounds || branches.iter().all(|b| b.ended);
+        let done = round == ctx.max_effects || branches.iter().all(|b| b.ended);
         if done {
             break;
         }
@@ -173,8 +184,10 @@ pub fn select(ctx: &SelectCtx, base: ModelState, progress: &dyn Observer) -> Sel
 }
 
 /// One round of branch `b`: its candidates judged, then the best accepted (one branch), it and
-/// its close rival accepted in a branch each (two; only while no fork is `open`, i.e. `b` is the
-/// only branch), or nothing accepted (the branch ends).
+/// its close rival accepted together when each is significant on top of the other ([`joint`];
+/// one branch), or else in a branch each (two; only while no fork is `open`, i.e. `b` is the
+/// only branch), or nothing accepted (the branch ends, also when its model holds
+/// [`SelectCtx::max_effects`] effects).
 fn advance(
     ctx: &SelectCtx,
     mut b: Branch,
@@ -187,6 +200,10 @@ fn advance(
     } else {
         format!(" (branch {})", b.label)
     };
+    if b.cur.effects.len() >= ctx.max_effects {
+        b.ended = true;
+        return vec![b];
+    }
     let Some(mut judged) = judge_round(ctx, &b.cur, round, &label, progress) else {
         b.ended = true;
         return vec![b];
@@ -220,20 +237,28 @@ fn advance(
         converge(ctx, judged[k].state.as_ref().expect("evaluated"))
     });
     let [sa, sb]: [ModelState; 2] = conv.try_into().expect("two states");
+    // the joint check, when the model has room for both
     let check = JointCheck {
         pair: (bi, ri),
         states: (&sa, &sb),
         round_z: z,
         round,
     };
-    if let Some((mut on_top, j)) = joint(ctx, &judged, &check, &label, progress) {
-        on_top.accepted = true;
+    let room = b.cur.effects.len() + 2 <= ctx.max_effects;
+    if let Some((on_top, j)) = room
+        .then(|| joint(ctx, &judged, &check, &label, progress))
+        .flatten()
+    {
         judged[bi].accepted = true;
         judged[ri].joined = true;
         judged[ri].state = None;
-        b.cur = converge(ctx, on_top.state.as_ref().expect("evaluated"));
+        let k = on_top
+            .iter()
+            .position(|t| t.accepted)
+            .expect("one accepted");
+        b.cur = converge(ctx, on_top[k].state.as_ref().expect("evaluated"));
         b.tried.extend(judged);
-        b.tried.push(on_top);
+        b.tried.extend(on_top);
         b.joints.push(j);
         return vec![b];
     }
@@ -275,101 +300,151 @@ struct JointCheck<'s> {
     states: (&'s ModelState, &'s ModelState),
     /// Held-out z of the first against the second.
     round_z: f64,
+    /// The round.
     round: usize,
 }
 
-/// Each of two candidates of round `round` (threshold `z_crit`) on top of the other: `b`
-/// proposed again on top of `on_a`, the round's model with `a` accepted (refitted to
-/// convergence), and `a` on top of `on_b` ([`proposed_on`]), each refitted by simulation on all
-/// judging windows and compared with the model below it ([`tried`]; [`significant`] tells
-/// whether it would be accepted there). `[b on a, a on b]`; an error says why one could not be
-/// judged (with `{other}` for the other's name).
+/// The members of one effect's slot judged on top of the model with another effect
+/// ([`on_top_of_each_other`]).
+#[derive(Debug, Clone)]
+pub struct OnTop {
+    /// The members the proposer offers there, each refitted and compared with that model
+    /// (empty: it offers none).
+    pub tried: Vec<Tried>,
+    /// The member that would be accepted there: of the significant ones, after the choice
+    /// between nested members ([`choose_members`]), the one of largest held-out gain; `None`
+    /// when none is significant.
+    pub chosen: Option<usize>,
+}
+
+impl OnTop {
+    /// The member to report: the chosen one, else the one of largest gain.
+    pub fn best(&self) -> Option<&Tried> {
+        self.chosen.map(|k| &self.tried[k]).or_else(|| {
+            self.tried
+                .iter()
+                .filter(|t| t.cmp.is_some())
+                .max_by(|a, b| a.gain().total_cmp(&b.gain()))
+        })
+    }
+}
+
+/// Each of two candidates of round `round` (threshold `z_crit`) on top of the other, as the next
+/// round of either branch of a fork would judge it: the members of `b`'s slot that the proposer
+/// offers on top of `on_a`, the round's model with `a` accepted (refitted to convergence), and
+/// those of `a`'s slot on top of `on_b` ([`proposed_on`]), each refitted by simulation on all
+/// judging windows and compared with the model below it ([`tried`]), the member that would be
+/// accepted chosen as in a round ([`OnTop::chosen`]). `[b on a, a on b]`.
 pub fn on_top_of_each_other(
     ctx: &SelectCtx,
     (a, on_a): (&Candidate, &ModelState),
     (b, on_b): (&Candidate, &ModelState),
     (round, z_crit): (usize, f64),
-) -> [Result<Tried, &'static str>; 2] {
-    let on = [(on_a, b), (on_b, a)];
-    let both: Vec<Result<Tried, &str>> = par_map(2, |n| {
-        let (cur, like) = on[n];
-        let cand = proposed_on(ctx, cur, like)
-            .ok_or("is not proposed on top of {other} (its weak form gains nothing there)")?;
-        let st = evaluate(ctx, cur, &cand).ok_or("could not be refitted on top of {other}")?;
-        Ok(tried(ctx, cur, cand, (None, Some(st)), (round, z_crit)))
+) -> [OnTop; 2] {
+    let members = [proposed_on(ctx, on_a, b), proposed_on(ctx, on_b, a)];
+    let cur = [on_a, on_b];
+    let tasks: Vec<(usize, &Candidate)> = (0..2)
+        .flat_map(|n| members[n].iter().map(move |c| (n, c)))
+        .collect();
+    let judged = par_map(tasks.len(), |k| {
+        let (n, c) = tasks[k];
+        let st = evaluate(ctx, cur[n], c);
+        (
+            n,
+            tried(ctx, cur[n], c.clone(), (None, st), (round, z_crit)),
+        )
     });
-    both.try_into().expect("two")
+    let mut out = [Vec::new(), Vec::new()];
+    for (n, t) in judged {
+        out[n].push(t);
+    }
+    out.map(|mut tried| {
+        let passed = choose_members(ctx, &mut tried, z_crit);
+        let chosen = passed
+            .into_iter()
+            .max_by(|&i, &j| tried[i].gain().total_cmp(&tried[j].gain()));
+        OnTop { tried, chosen }
+    })
 }
 
 /// The joint check of the close rivals `c.pair` of a round (see the module;
-/// [`on_top_of_each_other`] at the round's threshold). When both are [`significant`]: the
-/// rival's record on top of the accepted one, to accept, and the joint's record. `None` (fork)
-/// when either is not, or cannot be proposed or refitted there.
+/// [`on_top_of_each_other`] at the round's threshold). When each is significant on top of the
+/// other: the members of the rival's slot as tried on top of the accepted one (the chosen member
+/// accepted, all marked [`Tried::on_top_of`]) and the joint's record. `None` (fork) when either
+/// is not, or is not proposed there.
 fn joint(
     ctx: &SelectCtx,
     round: &[Tried],
     c: &JointCheck,
     label: &str,
     progress: &dyn Observer,
-) -> Option<(Tried, Joint)> {
+) -> Option<(Vec<Tried>, Joint)> {
     let (bi, ri) = c.pair;
     let z_crit = round[bi].z_crit;
-    let [second_on_first, first_on_second] = on_top_of_each_other(
-        ctx,
-        (&round[bi].candidate, c.states.0),
-        (&round[ri].candidate, c.states.1),
-        (c.round, z_crit),
-    );
-    let names = [bi, ri].map(|k| round[k].candidate.effect.id);
-    let z = |t: &Result<Tried, &str>| t.as_ref().ok().and_then(|t| t.cmp).map(|m| (m.z, m.gain));
-    let lines = [
+    let (a, b) = (&round[bi].candidate, &round[ri].candidate);
+    let [second_on_first, first_on_second] =
+        on_top_of_each_other(ctx, (a, c.states.0), (b, c.states.1), (c.round, z_crit));
+    let names = [a.effect.id, b.effect.id];
+    for (on, this, other) in [
         (&second_on_first, names[1], names[0]),
         (&first_on_second, names[0], names[1]),
-    ];
-    for (t, this, other) in lines {
-        match t {
-            Ok(t) => report_tried(
+    ] {
+        if on.tried.is_empty() {
+            stage(
+                progress,
+                &format!(
+                    "round {}{label} (joint check): {this} is not proposed on top of {other}",
+                    c.round
+                ),
+            );
+        }
+        for t in &on.tried {
+            report_tried(
                 t,
                 &format!("{label} (joint check, on top of {other})"),
                 progress,
-            ),
-            Err(why) => stage(
-                progress,
-                &format!(
-                    "round {}{label} (joint check): {this} {}",
-                    c.round,
-                    why.replace("{other}", other)
-                ),
-            ),
+            );
         }
     }
-    let (Some(s), Some(f)) = (z(&second_on_first), z(&first_on_second)) else {
+    let (Some(sk), Some(fk)) = (second_on_first.chosen, first_on_second.chosen) else {
         return None;
     };
-    let together = [&second_on_first, &first_on_second]
-        .iter()
-        .all(|t| t.as_ref().is_ok_and(significant));
-    if !together {
-        return None;
-    }
+    let (s, f) = (&second_on_first.tried[sk], &first_on_second.tried[fk]);
+    let zg = |t: &Tried| t.cmp.map(|m| (m.z, m.gain)).expect("judged");
+    let term_names = |t: &Tried| t.candidate.terms.iter().map(|x| x.name()).collect();
     stage(
         progress,
         &format!(
             "round {}{label}: {} and {} not told apart (held-out z {:.2} < {z_crit:.2}), but \
              each is significant on top of the other (z {:.2} and {:.2}): both accepted",
-            c.round, names[0], names[1], c.round_z, s.0, f.0
+            c.round,
+            names[0],
+            names[1],
+            c.round_z,
+            zg(s).0,
+            zg(f).0
         ),
     );
     let j = Joint {
         round: c.round,
         first: names[0].to_string(),
         second: names[1].to_string(),
+        first_terms: term_names(&round[bi]),
+        second_terms: term_names(s),
         round_z: c.round_z,
         z_crit,
-        second_on_first: s,
-        first_on_second: f,
+        second_on_first: zg(s),
+        first_on_second: zg(f),
     };
-    second_on_first.ok().map(|t| (t, j))
+    let mut on_top = second_on_first.tried;
+    for (k, t) in on_top.iter_mut().enumerate() {
+        t.on_top_of = Some(names[0]);
+        t.accepted = k == sk;
+        if k != sk {
+            t.state = None;
+        }
+    }
+    Some((on_top, j))
 }
 
 /// Of two branches, the one whose model predicts the held-out windows significantly worse than

@@ -246,6 +246,7 @@ pub fn width_member(
         dropped: None,
         forked: false,
         joined: false,
+        on_top_of: None,
     };
     Some((tried, alternate))
 }

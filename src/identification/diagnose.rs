@@ -43,11 +43,13 @@ use std::collections::BTreeMap;
 pub struct DiagnoseOptions {
     /// Weak-form options.
     pub weak: WeakOptions,
-    /// Most effects accepted by the judge (rounds).
+    /// Most effects accepted by the judge (one per round, two in a round whose close rivals are
+    /// accepted together; also the most rounds).
     pub max_effects: usize,
-    /// Fork the selection on close rivals: a round whose accepted candidate does not predict the
-    /// held-out windows significantly better than a named rival runs on in a branch for each, at
-    /// most two at a time ([`super::beam`]).
+    /// Decide close rivals: a round whose accepted candidate does not predict the held-out
+    /// windows significantly better than a named rival accepts both when each is significant on
+    /// top of the other, and else runs on in a branch for each, at most two at a time
+    /// ([`super::beam`]). Off: the greedy choice.
     pub fork_close_rivals: bool,
     /// BIC decrease that makes a mismatch fingerprint significant.
     pub bic_threshold: f64,
@@ -207,7 +209,7 @@ pub fn select_ctx<'a>(
         shooting: &opts.shooting,
         tol: opts.tol,
         propose: pctx,
-        max_rounds: opts.max_effects,
+        max_effects: opts.max_effects,
         fork_close_rivals: opts.fork_close_rivals,
     }
 }
@@ -445,8 +447,9 @@ pub fn diagnose(
         };
         let mut before = b;
         // the chain of round models runs through the effects the backward check dropped too (each
-        // finding's "before" is the model of the round before its own), but only the accepted
-        // ones are findings
+        // finding's "before" is the model it was judged against: the round's model, or for a
+        // close rival accepted together with the round's accepted effect the model with that
+        // effect), but only the accepted ones are findings
         for t in tried.iter().filter(|t| t.accepted || t.dropped.is_some()) {
             let found = t.accepted.then(|| {
                 let rv = rivals(t, &tried);

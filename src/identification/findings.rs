@@ -511,6 +511,14 @@ pub fn judged_finding(
     // parameters from the final model refitted to convergence (it holds every accepted effect)
     let params = params_of(e, fin);
     let mut ev = judgement_evidence(t, &cmp, folds);
+    if let Some(first) = t.on_top_of {
+        ev.insert(
+            "accepted_together_with".into(),
+            json!({"effect": first, "note": "a close rival of it in the round, significant on \
+                   top of it and it on top of this one: judged on top of the model with it \
+                   (fits.selection_joints)"}),
+        );
+    }
     ev.insert(
         "simulation_refit".into(),
         json!({"windows": st.fit.used.len(), "samples": st.fit.samples,
@@ -562,14 +570,24 @@ pub fn judged_finding(
     })
 }
 
-/// The other candidates of the round of `t` that were significant too (they explain part of the
-/// same mismatch), as "effect (terms): z, gain".
+/// The other candidates of the round of `t` judged on the same model that were significant too
+/// (they explain part of the same mismatch), as "effect (terms): z, gain". Not rivals: the
+/// family's other members (the judge chose among them) and the members of an effect accepted in
+/// the same round (close rivals accepted together, [`super::beam`]).
 pub fn rivals(t: &Tried, tried: &[Tried]) -> Vec<String> {
+    let same_round = |o: &&Tried| o.round == t.round;
+    let accepted_ids: Vec<&str> = tried
+        .iter()
+        .filter(same_round)
+        .filter(|o| o.accepted || o.joined)
+        .map(|o| o.candidate.effect.id)
+        .collect();
     tried
         .iter()
-        .filter(|o| o.round == t.round && !o.accepted && !o.joined)
-        // the family's other members are not rivals: the judge chose among them
+        .filter(same_round)
+        .filter(|o| o.on_top_of == t.on_top_of && !o.accepted)
         .filter(|o| o.candidate.effect.id != t.candidate.effect.id)
+        .filter(|o| !accepted_ids.contains(&o.candidate.effect.id))
         .filter_map(|o| {
             let c = o.cmp?;
             c.improves(o.z_crit).then(|| {
@@ -596,6 +614,7 @@ fn gave_way(t: &Tried, gain: f64, tried: &[Tried]) -> bool {
     t.candidate.effect.id == "unexplained"
         && tried.iter().any(|o| {
             o.round == t.round
+                && o.on_top_of == t.on_top_of
                 && o.accepted
                 && o.candidate.effect.id != "unexplained"
                 && o.cmp.is_some_and(|c| c.gain < gain)

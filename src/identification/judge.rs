@@ -49,8 +49,9 @@
 //!   accepted ones), accepts the one with the largest held-out gain Σ d_w among the significant
 //!   (a dictionary term gives way to a catalog effect it does not predict significantly better:
 //!   [`super::select`]), and repeats; the order in which candidates are listed never decides. A
-//!   round whose accepted candidate a named rival is not significantly worse than forks (a
-//!   branch for each, the better kept: [`super::beam`]).
+//!   round whose accepted candidate a named rival is not significantly worse than accepts both
+//!   when each is significant on top of the other, and else forks (a branch for each, the better
+//!   kept: [`super::beam`]).
 
 use super::preprocess::CleanRun;
 use super::shooting::{par_map, SimFit, SimModel, Win};

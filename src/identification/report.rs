@@ -342,15 +342,24 @@ fn forks_markdown(forks: &[super::beam::Fork], joints: &[super::beam::Joint]) ->
         return String::new();
     }
     let mut s = String::from("## Close rivals\n\n");
+    let terms = |t: &[String]| {
+        if t.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", t.join(", "))
+        }
+    };
     for j in joints {
         s.push_str(&format!(
-            "- Round {}: `{}` and `{}` could not be told apart by their held-out predictions \
-             (z = {:.2}), but each predicts significantly better on top of the other (`{}` on \
-             `{}`: z = {:.2}, χ² gain {:.1}; `{}` on `{}`: z = {:.2}, χ² gain {:.1}; threshold \
-             {:.2}): both were accepted in the round.\n",
+            "- Round {}: `{}`{} and `{}`{} could not be told apart by their held-out \
+             predictions (z = {:.2}), but each predicts significantly better on top of the other \
+             (`{}` on `{}`: z = {:.2}, χ² gain {:.1}; `{}` on `{}`: z = {:.2}, χ² gain {:.1}; \
+             threshold {:.2}): both were accepted in the round.\n",
             j.round,
             j.first,
+            terms(&j.first_terms),
             j.second,
+            terms(&j.second_terms),
             j.round_z,
             j.second,
             j.first,
@@ -554,6 +563,8 @@ mod tests {
             round: 1,
             first: "static_torque".into(),
             second: "sensor_latency".into(),
+            first_terms: vec!["sin(beta)".into(), "cos(beta)".into()],
+            second_terms: Vec::new(),
             round_z: 1.08,
             z_crit: 3.28,
             second_on_first: (16.45, 29475.0),
@@ -566,6 +577,10 @@ mod tests {
         assert!(r.selection_forks().is_empty());
         let md = markdown(&r, "t");
         assert!(md.contains("## Close rivals"), "{md}");
+        assert!(
+            md.contains("`static_torque` (sin(beta), cos(beta)) and `sensor_latency` could"),
+            "{md}"
+        );
         assert!(
             md.contains(
                 "`sensor_latency` on `static_torque`: z = 16.45, χ² gain 29475.0; \

@@ -1,10 +1,10 @@
 //! A round of the selection ([`super::judge`]'s rule): the weak form proposes candidates for the
 //! current model ([`super::propose`]), every candidate is refitted by simulation on top of the
 //! accepted ones and judged by its held-out prediction, and the best significant one is accepted
-//! (its close rival too, in a branch of its own: [`super::beam`]). Every candidate tried is kept
-//! with its numbers. Also the refits of the final model (polish, profiles).
+//! (with its close rival, when each is significant on top of the other, or else the rival in a
+//! branch of its own: [`super::beam`]). Every candidate tried is kept with its numbers. Also the refits of the final model (polish, profiles).
 
-use super::catalog::{member_choice, Effect, MemberChoice};
+use super::catalog::{member_choice, same_slot, Effect, MemberChoice};
 use super::judge::{added_parameters_z, compare, heldout, z_threshold, Comparison, Folds, HeldOut};
 use super::model::Geometry;
 use super::preprocess::CleanRun;
@@ -87,9 +87,13 @@ pub struct Tried {
     /// ([`super::beam`]).
     pub forked: bool,
     /// A close rival of the round's accepted candidate, significant on top of it and it on top of
-    /// this one: accepted with it in the same round, as refitted on top of it (the entry after
+    /// this one: accepted with it in the same round, as refitted on top of it (the entries after
     /// the round's, [`super::beam`]'s joint check).
     pub joined: bool,
+    /// Judged on top of the model with this effect, accepted in the same round (the members of
+    /// a joined rival's slot refitted on top of the accepted one, [`super::beam`]); `None` for
+    /// the round's own candidates, judged on the round's model.
+    pub on_top_of: Option<&'static str>,
 }
 
 impl Tried {
@@ -117,9 +121,11 @@ pub struct SelectCtx<'a> {
     pub tol: f64,
     /// The proposer.
     pub propose: &'a ProposeCtx<'a>,
-    /// Most rounds.
-    pub max_rounds: usize,
-    /// Whether a round with close rivals forks ([`super::beam::select`]).
+    /// Most effects accepted (one per round, two in a round whose close rivals are accepted
+    /// together: [`super::beam`]); also the most rounds.
+    pub max_effects: usize,
+    /// Whether a round with close rivals checks them jointly and else forks
+    /// ([`super::beam::select`]).
     pub fork_close_rivals: bool,
 }
 
@@ -609,31 +615,28 @@ pub fn tried(
         dropped: None,
         forked: false,
         joined: false,
+        on_top_of: None,
     }
 }
 
-/// Whether `t` may be accepted at its round's threshold: its held-out prediction improves
+/// Whether `t` may be accepted at the threshold `z_crit`: its held-out prediction improves
 /// significantly ([`Comparison::improves`]) and the parameters it adds are significant in its
 /// refit (Wald z ≥ the threshold).
-pub fn significant(t: &Tried) -> bool {
-    significant_at(t, t.z_crit)
-}
-
-/// [`significant`] at the threshold `z_crit`.
-fn significant_at(t: &Tried, z_crit: f64) -> bool {
+fn significant(t: &Tried, z_crit: f64) -> bool {
     t.cmp.is_some_and(|c| c.improves(z_crit))
         && t.added_z.is_some_and(|z| z >= z_crit)
         && t.state.is_some()
 }
 
-/// The candidate `like` (a member of a family, with its terms) as proposed for `cur`: the same
-/// effect and terms, its weak-form start computed on top of `cur` (`None` when the proposer no
-/// longer proposes it there).
-pub fn proposed_on(ctx: &SelectCtx, cur: &ModelState, like: &Candidate) -> Option<Candidate> {
+/// The candidates proposed for `cur` that fill the slot of `like` ([`same_slot`]: the members of
+/// its family the proposer offers there, with their weak-form starts on top of `cur`; empty when
+/// it offers none).
+pub fn proposed_on(ctx: &SelectCtx, cur: &ModelState, like: &Candidate) -> Vec<Candidate> {
     let lat = cur.fit_latency.then(|| cur.latency());
     propose(ctx.propose, &cur.terms, lat, &cur.effects)
         .into_iter()
-        .find(|c| c.effect.id == like.effect.id && c.terms == like.terms)
+        .filter(|c| same_slot(&c.effect, &like.effect))
+        .collect()
 }
 
 /// The progress lines of a judged candidate.
@@ -718,7 +721,7 @@ pub fn choose_named(
 pub fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<usize> {
     let nested = |id: &str| member_choice(id) == MemberChoice::Nested;
     let mut out: Vec<usize> = (0..round.len())
-        .filter(|&k| significant_at(&round[k], z_crit) && !nested(round[k].candidate.effect.id))
+        .filter(|&k| significant(&round[k], z_crit) && !nested(round[k].candidate.effect.id))
         .collect();
     let mut ids: Vec<&'static str> = round
         .iter()
@@ -728,7 +731,7 @@ pub fn choose_members(ctx: &SelectCtx, round: &mut [Tried], z_crit: f64) -> Vec<
     ids.dedup();
     for id in ids {
         let mut members: Vec<usize> = (0..round.len())
-            .filter(|&k| round[k].candidate.effect.id == id && significant_at(&round[k], z_crit))
+            .filter(|&k| round[k].candidate.effect.id == id && significant(&round[k], z_crit))
             .collect();
         members.sort_by_key(|&k| round[k].candidate.terms.len());
         let Some(&first) = members.first() else {
