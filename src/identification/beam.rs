@@ -14,8 +14,8 @@
 //! are proposed on top of the model with the other, refitted and judged against it as any
 //! candidate is against the current model, the member that would be accepted chosen as in a
 //! round. When each is significant on top of the other, neither explains what the other does:
-//! both are accepted in the round (the rival's member as chosen on top of the accepted one) and
-//! the selection goes on without a fork. The order of their acceptance then decides nothing,
+//! both are accepted in the round and the selection goes on without a fork, from the better of
+//! the two models with both (each effect's member chosen on top of the other; [`Joint::order`]). The order of their acceptance then decides nothing,
 //! and the rounds of two branches are not spent. (Each branch's next round would judge the
 //! other effect the same way, at that round's threshold, among all the candidates proposed
 //! there; a third effect that gains more there is judged in the next round on top of both.) A
@@ -78,7 +78,7 @@ impl Fork {
 pub struct Joint {
     /// The round.
     pub round: usize,
-    /// The effect accepted first (the larger held-out gain on the round's model).
+    /// The effect accepted on the round's model (its member as chosen in the round).
     pub first: String,
     /// Its close rival, accepted on top of it.
     pub second: String,
@@ -93,8 +93,11 @@ pub struct Joint {
     /// Held-out z and χ² gain of the second's chosen member refitted on top of the first,
     /// against the model with the first.
     pub second_on_first: (f64, f64),
-    /// The same for the first on top of the second.
+    /// The same for the first's chosen member on top of the second.
     pub first_on_second: (f64, f64),
+    /// Held-out χ² gain and z of the kept model (the second's member on top of the first) over
+    /// the other order's (the first's member chosen on top of the second), both ≥ 0.
+    pub order: (f64, f64),
 }
 
 /// The selection's result: every candidate tried on the kept branch (the accepted ones with
@@ -245,13 +248,14 @@ fn advance(
         round,
     };
     let room = b.cur.effects.len() + 2 <= ctx.max_effects;
-    if let Some((on_top, j)) = room
+    if let Some((on_top, j, below)) = room
         .then(|| joint(ctx, &judged, &check, &label, progress))
         .flatten()
     {
-        judged[bi].accepted = true;
-        judged[ri].joined = true;
-        judged[ri].state = None;
+        let above = if below == bi { ri } else { bi };
+        judged[below].accepted = true;
+        judged[above].joined = true;
+        judged[above].state = None;
         let k = on_top
             .iter()
             .position(|t| t.accepted)
@@ -369,16 +373,18 @@ pub fn on_top_of_each_other(
 
 /// The joint check of the close rivals `c.pair` of a round (see the module;
 /// [`on_top_of_each_other`] at the round's threshold). When each is significant on top of the
-/// other: the members of the rival's slot as tried on top of the accepted one (the chosen member
-/// accepted, all marked [`Tried::on_top_of`]) and the joint's record. `None` (fork) when either
-/// is not, or is not proposed there.
+/// other, of the two models with both (each one's member chosen on top of the other) the one
+/// that predicts the held-out windows better is kept: the members of the effect on top as tried
+/// there (the chosen member accepted, all marked [`Tried::on_top_of`]), the joint's record, and
+/// the index in `round` of the effect below it. `None` (fork) when either is not significant,
+/// or is not proposed there.
 fn joint(
     ctx: &SelectCtx,
     round: &[Tried],
     c: &JointCheck,
     label: &str,
     progress: &dyn Observer,
-) -> Option<(Vec<Tried>, Joint)> {
+) -> Option<(Vec<Tried>, Joint, usize)> {
     let (bi, ri) = c.pair;
     let z_crit = round[bi].z_crit;
     let (a, b) = (&round[bi].candidate, &round[ri].candidate);
@@ -409,42 +415,65 @@ fn joint(
     let (Some(sk), Some(fk)) = (second_on_first.chosen, first_on_second.chosen) else {
         return None;
     };
-    let (s, f) = (&second_on_first.tried[sk], &first_on_second.tried[fk]);
+    // the two models with both effects, each member chosen on top of the other effect: the one
+    // that predicts the held-out windows better is kept (the order decides nothing)
+    fn held(t: &Tried) -> &super::judge::HeldOut {
+        &t.state.as_ref().expect("judged").held
+    }
+    let order = compare(
+        held(&second_on_first.tried[sk]),
+        held(&first_on_second.tried[fk]),
+        ctx.wins,
+        ctx.runs,
+    );
     let zg = |t: &Tried| t.cmp.map(|m| (m.z, m.gain)).expect("judged");
+    let swap = order.gain > 0.0;
+    let (below, on, k, other_z) = if swap {
+        (ri, first_on_second, fk, zg(&second_on_first.tried[sk]))
+    } else {
+        (bi, second_on_first, sk, zg(&first_on_second.tried[fk]))
+    };
     let term_names = |t: &Tried| t.candidate.terms.iter().map(|x| x.name()).collect();
+    let first = round[below].candidate.effect.id;
+    let second = on.tried[k].candidate.effect.id;
     stage(
         progress,
         &format!(
             "round {}{label}: {} and {} not told apart (held-out z {:.2} < {z_crit:.2}), but \
-             each is significant on top of the other (z {:.2} and {:.2}): both accepted",
+             each is significant on top of the other (z {:.2} and {:.2}): both accepted, {second} \
+             on top of {first} (that model predicts the held-out windows better than the other \
+             order's: χ² gain {:.1}, z {:.2})",
             c.round,
             names[0],
             names[1],
             c.round_z,
-            zg(s).0,
-            zg(f).0
+            zg(&on.tried[k]).0,
+            other_z.0,
+            order.gain.abs(),
+            order.z.abs()
         ),
     );
     let j = Joint {
         round: c.round,
-        first: names[0].to_string(),
-        second: names[1].to_string(),
-        first_terms: term_names(&round[bi]),
-        second_terms: term_names(s),
+        first: first.to_string(),
+        second: second.to_string(),
+        first_terms: term_names(&round[below]),
+        second_terms: term_names(&on.tried[k]),
         round_z: c.round_z,
         z_crit,
-        second_on_first: zg(s),
-        first_on_second: zg(f),
+        second_on_first: zg(&on.tried[k]),
+        first_on_second: other_z,
+        order: (order.gain.abs(), order.z.abs()),
     };
-    let mut on_top = second_on_first.tried;
-    for (k, t) in on_top.iter_mut().enumerate() {
-        t.on_top_of = Some(names[0]);
-        t.accepted = k == sk;
-        if k != sk {
+    let mut on_top = on.tried;
+    for (n, t) in on_top.iter_mut().enumerate() {
+        t.on_top_of = Some(first);
+        t.accepted = n == k;
+        if n != k {
             t.state = None;
         }
     }
-    Some((on_top, j))
+    Some((on_top, j, below))
 }
 
 /// Of two branches, the one whose model predicts the held-out windows significantly worse than

@@ -354,7 +354,9 @@ fn forks_markdown(forks: &[super::beam::Fork], joints: &[super::beam::Joint]) ->
             "- Round {}: `{}`{} and `{}`{} could not be told apart by their held-out \
              predictions (z = {:.2}), but each predicts significantly better on top of the other \
              (`{}` on `{}`: z = {:.2}, χ² gain {:.1}; `{}` on `{}`: z = {:.2}, χ² gain {:.1}; \
-             threshold {:.2}): both were accepted in the round.\n",
+             threshold {:.2}): both were accepted in the round, `{}` on top of `{}` (that model \
+             predicts the held-out windows better than the other order's: χ² gain {:.1}, z = \
+             {:.2}).\n",
             j.round,
             j.first,
             terms(&j.first_terms),
@@ -369,7 +371,11 @@ fn forks_markdown(forks: &[super::beam::Fork], joints: &[super::beam::Joint]) ->
             j.second,
             j.first_on_second.0,
             j.first_on_second.1,
-            j.z_crit
+            j.z_crit,
+            j.second,
+            j.first,
+            j.order.0,
+            j.order.1
         ));
     }
     for f in forks {
@@ -569,6 +575,7 @@ mod tests {
             z_crit: 3.28,
             second_on_first: (16.45, 29475.0),
             first_on_second: (25.02, 32789.5),
+            order: (12.5, 0.4),
         };
         let r = report(Some(
             serde_json::json!({ "selection_joints": [joint.clone()] }),
@@ -585,7 +592,9 @@ mod tests {
             md.contains(
                 "`sensor_latency` on `static_torque`: z = 16.45, χ² gain 29475.0; \
                  `static_torque` on `sensor_latency`: z = 25.02, χ² gain 32789.5; threshold \
-                 3.28): both were accepted in the round."
+                 3.28): both were accepted in the round, `sensor_latency` on top of \
+                 `static_torque` (that model predicts the held-out windows better than the other \
+                 order's: χ² gain 12.5, z = 0.40)."
             ),
             "{md}"
         );
