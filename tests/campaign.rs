@@ -14,7 +14,8 @@ use std::f64::consts::TAU;
 use std::sync::OnceLock;
 
 /// The first two stages of the diagnosis of `set` (cleaning and ring-downs, the base model with
-/// its judging windows, 4 folds), for the tests that refit a chosen model on those windows.
+/// its judging windows, `opts.folds` folds), for the tests that refit a chosen model on those
+/// windows.
 fn prepared_base(
     set: &gearbif::io::recordings::RecordingSet,
     opts: &gearbif::identification::diagnose::DiagnoseOptions,
@@ -22,11 +23,24 @@ fn prepared_base(
     gearbif::identification::diagnose::Prepared,
     gearbif::identification::diagnose::BaseModel,
 ) {
+    let (prep, base, _) = prepared_with_folds(set, opts);
+    (prep, base)
+}
+
+/// [`prepared_base`] with its folds.
+fn prepared_with_folds(
+    set: &gearbif::io::recordings::RecordingSet,
+    opts: &gearbif::identification::diagnose::DiagnoseOptions,
+) -> (
+    gearbif::identification::diagnose::Prepared,
+    gearbif::identification::diagnose::BaseModel,
+    gearbif::identification::judge::Folds,
+) {
     use gearbif::identification::diagnose::{fit_base, prepare};
     let prep = prepare(set, opts, &gearbif::progress::Silent).unwrap();
-    let folds = gearbif::identification::judge::Folds::new(&prep.runs, 4);
+    let folds = gearbif::identification::judge::Folds::new(&prep.runs, opts.folds);
     let base = fit_base(&prep, set, opts, &folds, &gearbif::progress::Silent).unwrap();
-    (prep, base)
+    (prep, base, folds)
 }
 
 /// Camera noise of the documented sets, rad (0.5°).
@@ -588,10 +602,8 @@ fn ci_seeds(effect: &str, level: f64, seeds: Vec<u64>) -> CampaignDoc {
 fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
     use gearbif::identification::backward::backward;
     use gearbif::identification::catalog::catalog;
-    use gearbif::identification::diagnose::{
-        fit_base, prepare, propose_ctx, select_ctx, DiagnoseOptions,
-    };
-    use gearbif::identification::judge::{z_threshold, Folds};
+    use gearbif::identification::diagnose::{propose_ctx, select_ctx, DiagnoseOptions};
+    use gearbif::identification::judge::z_threshold;
     use gearbif::identification::propose::{propose, Candidate};
     use gearbif::identification::regression::Term;
     use gearbif::identification::select::{evaluate, ModelState, Tried};
@@ -600,9 +612,7 @@ fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
         let spec = effect("static_torque_2h").unwrap();
         let g = build_case(spec, 1.0, seed, &SetSize::ci(), &Rk4Filippov::default()).unwrap();
         let opts = DiagnoseOptions::default();
-        let prep = prepare(&g.set, &opts, &Silent).unwrap();
-        let folds = Folds::new(&prep.runs, opts.folds);
-        let base = fit_base(&prep, &g.set, &opts, &folds, &Silent).unwrap();
+        let (prep, base, folds) = prepared_with_folds(&g.set, &opts);
         let b = base.state.clone().expect("the base refit");
         let pctx = propose_ctx(&prep.runs, &base, &opts);
         let sctx = select_ctx(&pctx, &base, &folds, &opts);
@@ -850,20 +860,15 @@ fn close_rivals_each_significant_on_top_of_the_other_are_accepted_together() {
 /// Stribeck member where the recordings hold the torque alone.
 fn refused_on_sets_with_the_torque_alone() {
     use gearbif::identification::beam::{on_top_of_each_other, OnTop};
-    use gearbif::identification::diagnose::{
-        fit_base, prepare, propose_ctx, select_ctx, DiagnoseOptions,
-    };
-    use gearbif::identification::judge::{z_threshold, Folds};
+    use gearbif::identification::diagnose::{propose_ctx, select_ctx, DiagnoseOptions};
+    use gearbif::identification::judge::z_threshold;
     use gearbif::identification::propose::propose;
     use gearbif::identification::select::{converge, evaluate};
-    use gearbif::progress::Silent;
     for seed in [1u64, 2] {
         let spec = effect("static_torque_2h").unwrap();
         let g = build_case(spec, 2.0, seed, &SetSize::ci(), &Rk4Filippov::default()).unwrap();
         let opts = DiagnoseOptions::default();
-        let prep = prepare(&g.set, &opts, &Silent).unwrap();
-        let folds = Folds::new(&prep.runs, opts.folds);
-        let base = fit_base(&prep, &g.set, &opts, &folds, &Silent).unwrap();
+        let (prep, base, folds) = prepared_with_folds(&g.set, &opts);
         let b = base.state.clone().expect("the base refit");
         let pctx = propose_ctx(&prep.runs, &base, &opts);
         let sctx = select_ctx(&pctx, &base, &folds, &opts);
