@@ -15,8 +15,9 @@
 //! candidate is against the current model, the member that would be accepted chosen as in a
 //! round. When each is significant on top of the other, neither explains what the other does:
 //! both are accepted in the round and the selection goes on without a fork, from the better of
-//! the two models with both (each effect's member chosen on top of the other; [`Joint::order`]). The order of their acceptance then decides nothing,
-//! and the rounds of two branches are not spent. (Each branch's next round would judge the
+//! the two models with both (each effect's member chosen on top of the other; [`Joint::order`]).
+//! The order of their acceptance then decides nothing, and the rounds of two branches are not
+//! spent. (Each branch's next round would judge the
 //! other effect the same way, at that round's threshold, among all the candidates proposed
 //! there; a third effect that gains more there is judged in the next round on top of both.) A
 //! joint needs room for two more effects ([`SelectCtx::max_effects`]); without it the round
@@ -319,18 +320,6 @@ pub struct OnTop {
     /// between nested members ([`choose_members`]), the one of largest held-out gain; `None`
     /// when none is significant.
     pub chosen: Option<usize>,
-}
-
-impl OnTop {
-    /// The member to report: the chosen one, else the one of largest gain.
-    pub fn best(&self) -> Option<&Tried> {
-        self.chosen.map(|k| &self.tried[k]).or_else(|| {
-            self.tried
-                .iter()
-                .filter(|t| t.cmp.is_some())
-                .max_by(|a, b| a.gain().total_cmp(&b.gain()))
-        })
-    }
 }
 
 /// Each of two candidates of round `round` (threshold `z_crit`) on top of the other, as the next
