@@ -857,7 +857,8 @@ fn close_rivals_each_significant_on_top_of_the_other_are_accepted_together() {
 }
 
 /// The negative half of the test above: the joint check refuses the pair of the torque and the
-/// Stribeck member where the recordings hold the torque alone.
+/// Stribeck member where the recordings hold the torque alone (the Stribeck member is not
+/// significant on top of the torque, while the torque is on top of the Stribeck member).
 fn refused_on_sets_with_the_torque_alone() {
     use gearbif::identification::beam::{on_top_of_each_other, OnTop};
     use gearbif::identification::diagnose::{propose_ctx, select_ctx, DiagnoseOptions};
@@ -903,6 +904,10 @@ fn refused_on_sets_with_the_torque_alone() {
         eprintln!("{lines}");
         assert!(!stribeck_on_torque.tried.is_empty(), "{lines}");
         assert_eq!(stribeck_on_torque.chosen, None, "{lines}");
+        // the other direction: the torque the sets hold is significant on top of the Stribeck
+        // member's model (held-out z 7.9–13.2; −12.6 to −10.4 while the leave-fold-out step
+        // moved the Stribeck excess that model's windows do not determine by 10²⁸³)
+        assert!(torque_on_stribeck.chosen.is_some(), "{lines}");
     }
 }
 

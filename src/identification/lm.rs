@@ -3,7 +3,7 @@
 //! come from simulations whose events make them only piecewise smooth), and the Gauss–Newton
 //! covariance s²(JᵀJ)⁻¹ from the column-pivoted QR of J ([`crate::numerics::least_squares`]).
 
-use crate::numerics::least_squares::{inverse_gram, LeastSquaresError, DEFAULT_RCOND};
+use crate::numerics::least_squares::{independent_columns, inverse_gram, DEFAULT_RCOND};
 use crate::numerics::levenberg_marquardt::{minimize, LmOptions};
 use faer::Mat;
 use nalgebra::{DMatrix, DVector};
@@ -64,31 +64,24 @@ pub fn fd_jacobian<F: Fn(&[f64]) -> Option<Vec<f64>>>(
 /// others the inverse of their own Gram matrix.
 pub fn gauss_newton_cov(j: &DMatrix<f64>) -> DMatrix<f64> {
     let n = j.ncols();
-    let mut keep: Vec<usize> = (0..n).collect();
-    loop {
-        let a = Mat::from_fn(j.nrows(), keep.len(), |i, k| j[(i, keep[k])]);
-        match inverse_gram(&a, DEFAULT_RCOND) {
-            Ok(c) => {
-                let mut cov = DMatrix::zeros(n, n);
-                for k in 0..n {
-                    if !keep.contains(&k) {
-                        cov[(k, k)] = f64::INFINITY;
-                    }
-                }
-                for (a, &ka) in keep.iter().enumerate() {
-                    for (b, &kb) in keep.iter().enumerate() {
-                        cov[(ka, kb)] = c[(a, b)];
-                    }
-                }
-                return cov;
-            }
-            Err(LeastSquaresError::RankDeficient { dependent, .. }) if !dependent.is_empty() => {
-                let drop: Vec<usize> = dependent.iter().map(|&d| keep[d]).collect();
-                keep.retain(|k| !drop.contains(k));
-            }
-            Err(_) => return DMatrix::from_diagonal_element(n, n, f64::INFINITY),
+    let a = Mat::from_fn(j.nrows(), n, |i, k| j[(i, k)]);
+    let inverse = independent_columns(&a, DEFAULT_RCOND).and_then(|keep| {
+        let sub = Mat::from_fn(j.nrows(), keep.len(), |i, k| j[(i, keep[k])]);
+        Ok((inverse_gram(&sub, DEFAULT_RCOND)?, keep))
+    });
+    let Ok((c, keep)) = inverse else {
+        return DMatrix::from_diagonal_element(n, n, f64::INFINITY);
+    };
+    let mut cov = DMatrix::zeros(n, n);
+    for k in (0..n).filter(|k| !keep.contains(k)) {
+        cov[(k, k)] = f64::INFINITY;
+    }
+    for (a, &ka) in keep.iter().enumerate() {
+        for (b, &kb) in keep.iter().enumerate() {
+            cov[(ka, kb)] = c[(a, b)];
         }
     }
+    cov
 }
 
 /// s²(JᵀJ)⁻¹ with s² = `rss`/(rows − columns) ([`gauss_newton_cov`]); an infinite variance stays

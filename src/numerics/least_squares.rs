@@ -169,6 +169,44 @@ pub fn lstsq(a: &Mat<f64>, b: &[f64], rcond: f64) -> Result<LinearSolution, Leas
     })
 }
 
+/// The columns of A that carry independent information (to `rcond`), in increasing order: the
+/// dependent columns of the pivoted factorisation ([`LeastSquaresError::RankDeficient`]) are
+/// dropped and the rest factorised again, until it has full rank. A zero column is always
+/// dropped. Errors other than a rank deficiency (too few rows, a non-finite entry) are returned.
+pub fn independent_columns(a: &Mat<f64>, rcond: f64) -> Result<Vec<usize>, LeastSquaresError> {
+    let mut keep: Vec<usize> = (0..a.ncols()).collect();
+    loop {
+        let sub = Mat::from_fn(a.nrows(), keep.len(), |i, k| a[(i, keep[k])]);
+        match factor(&sub, rcond) {
+            Ok(_) => return Ok(keep),
+            Err(LeastSquaresError::RankDeficient { dependent, .. }) if !dependent.is_empty() => {
+                let drop: Vec<usize> = dependent.iter().map(|&d| keep[d]).collect();
+                keep.retain(|k| !drop.contains(k));
+            }
+            Err(e) => return Err(e),
+        }
+    }
+}
+
+/// min ‖A x − b‖₂ over the columns A determines ([`independent_columns`]), the others held at
+/// x_j = 0: the least-squares step that does not move along a direction the data cannot see
+/// (an SVD's minimum-norm solution would, by a rounding error divided by a vanishing column
+/// norm).
+pub fn lstsq_determined(
+    a: &Mat<f64>,
+    b: &[f64],
+    rcond: f64,
+) -> Result<Vec<f64>, LeastSquaresError> {
+    let keep = independent_columns(a, rcond)?;
+    let sub = Mat::from_fn(a.nrows(), keep.len(), |i, k| a[(i, keep[k])]);
+    let s = lstsq(&sub, b, rcond)?;
+    let mut x = vec![0.0; a.ncols()];
+    for (k, &j) in keep.iter().enumerate() {
+        x[j] = s.x[k];
+    }
+    Ok(x)
+}
+
 /// (AᵀA)⁻¹ of a full-rank A by column-pivoted QR (the Gauss–Newton covariance of a Jacobian).
 pub fn inverse_gram(a: &Mat<f64>, rcond: f64) -> Result<DMatrix<f64>, LeastSquaresError> {
     Ok(factor(a, rcond)?.cov_unit())
@@ -271,6 +309,25 @@ mod tests {
             err_ne > 1e3 * err_qr,
             "normal equations {err_ne} vs QR {err_qr}"
         );
+    }
+
+    #[test]
+    fn undetermined_columns_are_held() {
+        // column 1 is zero and column 3 = column 0 + column 2: the determined columns fit b
+        // exactly, and the undetermined ones stay at 0 (an exact fit needs none of them)
+        let a = Mat::from_fn(12, 4, |i, j| {
+            let t = i as f64 / 11.0;
+            [1.0, 0.0, t, 1.0 + t][j]
+        });
+        let b: Vec<f64> = (0..12).map(|i| 2.0 - 3.0 * i as f64 / 11.0).collect();
+        assert_eq!(independent_columns(&a, DEFAULT_RCOND).unwrap().len(), 2);
+        let x = lstsq_determined(&a, &b, DEFAULT_RCOND).unwrap();
+        assert_eq!(x[1], 0.0);
+        for i in 0..12 {
+            let fit: f64 = (0..4).map(|j| a[(i, j)] * x[j]).sum();
+            assert!((fit - b[i]).abs() < 1e-13, "row {i}: {fit} vs {}", b[i]);
+        }
+        assert_eq!(x.iter().filter(|v| **v == 0.0).count(), 2, "{x:?}");
     }
 
     #[test]
