@@ -169,6 +169,31 @@ pub fn lstsq(a: &Mat<f64>, b: &[f64], rcond: f64) -> Result<LinearSolution, Leas
     })
 }
 
+/// The R factor (upper triangle, min(m, n) × n) of the QR factorisation of `a`, computed
+/// sequentially. faer's default (global) parallelism splits the blocked Householder updates of a
+/// tall matrix over rayon's threads, so the rounding, and with it every fit by simulation, depended
+/// on the thread count (a campaign set's base refit: ζ and g differed by 1e-8 and 5e-9 relative
+/// between 1 and 2 threads);
+/// the matrices here are a few thousand rows by a few columns, too small to gain from threads.
+pub fn thin_r(mut a: Mat<f64>) -> Mat<f64> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::qr::no_pivoting::factor;
+    let (m, n) = a.shape();
+    let size = m.min(n);
+    let block = factor::recommended_block_size::<f64>(m, n);
+    let mut coeff = Mat::zeros(block, size);
+    let par = faer::Par::Seq;
+    let scratch = factor::qr_in_place_scratch::<f64>(m, n, block, par, Default::default());
+    factor::qr_in_place(
+        a.as_mut(),
+        coeff.as_mut(),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    );
+    Mat::from_fn(size, n, |i, j| if j >= i { a[(i, j)] } else { 0.0 })
+}
+
 /// The columns of A that carry independent information (to `rcond`), in increasing order: the
 /// dependent columns of the pivoted factorisation ([`LeastSquaresError::RankDeficient`]) are
 /// dropped and the rest factorised again, until it has full rank. A zero column is always
@@ -191,16 +216,37 @@ pub fn independent_columns(a: &Mat<f64>, rcond: f64) -> Result<Vec<usize>, Least
 /// min ‖A x − b‖₂ over the columns A determines ([`independent_columns`]), the others held at
 /// x_j = 0: the least-squares step that does not move along a direction the data cannot see
 /// (an SVD's minimum-norm solution would, by a rounding error divided by a vanishing column
-/// norm).
+/// norm). A is first reduced sequentially ([`thin_r`]) to the R factor [R c; 0 ρ] of [A b],
+/// which has the same Gram matrix and right-hand side (RᵀR = AᵀA, Rᵀc = Aᵀb): the result does
+/// not depend on the number of threads, and the pivoted factorisations work on n × n.
 pub fn lstsq_determined(
     a: &Mat<f64>,
     b: &[f64],
     rcond: f64,
 ) -> Result<Vec<f64>, LeastSquaresError> {
-    let keep = independent_columns(a, rcond)?;
-    let sub = Mat::from_fn(a.nrows(), keep.len(), |i, k| a[(i, keep[k])]);
-    let s = lstsq(&sub, b, rcond)?;
-    let mut x = vec![0.0; a.ncols()];
+    let (m, n) = a.shape();
+    if b.len() != m || m < n {
+        return Err(LeastSquaresError::TooFewRows {
+            rows: b.len().min(m),
+            cols: n,
+        });
+    }
+    let finite =
+        b.iter().all(|v| v.is_finite()) && (0..n).all(|j| (0..m).all(|i| a[(i, j)].is_finite()));
+    if !finite {
+        return Err(LeastSquaresError::NonFinite);
+    }
+    let rr = thin_r(Mat::from_fn(
+        m,
+        n + 1,
+        |i, j| if j < n { a[(i, j)] } else { b[i] },
+    ));
+    let r = Mat::from_fn(n, n, |i, j| rr[(i, j)]);
+    let c: Vec<f64> = (0..n).map(|i| rr[(i, n)]).collect();
+    let keep = independent_columns(&r, rcond)?;
+    let sub = Mat::from_fn(n, keep.len(), |i, k| r[(i, keep[k])]);
+    let s = lstsq(&sub, &c, rcond)?;
+    let mut x = vec![0.0; n];
     for (k, &j) in keep.iter().enumerate() {
         x[j] = s.x[k];
     }

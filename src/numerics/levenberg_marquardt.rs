@@ -18,6 +18,7 @@
 //! on Δ relative to ‖D x‖, `gtol` on the cosine between r and the columns of J, or the number of
 //! residual evaluations.
 
+use super::least_squares::thin_r;
 use faer::Mat;
 use nalgebra::DMatrix;
 use thiserror::Error;
@@ -108,31 +109,6 @@ pub struct LmSolution {
     pub jacobians: usize,
     /// Why it stopped.
     pub termination: Termination,
-}
-
-/// The R factor (upper triangle, min(m, n) × n) of the QR factorisation of `a`, computed
-/// sequentially. faer's default (global) parallelism splits the blocked Householder updates of a
-/// tall matrix over rayon's threads, so the rounding, and with it every fit by simulation, depended
-/// on the thread count (a campaign set's base refit: ζ and g differed by 1e-8 and 5e-9 relative
-/// between 1 and 2 threads);
-/// the matrices here are a few thousand rows by a few columns, too small to gain from threads.
-fn thin_r(mut a: Mat<f64>) -> Mat<f64> {
-    use faer::dyn_stack::{MemBuffer, MemStack};
-    use faer::linalg::qr::no_pivoting::factor;
-    let (m, n) = a.shape();
-    let size = m.min(n);
-    let block = factor::recommended_block_size::<f64>(m, n);
-    let mut coeff = Mat::zeros(block, size);
-    let par = faer::Par::Seq;
-    let scratch = factor::qr_in_place_scratch::<f64>(m, n, block, par, Default::default());
-    factor::qr_in_place(
-        a.as_mut(),
-        coeff.as_mut(),
-        par,
-        MemStack::new(&mut MemBuffer::new(scratch)),
-        Default::default(),
-    );
-    Mat::from_fn(size, n, |i, j| if j >= i { a[(i, j)] } else { 0.0 })
 }
 
 /// The trust-region subproblem of one Jacobian in the scaled variable u = D p.
