@@ -17,11 +17,10 @@
 //! both are accepted in the round and the selection goes on without a fork, from the better of
 //! the two models with both (each effect's member chosen on top of the other; [`Joint::order`]).
 //! The order of their acceptance then decides nothing, and the rounds of two branches are not
-//! spent. (Each branch's next round would judge the
-//! other effect the same way, at that round's threshold, among all the candidates proposed
-//! there; a third effect that gains more there is judged in the next round on top of both.) A
-//! joint needs room for two more effects ([`SelectCtx::max_effects`]); without it the round
-//! forks.
+//! spent. (Each branch's next round would judge the other effect the same way, at that round's
+//! threshold, among all the candidates proposed there; a third effect that gains more there is
+//! judged in the next round on top of both.) A joint needs room for two more effects
+//! ([`SelectCtx::max_effects`]); without it the round forks.
 
 use super::judge::{compare, Comparison};
 use super::propose::Candidate;

@@ -218,7 +218,9 @@ pub fn independent_columns(a: &Mat<f64>, rcond: f64) -> Result<Vec<usize>, Least
 /// (an SVD's minimum-norm solution would, by a rounding error divided by a vanishing column
 /// norm). A is first reduced sequentially ([`thin_r`]) to the R factor [R c; 0 ρ] of [A b],
 /// which has the same Gram matrix and right-hand side (RᵀR = AᵀA, Rᵀc = Aᵀb): the result does
-/// not depend on the number of threads, and the pivoted factorisations work on n × n.
+/// not depend on the number of threads, and the pivoted factorisations work on n × n. A
+/// non-finite entry of A or b reaches R and c and is reported there
+/// ([`LeastSquaresError::NonFinite`]).
 pub fn lstsq_determined(
     a: &Mat<f64>,
     b: &[f64],
@@ -230,11 +232,6 @@ pub fn lstsq_determined(
             rows: b.len().min(m),
             cols: n,
         });
-    }
-    let finite =
-        b.iter().all(|v| v.is_finite()) && (0..n).all(|j| (0..m).all(|i| a[(i, j)].is_finite()));
-    if !finite {
-        return Err(LeastSquaresError::NonFinite);
     }
     let rr = thin_r(Mat::from_fn(
         m,
@@ -374,6 +371,17 @@ mod tests {
             assert!((fit - b[i]).abs() < 1e-13, "row {i}: {fit} vs {}", b[i]);
         }
         assert_eq!(x.iter().filter(|v| **v == 0.0).count(), 2, "{x:?}");
+        // a non-finite entry of A (in the zero column, last row) or of b is an error, not a NaN
+        let mut bad = a.clone();
+        bad[(11, 1)] = f64::NAN;
+        let mut inf_b = b.clone();
+        inf_b[5] = f64::INFINITY;
+        for (m, rhs) in [(&bad, &b), (&a, &inf_b)] {
+            assert_eq!(
+                lstsq_determined(m, rhs, DEFAULT_RCOND),
+                Err(LeastSquaresError::NonFinite)
+            );
+        }
     }
 
     #[test]
