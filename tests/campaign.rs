@@ -31,6 +31,28 @@ fn prepared_base(
     (prep, base, folds)
 }
 
+/// `f` called with the selection's context and the base model's state on a set of the campaign
+/// generator (effect `id` at size `level`, seed `seed`, `ci` size; the default options), for the
+/// tests that judge chosen candidates by hand.
+fn on_base_model<R>(
+    id: &str,
+    level: f64,
+    seed: u64,
+    f: impl FnOnce(
+        gearbif::identification::select::SelectCtx,
+        &gearbif::identification::select::ModelState,
+    ) -> R,
+) -> R {
+    use gearbif::identification::diagnose::{propose_ctx, select_ctx, DiagnoseOptions};
+    let spec = effect(id).unwrap();
+    let g = build_case(spec, level, seed, &SetSize::ci(), &Rk4Filippov::default()).unwrap();
+    let opts = DiagnoseOptions::default();
+    let (prep, base, folds) = prepared_base(&g.set, &opts);
+    let b = base.state.clone().expect("the base refit");
+    let pctx = propose_ctx(&prep.runs, &base, &opts);
+    f(select_ctx(&pctx, &base, &folds, &opts), &b)
+}
+
 /// Camera noise of the documented sets, rad (0.5°).
 const CAMERA_NOISE: f64 = 0.5 * std::f64::consts::PI / 180.0;
 
@@ -590,97 +612,91 @@ fn ci_seeds(effect: &str, level: f64, seeds: Vec<u64>) -> CampaignDoc {
 fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
     use gearbif::identification::backward::backward;
     use gearbif::identification::catalog::catalog;
-    use gearbif::identification::diagnose::{propose_ctx, select_ctx, DiagnoseOptions};
     use gearbif::identification::judge::z_threshold;
     use gearbif::identification::propose::{propose, Candidate};
     use gearbif::identification::regression::Term;
     use gearbif::identification::select::{evaluate, ModelState, Tried};
     use gearbif::progress::Silent;
     for seed in 1..=3u64 {
-        let spec = effect("static_torque_2h").unwrap();
-        let g = build_case(spec, 1.0, seed, &SetSize::ci(), &Rk4Filippov::default()).unwrap();
-        let opts = DiagnoseOptions::default();
-        let (prep, base, folds) = prepared_base(&g.set, &opts);
-        let b = base.state.clone().expect("the base refit");
-        let pctx = propose_ctx(&prep.runs, &base, &opts);
-        let sctx = select_ctx(&pctx, &base, &folds, &opts);
-        // the candidates of a round on `cur` and the round's threshold
-        let round = |cur: &ModelState| {
-            let lat = cur.fit_latency.then(|| cur.latency());
-            let cands = propose(&pctx, &cur.terms, lat, &cur.effects);
-            let z_crit = z_threshold(cands.len());
-            (cands, z_crit)
-        };
-        let pick = |cur: &ModelState, id: &str, n: usize| {
-            let (cands, z_crit) = round(cur);
-            let c = cands
-                .into_iter()
-                .find(|c| c.effect.id == id && c.terms.len() == n)
-                .unwrap_or_else(|| panic!("seed {seed}: no {id} candidate with {n} terms"));
-            (c, z_crit)
-        };
-        let (torque, z1) = pick(&b, "static_torque", 4);
-        let with_torque = evaluate(&sctx, &b, &torque).expect("the torque's refit");
-        // the drag is not proposed on these sets (the weak form does not see it): its candidate
-        // starts nested, at the current θ with a zero drag
-        let (_, z2) = round(&with_torque);
-        let nt = with_torque.terms.len();
-        let drag = Candidate {
-            effect: catalog()
-                .into_iter()
-                .find(|e| e.id == "corotating_drag")
-                .unwrap(),
-            terms: vec![Term::Corot],
-            weak_coef: with_torque.fit.theta[..nt]
-                .iter()
-                .copied()
-                .chain([0.0])
-                .collect(),
-            weak_coef_current: with_torque.fit.theta[..nt].to_vec(),
-            latency: None,
-            weak_dbic: 0.0,
-        };
-        let with_both = evaluate(&sctx, &with_torque, &drag).expect("the drag's refit");
-        let accepted = |round, candidate, z_crit, state| Tried {
-            round,
-            candidate,
-            cmp: None,
-            screen: None,
-            z_crit,
-            accepted: true,
-            state: Some(state),
-            added_z: None,
-            member: None,
-            dropped: None,
-            forked: false,
-            joined: false,
-            on_top_of: None,
-        };
-        let mut tried = vec![
-            accepted(1, torque, z1, with_torque),
-            accepted(2, drag, z2, with_both.clone()),
-        ];
-        let fin = backward(&sctx, with_both, &mut tried, &Silent);
-        // the numbers of docs/diagnosis.md ("Pipeline", after step 8), shown with --nocapture
-        eprintln!(
-            "seed {seed}: drag {:?} (threshold {z2:.2})",
-            tried[1].dropped
-        );
-        assert!(
-            !tried[1].accepted && tried[1].dropped.is_some(),
-            "seed {seed}: the drag was kept: {:?}",
-            tried[1].dropped
-        );
-        assert!(
-            tried[0].accepted && tried[0].dropped.is_none(),
-            "seed {seed}"
-        );
-        assert!(
-            !fin.terms.contains(&Term::Corot),
-            "seed {seed}: {:?}",
-            fin.terms
-        );
-        assert_eq!(fin.effects.len(), 1, "seed {seed}");
+        on_base_model("static_torque_2h", 1.0, seed, |sctx, b| {
+            // the candidates of a round on `cur` and the round's threshold
+            let round = |cur: &ModelState| {
+                let lat = cur.fit_latency.then(|| cur.latency());
+                let cands = propose(sctx.propose, &cur.terms, lat, &cur.effects);
+                let z_crit = z_threshold(cands.len());
+                (cands, z_crit)
+            };
+            let pick = |cur: &ModelState, id: &str, n: usize| {
+                let (cands, z_crit) = round(cur);
+                let c = cands
+                    .into_iter()
+                    .find(|c| c.effect.id == id && c.terms.len() == n)
+                    .unwrap_or_else(|| panic!("seed {seed}: no {id} candidate with {n} terms"));
+                (c, z_crit)
+            };
+            let (torque, z1) = pick(b, "static_torque", 4);
+            let with_torque = evaluate(&sctx, b, &torque).expect("the torque's refit");
+            // the drag is not proposed on these sets (the weak form does not see it): its candidate
+            // starts nested, at the current θ with a zero drag
+            let (_, z2) = round(&with_torque);
+            let nt = with_torque.terms.len();
+            let drag = Candidate {
+                effect: catalog()
+                    .into_iter()
+                    .find(|e| e.id == "corotating_drag")
+                    .unwrap(),
+                terms: vec![Term::Corot],
+                weak_coef: with_torque.fit.theta[..nt]
+                    .iter()
+                    .copied()
+                    .chain([0.0])
+                    .collect(),
+                weak_coef_current: with_torque.fit.theta[..nt].to_vec(),
+                latency: None,
+                weak_dbic: 0.0,
+            };
+            let with_both = evaluate(&sctx, &with_torque, &drag).expect("the drag's refit");
+            let accepted = |round, candidate, z_crit, state| Tried {
+                round,
+                candidate,
+                cmp: None,
+                screen: None,
+                z_crit,
+                accepted: true,
+                state: Some(state),
+                added_z: None,
+                member: None,
+                dropped: None,
+                forked: false,
+                joined: false,
+                on_top_of: None,
+            };
+            let mut tried = vec![
+                accepted(1, torque, z1, with_torque),
+                accepted(2, drag, z2, with_both.clone()),
+            ];
+            let fin = backward(&sctx, with_both, &mut tried, &Silent);
+            // the numbers of docs/diagnosis.md ("Pipeline", after step 8), shown with --nocapture
+            eprintln!(
+                "seed {seed}: drag {:?} (threshold {z2:.2})",
+                tried[1].dropped
+            );
+            assert!(
+                !tried[1].accepted && tried[1].dropped.is_some(),
+                "seed {seed}: the drag was kept: {:?}",
+                tried[1].dropped
+            );
+            assert!(
+                tried[0].accepted && tried[0].dropped.is_none(),
+                "seed {seed}"
+            );
+            assert!(
+                !fin.terms.contains(&Term::Corot),
+                "seed {seed}: {:?}",
+                fin.terms
+            );
+            assert_eq!(fin.effects.len(), 1, "seed {seed}");
+        });
     }
 }
 
@@ -849,53 +865,47 @@ fn close_rivals_each_significant_on_top_of_the_other_are_accepted_together() {
 /// significant on top of the torque, while the torque is on top of the Stribeck member).
 fn refused_on_sets_with_the_torque_alone() {
     use gearbif::identification::beam::{on_top_of_each_other, OnTop};
-    use gearbif::identification::diagnose::{propose_ctx, select_ctx, DiagnoseOptions};
     use gearbif::identification::judge::z_threshold;
     use gearbif::identification::propose::propose;
     use gearbif::identification::select::{converge, evaluate};
     for seed in [1u64, 2] {
-        let spec = effect("static_torque_2h").unwrap();
-        let g = build_case(spec, 2.0, seed, &SetSize::ci(), &Rk4Filippov::default()).unwrap();
-        let opts = DiagnoseOptions::default();
-        let (prep, base, folds) = prepared_base(&g.set, &opts);
-        let b = base.state.clone().expect("the base refit");
-        let pctx = propose_ctx(&prep.runs, &base, &opts);
-        let sctx = select_ctx(&pctx, &base, &folds, &opts);
-        let cands = propose(&pctx, &b.terms, None, &b.effects);
-        let z_crit = z_threshold(cands.len());
-        let pick = |id: &str, n: usize| {
-            cands
-                .iter()
-                .find(|c| c.effect.id == id && c.terms.len() == n)
-                .unwrap_or_else(|| panic!("seed {seed}: no {id} with {n} terms"))
-        };
-        let (torque, stribeck) = (pick("static_torque", 4), pick("static_friction", 3));
-        let on = |c| converge(&sctx, &evaluate(&sctx, &b, c).expect("the refit"));
-        let [stribeck_on_torque, torque_on_stribeck] = on_top_of_each_other(
-            &sctx,
-            (torque, &on(torque)),
-            (stribeck, &on(stribeck)),
-            (1, z_crit),
-        );
-        let z = |t: &OnTop| {
-            t.tried
-                .iter()
-                .map(|t| (t.cmp.map(|c| c.z), t.added_z))
-                .collect::<Vec<_>>()
-        };
-        let lines = format!(
+        on_base_model("static_torque_2h", 2.0, seed, |sctx, b| {
+            let cands = propose(sctx.propose, &b.terms, None, &b.effects);
+            let z_crit = z_threshold(cands.len());
+            let pick = |id: &str, n: usize| {
+                cands
+                    .iter()
+                    .find(|c| c.effect.id == id && c.terms.len() == n)
+                    .unwrap_or_else(|| panic!("seed {seed}: no {id} with {n} terms"))
+            };
+            let (torque, stribeck) = (pick("static_torque", 4), pick("static_friction", 3));
+            let on = |c| converge(&sctx, &evaluate(&sctx, b, c).expect("the refit"));
+            let [stribeck_on_torque, torque_on_stribeck] = on_top_of_each_other(
+                &sctx,
+                (torque, &on(torque)),
+                (stribeck, &on(stribeck)),
+                (1, z_crit),
+            );
+            let z = |t: &OnTop| {
+                t.tried
+                    .iter()
+                    .map(|t| (t.cmp.map(|c| c.z), t.added_z))
+                    .collect::<Vec<_>>()
+            };
+            let lines = format!(
             "static_torque_2h seed {seed}: the Stribeck member on the torque (held-out z, Wald \
              z): {:?}; the torque's members on it: {:?} (threshold {z_crit:.2})",
             z(&stribeck_on_torque),
             z(&torque_on_stribeck)
         );
-        eprintln!("{lines}");
-        assert!(!stribeck_on_torque.tried.is_empty(), "{lines}");
-        assert_eq!(stribeck_on_torque.chosen, None, "{lines}");
-        // the other direction: the torque the sets hold is significant on top of the Stribeck
-        // member's model (held-out z 7.9–13.2; −12.6 to −10.4 while the leave-fold-out step
-        // moved the Stribeck excess that model's windows do not determine by 10²⁸³)
-        assert!(torque_on_stribeck.chosen.is_some(), "{lines}");
+            eprintln!("{lines}");
+            assert!(!stribeck_on_torque.tried.is_empty(), "{lines}");
+            assert_eq!(stribeck_on_torque.chosen, None, "{lines}");
+            // the other direction: the torque the sets hold is significant on top of the Stribeck
+            // member's model (held-out z 7.9–13.2; −12.6 to −10.4 while the leave-fold-out step
+            // moved the Stribeck excess that model's windows do not determine by 10²⁸³)
+            assert!(torque_on_stribeck.chosen.is_some(), "{lines}");
+        });
     }
 }
 
@@ -909,7 +919,6 @@ fn refused_on_sets_with_the_torque_alone() {
 /// 5 s: `cargo test --release --test campaign -- --nocapture one_step_held_out`.
 #[test]
 fn one_step_held_out_agrees_with_exact_leave_fold_out_refits() {
-    use gearbif::identification::diagnose::{propose_ctx, select_ctx, DiagnoseOptions};
     use gearbif::identification::judge::{compare, HeldOut};
     use gearbif::identification::propose::propose;
     use gearbif::identification::select::{
@@ -935,28 +944,22 @@ fn one_step_held_out_agrees_with_exact_leave_fold_out_refits() {
         }
         HeldOut { chi2, chi2_fit }
     };
-    let spec = effect("static_torque_2h").unwrap();
-    let g = build_case(spec, 2.0, 2, &SetSize::ci(), &Rk4Filippov::default()).unwrap();
-    let opts = DiagnoseOptions::default();
-    let (prep, base, folds) = prepared_base(&g.set, &opts);
-    let b = base.state.clone().expect("the base refit");
-    let pctx = propose_ctx(&prep.runs, &base, &opts);
-    let sctx = select_ctx(&pctx, &base, &folds, &opts);
-    let cands = propose(&pctx, &b.terms, None, &b.effects);
-    let find = |id: &str| cands.iter().find(|c| c.effect.id == id).unwrap();
-    let stribeck = cands
-        .iter()
-        .find(|c| c.effect.id == "static_friction" && c.terms.len() == 3)
-        .unwrap();
-    let s = converge(&sctx, &evaluate(&sctx, &b, stribeck).unwrap());
-    let s_exact = exact(&sctx, &s);
-    let members = proposed_on(&sctx, &s, find("static_torque"));
-    for c in members.iter().take(2) {
-        let t = converge(&sctx, &evaluate(&sctx, &s, c).unwrap());
-        let one_step = compare(&s.held, &t.held, sctx.wins, sctx.runs);
-        let exact_z = compare(&s_exact, &exact(&sctx, &t), sctx.wins, sctx.runs);
-        let sum = |h: &HeldOut| h.chi2.iter().flatten().sum::<f64>();
-        eprintln!(
+    on_base_model("static_torque_2h", 2.0, 2, |sctx, b| {
+        let cands = propose(sctx.propose, &b.terms, None, &b.effects);
+        let find = |id: &str| cands.iter().find(|c| c.effect.id == id).unwrap();
+        let stribeck = cands
+            .iter()
+            .find(|c| c.effect.id == "static_friction" && c.terms.len() == 3)
+            .unwrap();
+        let s = converge(&sctx, &evaluate(&sctx, b, stribeck).unwrap());
+        let s_exact = exact(&sctx, &s);
+        let members = proposed_on(&sctx, &s, find("static_torque"));
+        for c in members.iter().take(2) {
+            let t = converge(&sctx, &evaluate(&sctx, &s, c).unwrap());
+            let one_step = compare(&s.held, &t.held, sctx.wins, sctx.runs);
+            let exact_z = compare(&s_exact, &exact(&sctx, &t), sctx.wins, sctx.runs);
+            let sum = |h: &HeldOut| h.chi2.iter().flatten().sum::<f64>();
+            eprintln!(
             "torque with {} terms on the Stribeck model: one-step z {:.2} (held-out Σχ² {:.4e}), \
              exact z {:.2}; in sample Σχ² {:.4e}",
             c.terms.len(),
@@ -965,11 +968,12 @@ fn one_step_held_out_agrees_with_exact_leave_fold_out_refits() {
             exact_z.z,
             t.held.chi2_fit.iter().flatten().sum::<f64>()
         );
-        assert!(
-            (one_step.z - exact_z.z).abs() < 1.0,
-            "{one_step:?} vs {exact_z:?}"
-        );
-    }
+            assert!(
+                (one_step.z - exact_z.z).abs() < 1.0,
+                "{one_step:?} vs {exact_z:?}"
+            );
+        }
+    });
 }
 
 /// A 12 ms camera latency (the campaign generator's `latency` at level 2, seed 4: its own
