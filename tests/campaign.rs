@@ -913,10 +913,10 @@ fn refused_on_sets_with_the_torque_alone() {
 /// convergence without the fold's windows, then the fold's windows predicted), on the set where
 /// the one-step refit used to move an undetermined parameter (docs/diagnosis.md, Known
 /// weaknesses): `static_torque_2h` level 2 seed 2 (`ci` set), the torque's members on top of the
-/// Stribeck member's model, against that model. The held-out z of the two must agree to 1 (the
-/// one-step refit is first order in what a fold changes; measured 7.70 against 7.64 and 13.19
-/// against 12.99; the one-step refit that moved the Stribeck excess gave −7.37 and 4.78). About
-/// 5 s: `cargo test --release --test campaign -- --nocapture one_step_held_out`.
+/// Stribeck member's model, against that model. The held-out z of the two must agree to 0.5
+/// (the one-step refit is first order in what a fold changes; measured 7.70 against 7.64 and
+/// 13.19 against 12.99; the one-step refit that moved the Stribeck excess gave −7.37 for the
+/// first). About 5 s: `cargo test --release --test campaign -- --nocapture one_step_held_out`.
 #[test]
 fn one_step_held_out_agrees_with_exact_leave_fold_out_refits() {
     use gearbif::identification::judge::{compare, HeldOut};
@@ -969,7 +969,7 @@ fn one_step_held_out_agrees_with_exact_leave_fold_out_refits() {
             t.held.chi2_fit.iter().flatten().sum::<f64>()
         );
             assert!(
-                (one_step.z - exact_z.z).abs() < 1.0,
+                (one_step.z - exact_z.z).abs() < 0.5,
                 "{one_step:?} vs {exact_z:?}"
             );
         }
