@@ -19,6 +19,13 @@ outlier frames of 5–15°. Effects, in forms the diagnosis catalog does not spe
   freq_zeta       ζ (1 + 0.6 (f − 1.5 Hz)) in the driven runs; ring-downs ζ
   vib             2 sin(2π · 7.3 Hz · t) s⁻² (a vibration; 0.05° of motion, below the noise)
   latency9        β taken 9 ms before its time stamp
+  asym_fric       friction η (1 + 0.2 d), d the direction of motion (direction-dependent friction)
+  rel_zeta        damping ζ (1 + 0.5 cos 2(α − β))   (modulated by the relative angle)
+  quad_coupling   0.06 g sin 2(α − β) s⁻² added to the dipole torque (a quadrupole term)
+  g_saturating    g (1 − 0.08 (1 − e^(−k/4))) in run k (a drift that saturates)
+  beta_offset     β recorded 4° above the true angle (camera zero offset)
+  alpha_ripple    α(t) = 2πft + 0.15 sin 2πft, recorded as it is (a control: nothing to find)
+  latency_cubic   β taken 5 ms early and the drag −0.05 β̇³ (two effects at once)
 
 Usage: python3 scripts/independent_recordings.py EFFECT SEED OUT_FOLDER
 (writes experiment.toml, the CSVs and truth_blind.json with g, Δ, ζ, η).
@@ -38,27 +45,33 @@ class Truth:
         s.zeta=1.1*rng.uniform(0.9,1.1); s.eta=23.1*rng.uniform(0.9,1.1)
         s.run=0; s.fhz=1.5; s.t=0.0
     def smooth(s,a,b,v):
-        f=s.g*(-math.sin(a)*math.cos(b)+s.delta*math.cos(a)*math.sin(b))-s.zeta*v
+        g=s.g*(1-0.08*(1-math.exp(-s.run/4))) if s.effect=="g_saturating" else s.g
+        f=g*(-math.sin(a)*math.cos(b)+s.delta*math.cos(a)*math.sin(b))-s.zeta*v
         e=s.effect
         if e=="tilt_torque": f+=7.0*math.sin(b-0.7)+2.5*math.cos(2*b+0.3)
         if e=="cubic_drag": f-=0.08*v**3
+        if e=="latency_cubic": f-=0.05*v**3
+        if e=="rel_zeta": f-=s.zeta*0.5*math.cos(2*(a-b))*v
+        if e=="quad_coupling": f+=0.06*s.g*math.sin(2*(a-b))
         if e in("sqrt_drag","torque_sqrt"): f-=0.5*math.copysign(math.sqrt(abs(v)),v)
         if e=="torque_3h": f+=3.0*math.sin(3*b+0.4)
         if e=="torque_sqrt": f+=5.0*math.sin(b+1.0)
         if e=="vib": f+=2.0*math.sin(2*math.pi*7.3*s.t)
         if e=="freq_zeta": f-=s.zeta*0.6*(s.fhz-1.5)*v
         return f
-    def fric(s,a,b,v):
+    def fric(s,a,b,v,d):
+        """Friction level R ≥ 0 for motion in direction d = ±1."""
         e=s.effect; R=s.eta
         if e=="stribeck_exp": R+=0.6*s.eta*math.exp(-abs(v)/1.5)
         if e=="alpha_mod_fric": R*=1+0.35*math.cos(2*a)
         if e=="eta_drift": R*=1+0.3*s.run/19
+        if e=="asym_fric": R*=1+0.2*d
         return R
 def simulate(tr, alpha_fn, b0, v0, tend, dt, tsamp):
     out=[]; t=0.0; b=b0; v=v0; stuck=False; k=0
     def acc(t,b,v,sg):
         a=alpha_fn(t); tr.t=t
-        return tr.smooth(a,b,v)-sg*tr.fric(a,b,v)
+        return tr.smooth(a,b,v)-sg*tr.fric(a,b,v,sg)
     while k<len(tsamp):
         # emit samples inside [t, t+dt)
         while k<len(tsamp) and tsamp[k]<t+dt*0.5:
@@ -66,7 +79,7 @@ def simulate(tr, alpha_fn, b0, v0, tend, dt, tsamp):
         a=alpha_fn(t)
         if stuck:
             fs=tr.smooth(a,b,0.0)
-            if abs(fs)>tr.fric(a,b,0.0): stuck=False; sg=math.copysign(1,fs)
+            if abs(fs)>tr.fric(a,b,0.0,math.copysign(1,fs)): stuck=False; sg=math.copysign(1,fs)
             else: t+=dt; continue
         else: sg=math.copysign(1,v) if v!=0 else math.copysign(1,tr.smooth(a,b,0.0))
         k1b=v; k1v=acc(t,b,v,sg)
@@ -78,7 +91,7 @@ def simulate(tr, alpha_fn, b0, v0, tend, dt, tsamp):
             frac=v/(v-nv); nb=b+frac*(nb-b); 
             a2=alpha_fn(t+frac*dt)
             fs=tr.smooth(a2,nb,0.0)
-            if abs(fs)<=tr.fric(a2,nb,0.0): stuck=True; nv=0.0
+            if abs(fs)<=tr.fric(a2,nb,0.0,math.copysign(1,fs)): stuck=True; nv=0.0
             else: nv=0.0 if frac<1 else nv
         b,v=nb,nv; t+=dt
     return out
@@ -91,6 +104,7 @@ def noise(rng,kind,sig):
 def main(effect, seed, out):
     rng=random.Random(seed); tr=Truth(effect,rng); os.makedirs(out,exist_ok=True)
     sig=math.radians(0.5); nk="laplace" if effect=="null_laplace" else "gauss"
+    off=math.radians(4.0) if effect=="beta_offset" else 0.0  # camera zero offset
     runs=[]
     for i in range(12):
         a0=math.radians(15+30*i+rng.uniform(-5,5))
@@ -98,24 +112,25 @@ def main(effect, seed, out):
         b0=rng.uniform(-math.pi,math.pi)
         ts=[j/100 for j in range(300)]
         tr.run=i; tr.fhz=1.5
-        lat=0.009 if tr.effect=="latency9" else 0.0
+        lat={"latency9":0.009,"latency_cubic":0.005}.get(tr.effect,0.0)
         bs=simulate(tr,lambda t:a0,b0,0.0,3.0,2e-4,[max(0.0,x-lat) for x in ts])
         fn=f"rd_{i:02d}.csv"
         with open(os.path.join(out,fn),"w") as f:
             f.write("t,alpha,beta\n")
-            for t,b in zip(ts,bs): f.write(f"{t:.6f},{a0:.6f},{b+noise(rng,nk,sig):.6f}\n")
+            for t,b in zip(ts,bs): f.write(f"{t:.6f},{a0:.6f},{b+off+noise(rng,nk,sig):.6f}\n")
         runs.append(("ringdown",math.degrees(a0),fn))
     for i in range(8):
         fhz=0.5+2.0*i/7
         n=80*50; ts=[j/(50*fhz) for j in range(n)]
-        al=lambda t,fhz=fhz: 2*math.pi*fhz*t
+        rip=0.15 if tr.effect=="alpha_ripple" else 0.0  # the motor's speed ripple
+        al=lambda t,fhz=fhz,rip=rip: 2*math.pi*fhz*t+rip*math.sin(2*math.pi*fhz*t)
         tr.run=12+i; tr.fhz=fhz
-        lat=0.009 if tr.effect=="latency9" else 0.0
+        lat={"latency9":0.009,"latency_cubic":0.005}.get(tr.effect,0.0)
         bs=simulate(tr,al,rng.uniform(-math.pi,math.pi),0.0,ts[-1]+0.01,min(2e-4,0.02/fhz/50*5),[max(0.0,x-lat) for x in ts])
         fn=f"dr_{i:02d}.csv"
         with open(os.path.join(out,fn),"w") as f:
             f.write("t,alpha,beta\n")
-            for t,b in zip(ts,bs): f.write(f"{t:.6f},{math.remainder(al(t),2*math.pi):.6f},{math.remainder(b+noise(rng,nk,sig),2*math.pi):.6f}\n")
+            for t,b in zip(ts,bs): f.write(f"{t:.6f},{math.remainder(al(t),2*math.pi):.6f},{math.remainder(b+off+noise(rng,nk,sig),2*math.pi):.6f}\n")
         runs.append(("driven",fhz,fn))
     with open(os.path.join(out,"experiment.toml"),"w") as f:
         f.write("[gear]\nm1 = 3.51\nm2 = 3.51\nr = 0.04\ntheta_deg = 31.0\nphi_deg = 31.0\nzeta = 1.1\neta = 23.1\nshaft_mass = 0.32\nbearing_bore = 0.03\n")

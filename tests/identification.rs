@@ -5,7 +5,7 @@
 //! reported σ.
 
 use gearbif::identification::diagnose::{diagnose, DiagnoseOptions, Diagnosis};
-use gearbif::identification::model::{AugmentedGear, Coefficients, Geometry, Rng};
+use gearbif::identification::model::{AugmentedGear, Coefficients, Geometry, InputBend, Rng};
 use gearbif::identification::preprocess::clean;
 use gearbif::identification::ringdown::{fit_kappa, fit_ringdown};
 use gearbif::identification::synth::{synthesize, SynthOptions};
@@ -342,6 +342,7 @@ fn vector_load_friction_is_not_named_a_drag() {
             geo,
             alpha0,
             alpha_rate: rate,
+            bend: InputBend::default(),
         },
         friction: move |al: f64, b: f64| mu * radial_load(&geo, weight, al, b),
     };
@@ -409,6 +410,7 @@ fn friction_modulated_by_cos_2beta_is_unexplained_and_named_by_its_term() {
             geo,
             alpha0,
             alpha_rate: rate,
+            bend: InputBend::default(),
         },
         friction: move |_al: f64, b: f64| eta * (1.0 + 0.3 * (2.0 * b).cos()),
     };

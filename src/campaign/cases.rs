@@ -195,6 +195,30 @@ pub const EFFECTS: &[EffectSpec] = &[
         unit: "",
         form: "base model; coloured camera noise, AR(1) with ρ = 0.9 between frames, 0.5° stationary σ",
     },
+    EffectSpec {
+        id: "direction_friction",
+        expected: &["unexplained"],
+        reference: 0.1,
+        unit: "1",
+        form: "Coulomb friction η(1 + a d) for motion in the direction d = ±1, a = size (out of \
+               catalog; the same force as a constant torque −aη)",
+    },
+    EffectSpec {
+        id: "relative_angle_damping",
+        expected: &["unexplained"],
+        reference: 0.6,
+        unit: "1",
+        form: "viscous damping ζ(1 + ε cos²(α − β)) β̇, ε = size (eddy currents that follow the \
+               magnets' relative angle; out of catalog)",
+    },
+    EffectSpec {
+        id: "none_drive_ripple",
+        expected: &["none"],
+        reference: 0.0,
+        unit: "",
+        form: "base model; the drive's speed ripples once per input turn, α = Ωt + 0.15 sin Ωt, \
+               recorded as it is",
+    },
 ];
 
 /// Looks an effect up by id.
@@ -386,6 +410,9 @@ fn apply_effect(
         }
         "angle_modulated_friction" => d.truth.angle_modulation = s,
         "frequency_damping" => frequency_damping(s, d),
+        "direction_friction" => d.truth.friction_asymmetry = s,
+        "relative_angle_damping" => d.truth.zeta_relative = s,
+        "none_drive_ripple" => d.truth.drive_ripple = 0.15,
         other => {
             return Err(Error::unknown_name(
                 "effect with a generator",

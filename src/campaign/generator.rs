@@ -168,7 +168,11 @@ pub fn generate(
         let beta0 = psi + side * (FRAC_PI_2 - 0.1 + 0.2 * rng.uniform());
         let n = (size.ringdown_s * size.fps).floor() as usize;
         let t: Vec<f64> = (0..n).map(|i| i as f64 / size.fps).collect();
-        let drive = Drive { alpha0, rate: 0.0 };
+        let drive = Drive {
+            alpha0,
+            rate: 0.0,
+            ripple: 0.0,
+        };
         let beta = observe(truth, drive, beta0, &t, meas, integrator, rng)?;
         runs.push(Run {
             kind: RunKind::Ringdown { alpha0 },
@@ -188,13 +192,17 @@ pub fn generate(
         let n = (size.turns * size.samples_per_turn as f64).floor() as usize;
         let dt = 1.0 / (f * size.samples_per_turn as f64);
         let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
-        let alpha: Vec<f64> = (0..n)
-            .map(|i| TAU * i as f64 / size.samples_per_turn as f64)
-            .collect();
         let drive = Drive {
             alpha0: 0.0,
             rate: TAU * f,
+            ripple: truth.drive_ripple,
         };
+        let alpha: Vec<f64> = (0..n)
+            .map(|i| {
+                let x = TAU * i as f64 / size.samples_per_turn as f64;
+                x + drive.ripple_at(x)
+            })
+            .collect();
         let beta0 = TAU * rng.uniform();
         let run_truth = truth.for_drive_frequency(f);
         let beta = observe(&run_truth, drive, beta0, &t, meas, integrator, rng)?;

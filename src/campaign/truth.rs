@@ -102,21 +102,42 @@ pub struct TruthModel {
     /// ζ(1 + k(f − 1 Hz)), k in 1/Hz; the ring-downs keep ζ (applied per run by the generator,
     /// [`TruthModel::for_drive_frequency`]).
     pub zeta_per_hz: f64,
+    /// Dry friction that differs by the direction of motion: η(1 + a d) for motion in the
+    /// direction d = ±1, with a this value. As a force, −d η(1 + a d) = −d η − a η while sliding,
+    /// and the stick band [−η(1 − a), η(1 + a)] of the smooth force is that of η about the
+    /// torque −aη: the generator applies it as that constant torque (the same Filippov system).
+    pub friction_asymmetry: f64,
+    /// Viscous damping modulated by the magnets' relative angle (eddy currents that follow the
+    /// field): ζ(1 + ε cos²(α_m − β)) β̇, with ε this value.
+    pub zeta_relative: f64,
+    /// The driving motor's speed ripple ε, rad ([`Drive::ripple`]; the recorded α shows it).
+    pub drive_ripple: f64,
 }
 
-/// The input: held at α₀ (rate 0) or turned at a constant rate.
+/// The input: held at α₀ (rate 0) or turned at a mean rate, with a speed ripple of one period
+/// per input turn.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Drive {
     /// Drive angle at t = 0, rad.
     pub alpha0: f64,
-    /// Drive rate α̇, rad/s.
+    /// Mean drive rate α̇, rad/s.
     pub rate: f64,
+    /// Amplitude ε of the ripple, rad: α_d(t) = α₀ + α̇ t + ε sin α̇t.
+    pub ripple: f64,
 }
 
 impl Drive {
-    /// α_d(t).
+    /// α_d(t) = α₀ + α̇ t + ε sin α̇t.
     pub fn angle(&self, t: f64) -> f64 {
-        self.alpha0 + self.rate * t
+        self.alpha0 + self.rate * t + self.ripple_at(self.rate * t)
+    }
+    /// ε sin x at the uniform drive's advance x = α̇t.
+    pub fn ripple_at(&self, x: f64) -> f64 {
+        if self.ripple == 0.0 {
+            0.0
+        } else {
+            self.ripple * x.sin()
+        }
     }
 }
 
@@ -137,6 +158,9 @@ impl TruthModel {
             angle_modulation: 0.0,
             compliance: 0.0,
             zeta_per_hz: 0.0,
+            friction_asymmetry: 0.0,
+            zeta_relative: 0.0,
+            drive_ripple: 0.0,
         }
     }
 
@@ -179,6 +203,10 @@ impl TruthModel {
         let (sa, ca) = alpha_m.sin_cos();
         let (sb, cb) = beta.sin_cos();
         let mut a = self.g * (-sa * cb + self.delta() * ca * sb) - self.zeta * omega;
+        a -= self.friction_asymmetry * self.eta;
+        if self.zeta_relative != 0.0 {
+            a -= self.zeta * self.zeta_relative * (alpha_m - beta).cos().powi(2) * omega;
+        }
         for &(k, amp, ph) in &self.harmonics {
             a += amp * (k as f64 * beta - ph).sin();
         }

@@ -38,11 +38,13 @@ pub fn catalog() -> Vec<Effect> {
             id: "coupling_geometry",
             class: "coupling",
             explanation: "the bilinear coupling differs from the nominal one: terms cos α cos β and \
-                          sin α sin β appear (input angle zero offset, out-of-plane tilt or true \
-                          shaft angles other than nominal)",
+                          sin α sin β appear (a zero offset of the input or of the output angle \
+                          reading, read off as alpha_offset_deg and beta_offset_deg; an \
+                          out-of-plane tilt or true shaft angles other than nominal)",
             terms: vec![Term::CosACosB, Term::SinASinB],
             candidates: vec![
                 "input angle zero offset",
+                "output angle (camera) zero offset",
                 "out-of-plane tilt of a shaft",
                 "shaft angles other than nominal",
             ],
@@ -357,11 +359,20 @@ pub fn same_slot(a: &Effect, b: &Effect) -> bool {
     a.id == b.id && drift_param(a) == drift_param(b)
 }
 
-/// Dictionary for the sparse search: trig(kα + lβ) with |k|, |l| ≤ 2 (not already in the base
-/// model or the catalog) and cos/sin 3β, velocity/sign terms modulated by cos β, sin β, and dry
-/// friction modulated by cos/sin(kα + lβ) for (k, l) = (0, 2), (1, 0), (2, 0), (1, ±1).
+/// The angle harmonics (k, l) of cos/sin(kα + lβ) that modulate the dictionary's viscous and dry
+/// friction terms beyond (0, 1): the output angle's second harmonic, the input angle's first
+/// two, and the first two of the sum and of the difference (the magnets' relative angle).
+pub const MODULATIONS: [(i8, i8); 7] = [(0, 2), (1, 0), (2, 0), (1, 1), (1, -1), (2, 2), (2, -2)];
+
+/// Dictionary for the sparse search: a constant torque (`const`: a bias torque, or a dry
+/// friction that differs by the direction of motion, η₊ ≠ η₋, which is the same force),
+/// trig(kα + lβ) with |k|, |l| ≤ 2 (not already in the base model or the catalog) and
+/// cos/sin 3β, viscous damping −β̇ and dry friction −sgn β̇ modulated by cos/sin β and by
+/// cos/sin(kα + lβ) for the (k, l) of [`MODULATIONS`].
 pub fn dictionary() -> Vec<Term> {
-    let mut v = Vec::new();
+    // a constant torque c: −sgn β̇ η (1 + a sgn β̇) = −sgn β̇ η − aη while sliding, and its stick
+    // band [−η(1 − a), η(1 + a)] is that of η about a torque −aη: the same Filippov system
+    let mut v = vec![Term::Cos(0, 0)];
     for k in 0..=2i8 {
         for l in -2..=2i8 {
             if k == 0 && l <= 0 {
@@ -378,9 +389,10 @@ pub fn dictionary() -> Vec<Term> {
     // torques with the third harmonic of β
     v.extend([Term::Cos(0, 3), Term::Sin(0, 3)]);
     v.extend([Term::VCosB, Term::VSinB, Term::SCosB, Term::SSinB]);
-    // dry friction modulated by harmonics of α and β: sgn β̇ · cos/sin(kα + lβ)
-    for (k, l) in [(0, 2), (1, 0), (2, 0), (1, 1), (1, -1)] {
+    // viscous damping and dry friction modulated by harmonics of α and β
+    for (k, l) in MODULATIONS {
         for sin in [false, true] {
+            v.push(Term::VTrig(k, l, sin));
             v.push(Term::STrig(k, l, sin));
         }
     }

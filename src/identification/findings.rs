@@ -90,12 +90,27 @@ pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<Effec
             "lag_at_peak_torque_err_deg",
             "deg",
         ),
-        "coupling_geometry" => mk(
-            "alpha_offset",
-            "alpha_offset_deg",
-            "alpha_offset_err_deg",
-            "deg",
-        ),
+        "coupling_geometry" => {
+            // the angle offset that the bilinear terms show more clearly ([`angle_offsets`])
+            let input = mk(
+                "alpha_offset",
+                "alpha_offset_deg",
+                "alpha_offset_err_deg",
+                "deg",
+            );
+            let output = mk(
+                "beta_offset",
+                "beta_offset_deg",
+                "beta_offset_err_deg",
+                "deg",
+            );
+            let z = |s: &Option<EffectSize>| s.as_ref().map_or(-1.0, |s| (s.value / s.sigma).abs());
+            if z(&output) > z(&input) {
+                output
+            } else {
+                input
+            }
+        }
         "drive_steps" => mk("offset", "offset_deg", "offset_err_deg", "deg"),
         "static_friction" => mk("excess", "excess_relative", "excess_relative_err", "1"),
         "parameter_drift" | "condition_dependence" => DriftParam::ALL.iter().find_map(|d| {
@@ -115,17 +130,22 @@ pub fn headline_size(effect: &Effect, p: &BTreeMap<String, f64>) -> Option<Effec
             .iter()
             .filter_map(|t| {
                 Some((
-                    t.name(),
+                    *t,
                     *p.get(&t.name())?,
                     *p.get(&format!("{}_err", t.name()))?,
                 ))
             })
             .max_by(|a, b| (a.1 / a.2).abs().total_cmp(&(b.1 / b.2).abs()))
-            .map(|(n, v, e)| EffectSize {
-                name: n,
+            .map(|(t, v, e)| EffectSize {
+                name: t.name(),
                 value: v,
                 sigma: e,
-                unit: "s^-2".into(),
+                // a damping coefficient multiplies β̇; every other term is an acceleration
+                unit: match t {
+                    Term::VCosB | Term::VSinB | Term::VTrig(..) => "s^-1",
+                    _ => "s^-2",
+                }
+                .into(),
             }),
         _ => None,
     }
@@ -177,8 +197,64 @@ pub fn params_of(effect: &Effect, st: &ModelState) -> BTreeMap<String, f64> {
             }
             p
         }
+        "coupling_geometry" => {
+            let mut p = effect_params(effect, &map, base_values(&map));
+            if let Some([a, b]) = angle_offsets(st) {
+                for (name, (v, e)) in [("alpha_offset", a), ("beta_offset", b)] {
+                    p.insert(format!("{name}_deg"), v.to_degrees());
+                    p.insert(format!("{name}_err_deg"), e.to_degrees());
+                }
+            }
+            p
+        }
         _ => effect_params(effect, &map, base_values(&map)),
     }
+}
+
+/// The coupling's bilinear terms read as zero offsets of the two angle readings, each (value,
+/// 1σ) in radians. The input magnet at α + ε_α gives c_cc = −g sin ε_α, c_ss = −gΔ sin ε_α
+/// (and c_sc = −g cos ε_α, c_cs = gΔ cos ε_α); β recorded ε_β above the output magnet's angle
+/// gives c_cc = −gΔ sin ε_β, c_ss = −g sin ε_β. With g = −c_sc and Δ = c_cs/g both are solved
+/// from the linear system: tan ε_α = −(c_cc − Δ c_ss)/(g(1 − Δ²)), tan ε_β = −(c_ss −
+/// Δ c_cc)/(g(1 − Δ²)), exact for either offset alone, first order for both together. The σ
+/// by first-order propagation through the refit's covariance of (c_sc, c_cs, c_cc, c_ss).
+/// `None` without the four terms or when |Δ| > 0.95: the coupling then depends nearly on α − β
+/// alone, and the two offsets are one (the catalog's `alpha_offset_deg` from c_cc alone).
+pub fn angle_offsets(st: &ModelState) -> Option<[(f64, f64); 2]> {
+    let at = |t: Term| st.terms.iter().position(|&x| x == t);
+    let idx = [
+        at(Term::SinACosB)?,
+        at(Term::CosASinB)?,
+        at(Term::CosACosB)?,
+        at(Term::SinASinB)?,
+    ];
+    let offsets = |c: [f64; 4]| {
+        let g = -c[0];
+        let delta = c[1] / g;
+        let den = g * (1.0 - delta * delta);
+        [
+            (-(c[2] - delta * c[3]) / den).atan(),
+            (-(c[3] - delta * c[2]) / den).atan(),
+        ]
+    };
+    let c = idx.map(|i| st.fit.theta[i]);
+    let delta = c[1] / -c[0];
+    if !c.iter().all(|x| x.is_finite()) || delta.is_nan() || delta.abs() > 0.95 {
+        return None;
+    }
+    let value = offsets(c);
+    Some([0, 1].map(|j| {
+        let grad: Vec<(usize, f64)> = (0..4)
+            .map(|i| {
+                let h = 1e-6 * c[i].abs().max(1.0);
+                let (mut up, mut down) = (c, c);
+                up[i] += h;
+                down[i] -= h;
+                (idx[i], (offsets(up)[j] - offsets(down)[j]) / (2.0 * h))
+            })
+            .collect();
+        first_order(st, value[j], &grad)
+    }))
 }
 
 /// A function of θ entries with its 1σ by first-order propagation through the refit's
@@ -482,14 +558,20 @@ pub fn dictionary_experiment(t: Term) -> &'static str {
         Term::STrig(..) => {
             "dry friction that depends on the input angle: ring-downs at many α0 over a turn; the dry-friction decrement changes with α0 (bearing load from the input side, e.g. a force on the output shaft that turns with the input)"
         }
+        Term::Cos(0, 0) => {
+            "a constant torque on the output, or a dry friction that differs by the direction of motion (η₊ − η₋ = −2 × const: the same force): spin the output by hand without the input magnet, both ways; the decelerations differ by 2 × const in either case, and a torque that stays when the bearing is turned end for end or exchanged is a bias (air draught, cable), not the bearing"
+        }
         Term::Cos(0, _) | Term::Sin(0, _) => {
             "a torque that depends on the output angle only: ring-downs of the output with the input magnet removed; the remaining torque and its harmonics are lab-fixed"
         }
         Term::Cos(..) | Term::Sin(..) => {
             "a coupling harmonic: ring-downs at finely stepped α0 over a full turn; κ(α0) and the equilibrium β0(α0) show the harmonic (dipole shape or position of the magnets)"
         }
-        Term::VCosB | Term::VSinB => {
+        Term::VCosB | Term::VSinB | Term::VTrig(0, _, _) => {
             "damping that depends on the output angle: ring-downs from large amplitudes at several α0; the viscous decay rate varies with the angle range swept"
+        }
+        Term::VTrig(..) => {
+            "damping that depends on the input angle or on the magnets' relative angle (eddy currents in conductors near the magnets): ring-downs at many α0 over a turn; the viscous decay rate changes with α0, and with a conductor moved away it does not"
         }
         _ => "",
     }
@@ -705,6 +787,7 @@ fn smaller_member_reason(t: &Tried) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::TAU;
 
     #[test]
     fn a_torque_with_only_a_third_harmonic_is_headlined_by_it() {
@@ -791,6 +874,84 @@ mod tests {
             },
             effects: Vec::new(),
         }
+    }
+
+    /// The coupling's four bilinear coefficients of −g sin(α + a) cos(β − b) + gΔ cos(α + a)
+    /// sin(β − b), projected numerically on the basis (sin α cos β, cos α sin β, cos α cos β,
+    /// sin α sin β) by quadrature over the torus (independent of the algebra under test).
+    fn projected_coupling(g: f64, delta: f64, a: f64, b: f64) -> [f64; 4] {
+        let n = 64;
+        let mut c = [0.0; 4];
+        for i in 0..n {
+            for j in 0..n {
+                let (al, be) = (TAU * i as f64 / n as f64, TAU * j as f64 / n as f64);
+                let f = -g * (al + a).sin() * (be - b).cos()
+                    + g * delta * (al + a).cos() * (be - b).sin();
+                let basis = [
+                    al.sin() * be.cos(),
+                    al.cos() * be.sin(),
+                    al.cos() * be.cos(),
+                    al.sin() * be.sin(),
+                ];
+                for k in 0..4 {
+                    // each basis function has mean square 1/4 over the torus
+                    c[k] += 4.0 * f * basis[k] / (n * n) as f64;
+                }
+            }
+        }
+        c
+    }
+
+    /// Zero offsets of the input and of the output angle reading are told apart by the
+    /// coupling's bilinear terms: exact for either alone, to second order for both; the σ are
+    /// the first-order propagation of a diagonal covariance of c_cc and c_ss.
+    #[test]
+    fn coupling_terms_give_the_input_and_output_angle_offsets() {
+        let terms = vec![
+            Term::SinACosB,
+            Term::CosASinB,
+            Term::CosACosB,
+            Term::SinASinB,
+        ];
+        let (g, delta) = (295.0, 0.204);
+        let (s_cc, s_ss) = (0.08, 0.06);
+        let mut cov = nalgebra::DMatrix::<f64>::zeros(4, 4);
+        cov[(2, 2)] = s_cc * s_cc;
+        cov[(3, 3)] = s_ss * s_ss;
+        let offsets = |a: f64, b: f64| {
+            let c = projected_coupling(g, delta, a, b);
+            let st = state(
+                terms.clone(),
+                c.to_vec(),
+                vec![0.0, 0.0, s_cc, s_ss],
+                cov.clone(),
+            );
+            angle_offsets(&st).unwrap()
+        };
+        let deg = 1f64.to_radians();
+        for (a, b, tol) in [
+            (4.0 * deg, 0.0, 1e-12),
+            (0.0, 4.0 * deg, 1e-12),
+            (-2.0 * deg, 0.0, 1e-12),
+            // both together: first order, off by terms of second order in the offsets
+            (1.0 * deg, 3.0 * deg, 3.0 * deg * deg),
+        ] {
+            let [(ea, _), (eb, _)] = offsets(a, b);
+            assert!(
+                (ea - a).abs() < tol && (eb - b).abs() < tol,
+                "{a} {b}: {ea} {eb}"
+            );
+        }
+        let [(_, sa), (_, sb)] = offsets(0.0, 4.0 * deg);
+        let den = g * (1.0 - delta * delta);
+        let want_b = (s_ss.powi(2) + (delta * s_cc).powi(2)).sqrt() / den;
+        let want_a = (s_cc.powi(2) + (delta * s_ss).powi(2)).sqrt() / den;
+        assert!((sb / want_b - 1.0).abs() < 1e-2, "{sb} {want_b}");
+        assert!((sa / want_a - 1.0).abs() < 1e-2, "{sa} {want_a}");
+        // nearly parallel magnets: the coupling depends on α − β alone, the offsets are one
+        let c = projected_coupling(g, 0.97, 0.0, 0.05);
+        let st = state(terms.clone(), c.to_vec(), vec![0.0; 4], cov.clone());
+        assert!(angle_offsets(&st).is_none());
     }
 
     /// The load family's fraction λ, weight ρ and tilt ψ with their first-order σ: the values

@@ -37,14 +37,15 @@ pub enum ExtraTerm {
         /// Sine instead of cosine.
         sin: bool,
     },
-    /// −β̇ cos β.
-    VelCos,
-    /// −β̇ sin β.
-    VelSin,
-    /// Dry friction modulated by cos β (the term −sgn β̇ cos β).
-    FricCos,
-    /// Dry friction modulated by sin β.
-    FricSin,
+    /// Viscous damping modulated by the angles: the term −β̇ cos(kα + lβ) (sin when `sin`).
+    VelTrig {
+        /// Harmonic of α.
+        k: i8,
+        /// Harmonic of β.
+        l: i8,
+        /// Sine instead of cosine.
+        sin: bool,
+    },
     /// Dry friction modulated by cos(kα + lβ) (sin when `sin`).
     FricTrig {
         /// Harmonic of α.
@@ -370,6 +371,33 @@ pub fn drag(exponent: Option<f64>, omega: f64) -> (f64, f64) {
     }
 }
 
+/// The input angle's departure from a uniform drive over a prediction window: α(t) gains
+/// Σ_{k=2..5} a_k (t − t_c)^k (a motor's speed ripple; zero for a uniform drive).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct InputBend {
+    /// Centre t_c, s.
+    pub t_c: f64,
+    /// a₂ … a₅, rad/s^k.
+    pub a: [f64; 4],
+}
+
+impl InputBend {
+    /// Σ a_k (t − t_c)^k, rad (Horner).
+    #[inline]
+    pub fn angle(&self, t: f64) -> f64 {
+        let s = t - self.t_c;
+        let [a2, a3, a4, a5] = self.a;
+        s * s * (a2 + s * (a3 + s * (a4 + s * a5)))
+    }
+    /// Its rate Σ k a_k (t − t_c)^(k−1), rad/s.
+    #[inline]
+    pub fn rate(&self, t: f64) -> f64 {
+        let s = t - self.t_c;
+        let [a2, a3, a4, a5] = self.a;
+        s * (2.0 * a2 + s * (3.0 * a3 + s * (4.0 * a4 + s * 5.0 * a5)))
+    }
+}
+
 /// The augmented gear as a driven oscillator.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AugmentedGear {
@@ -381,13 +409,25 @@ pub struct AugmentedGear {
     pub alpha0: f64,
     /// α̇, rad/s (0: locked input).
     pub alpha_rate: f64,
+    /// The input's departure from the uniform drive α0 + α̇ t.
+    pub bend: InputBend,
 }
 
 impl AugmentedGear {
-    /// α(t).
+    /// α(t) = α0 + α̇ t + the bend.
     #[inline]
     pub fn alpha(&self, t: f64) -> f64 {
-        self.alpha0 + self.alpha_rate * t
+        self.alpha0 + self.alpha_rate * t + self.bend.angle(t)
+    }
+    /// The corotating drag's correction for the bend: −c(β̇ − α̇(t)) where the smooth part has
+    /// −c(β̇ − α̇) with the uniform rate.
+    #[inline]
+    fn corot_bend(&self, t: f64) -> f64 {
+        if self.c.corot == 0.0 {
+            0.0
+        } else {
+            self.c.corot * self.bend.rate(t)
+        }
     }
     /// The input magnet's angle α_in = α + ε + χ τ_in(α_in, β) (Newton iteration) and its
     /// derivative dα_in/dβ = χ τ_β / (1 − χ τ_α).
@@ -484,20 +524,15 @@ impl AugmentedGear {
                     a_beta += th * l as f64 * d;
                     a_alpha += th * k as f64 * d;
                 }
-                ExtraTerm::VelCos => {
-                    a -= th * omega * cb;
-                    a_beta += th * omega * sb;
-                    a_omega -= th * cb;
+                ExtraTerm::VelTrig { k, l, sin } => {
+                    let (sx, cx) = (k as f64 * alpha + l as f64 * beta).sin_cos();
+                    let (v, d) = if sin { (sx, cx) } else { (cx, -sx) };
+                    a -= th * omega * v;
+                    a_beta -= th * omega * l as f64 * d;
+                    a_alpha -= th * omega * k as f64 * d;
+                    a_omega -= th * v;
                 }
-                ExtraTerm::VelSin => {
-                    a -= th * omega * sb;
-                    a_beta -= th * omega * cb;
-                    a_omega -= th * sb;
-                }
-                ExtraTerm::FricCos
-                | ExtraTerm::FricSin
-                | ExtraTerm::FricTrig { .. }
-                | ExtraTerm::Unused => {}
+                ExtraTerm::FricTrig { .. } | ExtraTerm::Unused => {}
             }
         }
         (a, a_beta, a_omega, a_alpha)
@@ -529,24 +564,12 @@ impl AugmentedGear {
             r += self.c.eta_load * h;
             r_beta += self.c.eta_load * h_beta;
         }
-        let (sb, cb) = sc_beta;
         for &(term, th) in &self.c.extra {
-            match term {
-                ExtraTerm::FricCos => {
-                    r += th * cb;
-                    r_beta -= th * sb;
-                }
-                ExtraTerm::FricSin => {
-                    r += th * sb;
-                    r_beta += th * cb;
-                }
-                ExtraTerm::FricTrig { k, l, sin } => {
-                    let (sx, cx) = (k as f64 * alpha + l as f64 * beta).sin_cos();
-                    let (v, d) = if sin { (sx, cx) } else { (cx, -sx) };
-                    r += th * v;
-                    r_beta += th * l as f64 * d;
-                }
-                _ => {}
+            if let ExtraTerm::FricTrig { k, l, sin } = term {
+                let (sx, cx) = (k as f64 * alpha + l as f64 * beta).sin_cos();
+                let (v, d) = if sin { (sx, cx) } else { (cx, -sx) };
+                r += th * v;
+                r_beta += th * l as f64 * d;
             }
         }
         (r, r_beta)
@@ -555,13 +578,11 @@ impl AugmentedGear {
     /// harmonics): only then can its floor at 0 switch within a slip phase.
     fn friction_varies(&self) -> bool {
         self.c.eta_load != 0.0
-            || self.c.extra.iter().any(|&(term, th)| {
-                th != 0.0
-                    && matches!(
-                        term,
-                        ExtraTerm::FricCos | ExtraTerm::FricSin | ExtraTerm::FricTrig { .. }
-                    )
-            })
+            || self
+                .c
+                .extra
+                .iter()
+                .any(|&(term, th)| th != 0.0 && matches!(term, ExtraTerm::FricTrig { .. }))
     }
     /// The friction r and ∂r/∂β: ρ of [`Self::friction`] floored at 0 (`held`: `None`), or on a
     /// held branch of the floor (`Some(true)`: 0; `Some(false)`: ρ itself, also where negative),
@@ -592,7 +613,10 @@ impl AugmentedGear {
         let sc_beta = beta.sin_cos();
         let ((a, _, _), sc_alpha) = self.smooth(al, beta, sc_beta, omega);
         let (r, _, _) = self.floored_friction(al, beta, omega, (sc_beta, sc_alpha), false, held);
-        Forces { a, r }
+        Forces {
+            a: a + self.corot_bend(t),
+            r,
+        }
     }
     /// [`DrivenOscillator::forces_jet`] on the branch `held` ([`Self::floored_friction`]).
     fn forces_jet_on(&self, t: f64, beta: f64, omega: f64, held: Option<bool>) -> ForcesJet {
@@ -601,7 +625,7 @@ impl AugmentedGear {
         let ((a, a_beta, a_omega), sc_alpha) = self.smooth(al, beta, sc_beta, omega);
         let (r, r_beta, r_omega) =
             self.floored_friction(al, beta, omega, (sc_beta, sc_alpha), true, held);
-        let mut j = ForcesJet::new(a, r);
+        let mut j = ForcesJet::new(a + self.corot_bend(t), r);
         j.a_beta = a_beta;
         j.a_omega = a_omega;
         j.r_omega = r_omega;
@@ -729,6 +753,7 @@ mod tests {
             geo: Geometry::new(0.5, 0.5),
             alpha0: 0.3,
             alpha_rate: 4.0,
+            bend: InputBend::default(),
         }
     }
 
@@ -775,6 +800,7 @@ mod tests {
                 geo,
                 alpha0: 0.0,
                 alpha_rate: TAU * 0.5,
+                bend: InputBend::default(),
             };
             // at rest at β = 0.3 with α = 0: a = gΔ·cos 0·sin 0.3 ≈ 16.5 < η, stuck
             let opts = FlowOptions::with_tol(1e-10).record_events(true);
@@ -818,8 +844,22 @@ mod tests {
                 },
                 -2.0,
             ),
-            (ExtraTerm::VelCos, 0.4),
-            (ExtraTerm::VelSin, -0.3),
+            (
+                ExtraTerm::VelTrig {
+                    k: 0,
+                    l: 1,
+                    sin: false,
+                },
+                0.4,
+            ),
+            (
+                ExtraTerm::VelTrig {
+                    k: 2,
+                    l: -2,
+                    sin: true,
+                },
+                -0.3,
+            ),
         ];
         let sys = driven_test_gear(c);
         for k in 0..10 {
@@ -829,7 +869,14 @@ mod tests {
         // friction modulated by cos β: r = η + θ cos β, with its β-derivative
         let mut c2 = c;
         c2.extra = [
-            (ExtraTerm::FricCos, 2.0),
+            (
+                ExtraTerm::FricTrig {
+                    k: 0,
+                    l: 1,
+                    sin: false,
+                },
+                2.0,
+            ),
             Default::default(),
             Default::default(),
             Default::default(),
@@ -877,6 +924,7 @@ mod tests {
         );
         let sys = AugmentedGear {
             alpha_rate: 20.0,
+            bend: InputBend::default(),
             ..driven_test_gear(c)
         };
         let (x0, t1) = ([0.3, 20.0], 3.9);
@@ -965,7 +1013,14 @@ mod tests {
         let mut c = Coefficients::base(300.0, 0.2, 1.0, 20.0);
         c.eta_load = 6.0;
         c.extra = [
-            (ExtraTerm::FricSin, -1.5),
+            (
+                ExtraTerm::FricTrig {
+                    k: 0,
+                    l: 1,
+                    sin: true,
+                },
+                -1.5,
+            ),
             (
                 ExtraTerm::FricTrig {
                     k: 1,
@@ -974,7 +1029,14 @@ mod tests {
                 },
                 0.8,
             ),
-            (ExtraTerm::FricCos, 1.1),
+            (
+                ExtraTerm::FricTrig {
+                    k: 0,
+                    l: 1,
+                    sin: false,
+                },
+                1.1,
+            ),
             (
                 ExtraTerm::FricTrig {
                     k: 2,

@@ -21,7 +21,8 @@
 //! systematic part: [`fit_static_friction`].
 
 use super::lm::{least_squares, LsqFit};
-use super::model::{AugmentedGear, Coefficients, Geometry};
+use super::model::{AugmentedGear, Coefficients, Geometry, InputBend};
+use super::predict::window_input;
 use super::preprocess::CleanRun;
 use crate::integrator::{EventDriven, EventKind, FlowMethod, FlowOptions};
 use crate::model::DrivenOscillator;
@@ -100,8 +101,8 @@ struct Window<'a> {
     b: &'a [f64],
     v0: f64,
     sigma: f64,
-    alpha0: f64,
-    alpha_rate: f64,
+    /// The input (α₀, α̇, bend) of [`window_input`].
+    input: (f64, f64, InputBend),
     /// The run's own coefficients relative to the common ones (parameter drift, driven-run
     /// input offset): added ζ and η, factor on the coupling, input offset.
     d_zeta: f64,
@@ -126,8 +127,9 @@ impl Window<'_> {
                 ..*c
             },
             geo: *geo,
-            alpha0: self.alpha0,
-            alpha_rate: self.alpha_rate,
+            alpha0: self.input.0,
+            alpha_rate: self.input.1,
+            bend: self.input.2,
         }
     }
 
@@ -236,11 +238,13 @@ fn windows<'a>(
                 + rc.alpha_offset_per_turn * r.alpha_rate.abs() * (t - r.t[0])
                     / std::f64::consts::TAU
         };
-        let sys = AugmentedGear {
+        // the model at sample j, its input through the recorded α_j
+        let at_sample = |j: usize| AugmentedGear {
             c: rc,
             geo: *geo,
-            alpha0: r.alpha[0] - r.alpha_rate * (r.t[0] + latency),
+            alpha0: r.alpha[j] - r.alpha_rate * (r.t[j] + latency),
             alpha_rate: r.alpha_rate,
+            bend: InputBend::default(),
         };
         let thr = 3.0 * r.v_gain * r.sigma_beta;
         let near: Vec<bool> = (0..n)
@@ -260,7 +264,7 @@ fn windows<'a>(
             }
             let i1 = i - 1;
             let relevant = (i0.saturating_sub(1)..(i1 + 2).min(n)).any(|j| {
-                let f = sys.forces(r.t[j], r.beta[j], 0.0);
+                let f = at_sample(j).forces(r.t[j], r.beta[j], 0.0);
                 f.a.abs() - f.r <= reach
             });
             if !relevant {
@@ -284,8 +288,7 @@ fn windows<'a>(
                     b: &r.beta[lo..hi],
                     v0: r.v[lo],
                     sigma: r.sigma_camera,
-                    alpha0: r.alpha[lo] - r.alpha_rate * (r.t[lo] + latency),
-                    alpha_rate: r.alpha_rate,
+                    input: window_input(r, latency, lo, hi),
                     d_zeta: rc.zeta - c.zeta,
                     d_eta: rc.eta - c.eta,
                     g_scale,

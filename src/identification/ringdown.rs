@@ -5,7 +5,7 @@
 //! set-up, its uncertainty from the fit and the tolerances of m1, m2, r.
 
 use super::lm::least_squares;
-use super::model::{AugmentedGear, Coefficients, Geometry};
+use super::model::{AugmentedGear, Coefficients, Geometry, InputBend};
 use super::preprocess::CleanRun;
 use super::regression::autocorr_time;
 use crate::integrator::{EventDriven, FlowMethod, FlowOptions};
@@ -80,6 +80,7 @@ pub fn simulate_model(p: &[f64], t0: f64, times: &[f64], tol: f64) -> Option<Vec
         geo: Geometry::new(0.0, 0.0),
         alpha0: 0.0,
         alpha_rate: 0.0,
+        bend: InputBend::default(),
     };
     let t1 = *times.last()?;
     let mut opts = FlowOptions::with_tol(tol).samples(times.to_vec());

@@ -118,10 +118,18 @@ pub fn extra_term(t: Term) -> Option<ExtraTerm> {
     match t {
         Term::Cos(k, l) => Some(ExtraTerm::Trig { k, l, sin: false }),
         Term::Sin(k, l) => Some(ExtraTerm::Trig { k, l, sin: true }),
-        Term::VCosB => Some(ExtraTerm::VelCos),
-        Term::VSinB => Some(ExtraTerm::VelSin),
-        Term::SCosB => Some(ExtraTerm::FricCos),
-        Term::SSinB => Some(ExtraTerm::FricSin),
+        // the modulations by β (k = 0, l = 1) named on their own in the dictionary
+        Term::VCosB | Term::VSinB => Some(ExtraTerm::VelTrig {
+            k: 0,
+            l: 1,
+            sin: t == Term::VSinB,
+        }),
+        Term::SCosB | Term::SSinB => Some(ExtraTerm::FricTrig {
+            k: 0,
+            l: 1,
+            sin: t == Term::SSinB,
+        }),
+        Term::VTrig(k, l, sin) => Some(ExtraTerm::VelTrig { k, l, sin }),
         Term::STrig(k, l, sin) => Some(ExtraTerm::FricTrig { k, l, sin }),
         _ => None,
     }

@@ -3,7 +3,7 @@
 //! 7.2° drive grid, ring-downs at a camera frame rate, Gaussian camera noise on β, optional sensor
 //! latency, outlier frames and gaps. Simulated with the exact Filippov integrator.
 
-use super::model::{AugmentedGear, Coefficients, Geometry, Rng};
+use super::model::{AugmentedGear, Coefficients, Geometry, InputBend, Rng};
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, FlowMethod, FlowOptions};
 use crate::io::recordings::{GearSetup, RecordingSet, Run, RunKind};
@@ -267,6 +267,7 @@ fn ringdown_runs(opts: &SynthOptions, truth: &SynthTruth, rng: &mut Rng) -> Resu
             geo: truth.geometry,
             alpha0,
             alpha_rate: 0.0,
+            bend: InputBend::default(),
         };
         // equilibrium of the truth near which it is released: minimum of the coupling potential
         let psi = (coef.c_sc * alpha0.sin() + coef.c_cc * alpha0.cos())
@@ -310,6 +311,7 @@ fn driven_runs(opts: &SynthOptions, truth: &mut SynthTruth, rng: &mut Rng) -> Re
             geo: truth.geometry,
             alpha0: 0.0,
             alpha_rate: TAU * f,
+            bend: InputBend::default(),
         };
         let n = (opts.turns * opts.samples_per_turn as f64).floor() as usize;
         let dt = 1.0 / (f * opts.samples_per_turn as f64);
@@ -389,6 +391,7 @@ fn simulate_stepped(
         let rest = AugmentedGear {
             alpha0: sys.alpha0 + step * (k - lost) as f64,
             alpha_rate: 0.0,
+            bend: InputBend::default(),
             ..*sys
         };
         let flow = EventDriven.flow(&rest, tk, x, t_next, &opts)?;
