@@ -425,6 +425,7 @@ mod tests {
                 lo: 20 * k,
                 hi: 20 * k + 20,
                 keep: vec![true; 20],
+                input: Default::default(),
             })
             .collect();
         (run, wins)

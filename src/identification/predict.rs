@@ -60,15 +60,16 @@ pub fn prediction_windows(r: &CleanRun) -> Vec<(usize, usize)> {
     out
 }
 
-/// The model of window [i, j) of run `r`: α(t) through the window's first recorded angle (a β
-/// recorded `latency` late), and a lost-step input offset taken at the window's middle.
+/// The model of window [i, j) of run `r`: its recorded input `input` ([`RecordedInput::fit`] of
+/// the window; a β recorded `latency` late), and a lost-step input offset taken at the window's
+/// middle.
 pub fn window_system(
     r: &CleanRun,
     c: &Coefficients,
     geo: &Geometry,
     latency: f64,
-    i: usize,
-    j: usize,
+    (i, j): (usize, usize),
+    input: &RecordedInput,
 ) -> AugmentedGear {
     let mut cw = *c;
     if c.alpha_offset_per_turn != 0.0 {
@@ -76,7 +77,7 @@ pub fn window_system(
         cw.alpha_offset +=
             c.alpha_offset_per_turn * r.alpha_rate.abs() * (tm - r.t[0]) / std::f64::consts::TAU;
     }
-    let (alpha0, alpha_rate, bend) = window_input(r, latency, i, j);
+    let (alpha0, alpha_rate, bend) = input.drive(latency);
     AugmentedGear {
         c: cw,
         geo: *geo,
@@ -87,46 +88,83 @@ pub fn window_system(
 }
 
 /// The input of window [i, j) of run `r` as the model's α(t) = α₀ + α̇ t + bend, for a β
-/// recorded `latency` late (α at model time t is the recorded α at t − latency). A driven run's
-/// recorded α over the window is fitted by a polynomial of degree 5 in time (least squares by
-/// column-pivoted QR, centred on the window), so a drive whose speed is not uniform (a motor's
-/// speed ripple, a frequency off its stated value) is followed as recorded; a uniform drive is
-/// its own polynomial. Ring-downs, windows of fewer than 8 samples and a failed fit: the line
-/// through the window's first recorded α at the stated rate. Returns (α₀, α̇, bend).
+/// recorded `latency` late: [`RecordedInput::fit`], then [`RecordedInput::drive`].
 pub fn window_input(r: &CleanRun, latency: f64, i: usize, j: usize) -> (f64, f64, InputBend) {
-    const DEGREE: usize = 5;
-    let line = (
-        r.alpha[i] - r.alpha_rate * (r.t[i] + latency),
-        r.alpha_rate,
-        InputBend::default(),
-    );
-    let j = j.min(r.t.len());
-    if r.ringdown || j < i + DEGREE + 3 {
-        return line;
+    RecordedInput::fit(r, i, j).drive(latency)
+}
+
+/// The recorded input over a window, fitted once (it does not depend on the model; a latency
+/// only moves the time axis, [`RecordedInput::drive`]). A driven run's recorded α over the window
+/// is fitted by a polynomial of degree 5 in time (least squares by column-pivoted QR, centred on
+/// the window), so a drive whose speed is not uniform (a motor's speed ripple, a frequency off
+/// its stated value) is followed as recorded; a uniform drive is its own polynomial. Ring-downs,
+/// windows of fewer than 8 samples and a failed fit: the line through the window's first
+/// recorded α at the stated rate. `Default`: the line α = 0 at rest.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RecordedInput {
+    /// The window's first sample (t_i, α_i) and the stated rate α̇_s.
+    anchor: (f64, f64, f64),
+    /// Centre t_c and half-width h of the window, s (h = 0: the line).
+    t_c: f64,
+    h: f64,
+    /// Coefficients c_p of the departure from the line, Σ c_p s^p with s = (τ − t_c)/h.
+    c: [f64; 6],
+}
+
+impl RecordedInput {
+    /// The fit over samples [i, j) of run `r` (see the type).
+    pub fn fit(r: &CleanRun, i: usize, j: usize) -> Self {
+        const DEGREE: usize = 5;
+        let line = Self {
+            anchor: (r.t[i], r.alpha[i], r.alpha_rate),
+            ..Self::default()
+        };
+        let j = j.min(r.t.len());
+        if r.ringdown || j < i + DEGREE + 3 {
+            return line;
+        }
+        // the departure from the stated line through the first sample, in a scaled time s ∈ [−1, 1]
+        let (t_c, h) = (0.5 * (r.t[i] + r.t[j - 1]), 0.5 * (r.t[j - 1] - r.t[i]));
+        if h.is_nan() || h <= 0.0 {
+            return line;
+        }
+        let a = Mat::from_fn(j - i, DEGREE + 1, |k, p| {
+            ((r.t[i + k] - t_c) / h).powi(p as i32)
+        });
+        let y: Vec<f64> = (i..j)
+            .map(|k| r.alpha[k] - r.alpha[i] - r.alpha_rate * (r.t[k] - r.t[i]))
+            .collect();
+        match lstsq(&a, &y, DEFAULT_RCOND) {
+            Ok(fit) => Self {
+                t_c,
+                h,
+                c: std::array::from_fn(|p| fit.x[p]),
+                ..line
+            },
+            Err(_) => line,
+        }
     }
-    // the departure from the stated line through the first sample, in a scaled time s ∈ [−1, 1]
-    let (t_c, h) = (0.5 * (r.t[i] + r.t[j - 1]), 0.5 * (r.t[j - 1] - r.t[i]));
-    if h.is_nan() || h <= 0.0 {
-        return line;
+
+    /// The model's input (α₀, α̇, bend) for a β recorded `latency` late: α at model time t is the
+    /// recorded α at t − latency, α_rec(τ) = α_i + α̇_s (τ − t_i) + Σ c_p s^p.
+    pub fn drive(&self, latency: f64) -> (f64, f64, InputBend) {
+        let (t_i, alpha_i, rate_s) = self.anchor;
+        let (c, h) = (&self.c, self.h);
+        if h == 0.0 {
+            return (
+                alpha_i - rate_s * (t_i + latency),
+                rate_s,
+                InputBend::default(),
+            );
+        }
+        let rate = rate_s + c[1] / h;
+        let alpha0 = alpha_i - rate_s * (latency + t_i) + c[0] - c[1] / h * (latency + self.t_c);
+        let bend = InputBend {
+            t_c: self.t_c + latency,
+            a: [2, 3, 4, 5].map(|p| c[p] / h.powi(p as i32)),
+        };
+        (alpha0, rate, bend)
     }
-    let a = Mat::from_fn(j - i, DEGREE + 1, |k, p| {
-        ((r.t[i + k] - t_c) / h).powi(p as i32)
-    });
-    let y: Vec<f64> = (i..j)
-        .map(|k| r.alpha[k] - r.alpha[i] - r.alpha_rate * (r.t[k] - r.t[i]))
-        .collect();
-    let Ok(fit) = lstsq(&a, &y, DEFAULT_RCOND) else {
-        return line;
-    };
-    let c = &fit.x;
-    // α_rec(τ) = α_i + α̇_s (τ − t_i) + Σ c_p s^p with s = (τ − t_c)/h, and α(t) = α_rec(t − latency)
-    let rate = r.alpha_rate + c[1] / h;
-    let alpha0 = r.alpha[i] - r.alpha_rate * (latency + r.t[i]) + c[0] - c[1] / h * (latency + t_c);
-    let bend = InputBend {
-        t_c: t_c + latency,
-        a: [2, 3, 4, 5].map(|p| c[p] / h.powi(p as i32)),
-    };
-    (alpha0, rate, bend)
 }
 
 /// Window simulations run by this process (all threads): the unit of work of the diagnosis,
@@ -463,7 +501,7 @@ pub fn predict(
     for (i, j) in prediction_windows(r) {
         let t = &r.t[i..j];
         let b = &r.beta[i..j];
-        let sys = window_system(r, c, geo, latency, i, j);
+        let sys = window_system(r, c, geo, latency, (i, j), &RecordedInput::fit(r, i, j));
         let sigma = r.sigma_camera.max(1e-12);
         let all = vec![true; t.len()];
         if let Some(mut fit) = fit_window_state(&sys, t, b, &all, sigma, [b[0], r.v[i]], true, tol)

@@ -26,7 +26,7 @@ use super::lm::{
 use super::model::{AugmentedGear, Coefficients, Geometry, Shape};
 use super::predict::{
     fit_window_state, prediction_windows, window_residuals, window_residuals_jacobian,
-    window_system,
+    window_system, RecordedInput,
 };
 use super::preprocess::CleanRun;
 use super::regression::Term;
@@ -91,6 +91,8 @@ pub struct Win {
     pub hi: usize,
     /// Frames used (outlier frames beyond 5σ masked).
     pub keep: Vec<bool>,
+    /// The recorded input over the window, fitted once ([`RecordedInput::fit`]).
+    pub input: RecordedInput,
 }
 
 impl Win {
@@ -162,7 +164,14 @@ impl SimModel<'_> {
     pub fn system(&self, theta: &[f64], w: &Win) -> AugmentedGear {
         let r = &self.runs[w.run];
         let c = self.coefficients(theta, w.run);
-        window_system(r, &c, &self.geo, self.latency_of(theta), w.lo, w.hi)
+        window_system(
+            r,
+            &c,
+            &self.geo,
+            self.latency_of(theta),
+            (w.lo, w.hi),
+            &w.input,
+        )
     }
     /// θ with every shape parameter clamped into its family's range ([`Shape::range`]), the value
     /// the model evaluates: an optimiser may step beyond the range, where the residuals no longer
@@ -393,6 +402,7 @@ pub fn mask_windows(model: &SimModel, theta: &[f64], chosen: &[(usize, usize, us
             lo,
             hi,
             keep: vec![true; hi - lo],
+            input: RecordedInput::fit(r, lo, hi),
         };
         let sys = model.system(theta, &w);
         let (t, b) = (&r.t[lo..hi], &r.beta[lo..hi]);
@@ -1000,6 +1010,7 @@ mod tests {
                 lo: 0,
                 hi: len,
                 keep: vec![true; len],
+                input: RecordedInput::default(),
             })
             .collect();
         let e = noise(nw * len, 3);
