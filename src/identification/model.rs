@@ -398,6 +398,18 @@ impl InputBend {
     }
 }
 
+/// cos(kα + lβ), or sin when `sin`, and its derivative with respect to the phase kα + lβ: the
+/// angle harmonics of the dictionary's torques, damping and friction terms.
+#[inline]
+pub fn angle_harmonic(k: i8, l: i8, sin: bool, alpha: f64, beta: f64) -> (f64, f64) {
+    let (sx, cx) = (k as f64 * alpha + l as f64 * beta).sin_cos();
+    if sin {
+        (sx, cx)
+    } else {
+        (cx, -sx)
+    }
+}
+
 /// The augmented gear as a driven oscillator.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AugmentedGear {
@@ -518,15 +530,13 @@ impl AugmentedGear {
             }
             match term {
                 ExtraTerm::Trig { k, l, sin } => {
-                    let (sx, cx) = (k as f64 * alpha + l as f64 * beta).sin_cos();
-                    let (v, d) = if sin { (sx, cx) } else { (cx, -sx) };
+                    let (v, d) = angle_harmonic(k, l, sin, alpha, beta);
                     a += th * v;
                     a_beta += th * l as f64 * d;
                     a_alpha += th * k as f64 * d;
                 }
                 ExtraTerm::VelTrig { k, l, sin } => {
-                    let (sx, cx) = (k as f64 * alpha + l as f64 * beta).sin_cos();
-                    let (v, d) = if sin { (sx, cx) } else { (cx, -sx) };
+                    let (v, d) = angle_harmonic(k, l, sin, alpha, beta);
                     a -= th * omega * v;
                     a_beta -= th * omega * l as f64 * d;
                     a_alpha -= th * omega * k as f64 * d;
@@ -566,8 +576,7 @@ impl AugmentedGear {
         }
         for &(term, th) in &self.c.extra {
             if let ExtraTerm::FricTrig { k, l, sin } = term {
-                let (sx, cx) = (k as f64 * alpha + l as f64 * beta).sin_cos();
-                let (v, d) = if sin { (sx, cx) } else { (cx, -sx) };
+                let (v, d) = angle_harmonic(k, l, sin, alpha, beta);
                 r += th * v;
                 r_beta += th * l as f64 * d;
             }

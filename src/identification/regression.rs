@@ -13,7 +13,7 @@
 //! correlated: the effective sample size n_eff = Σ_runs n_run / τ_run, with τ the integrated
 //! autocorrelation time of the standardised residuals, scales the covariance and the BIC.
 
-use super::model::{drag, force_shape, load_shape, stribeck, Geometry, Shape};
+use super::model::{angle_harmonic, drag, force_shape, load_shape, stribeck, Geometry, Shape};
 use super::preprocess::CleanRun;
 use crate::model::{GearParam, Parameter};
 use crate::numerics::least_squares::{weighted, LeastSquaresError, DEFAULT_RCOND};
@@ -414,20 +414,14 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
         ),
         Term::LoadGrid(z, n, radial) => (load_shape(geo, al, b, grid_weight(z, n), radial), true),
         Term::LoadFric => (force_shape(geo, al, b), true),
-        Term::Cos(k, l) => ((k as f64 * al + l as f64 * b).cos(), false),
-        Term::Sin(k, l) => ((k as f64 * al + l as f64 * b).sin(), false),
+        Term::Cos(k, l) => (angle_harmonic(k, l, false, al, b).0, false),
+        Term::Sin(k, l) => (angle_harmonic(k, l, true, al, b).0, false),
         Term::VCosB => (-v * b.cos(), false),
         Term::VSinB => (-v * b.sin(), false),
         Term::SCosB => (b.cos(), true),
         Term::SSinB => (b.sin(), true),
-        Term::VTrig(k, l, sin) => {
-            let x = k as f64 * al + l as f64 * b;
-            (-v * if sin { x.sin() } else { x.cos() }, false)
-        }
-        Term::STrig(k, l, sin) => {
-            let x = k as f64 * al + l as f64 * b;
-            (if sin { x.sin() } else { x.cos() }, true)
-        }
+        Term::VTrig(k, l, sin) => (-v * angle_harmonic(k, l, sin, al, b).0, false),
+        Term::STrig(k, l, sin) => (angle_harmonic(k, l, sin, al, b).0, true),
     }
 }
 
