@@ -219,6 +219,17 @@ pub const EFFECTS: &[EffectSpec] = &[
         form: "base model; the drive's speed ripples once per input turn, α = Ωt + 0.15 sin Ωt, \
                recorded as it is",
     },
+    EffectSpec {
+        id: "warming_friction",
+        expected: &["parameter_drift"],
+        reference: 0.2,
+        unit: "1",
+        form: "dry friction falling as the bearings warm up: a run whose middle lies at the \
+               session position u ∈ [0, 1] (recording time, runs in file order) has \
+               η(1 − a tanh(u/0.2)), a = size (a warm-up of another shape than the catalog's \
+               linear and exponential drifts); headline: η's change from the first run's \
+               middle to the last's",
+    },
 ];
 
 /// Looks an effect up by id.
@@ -413,6 +424,7 @@ fn apply_effect(
         "direction_friction" => d.truth.friction_asymmetry = s,
         "relative_angle_damping" => d.truth.zeta_relative = s,
         "none_drive_ripple" => d.truth.drive_ripple = 0.15,
+        "warming_friction" => warming_friction(s, d),
         other => {
             return Err(Error::unknown_name(
                 "effect with a generator",
@@ -477,6 +489,19 @@ fn frequency_damping(s: f64, d: &mut Draft) {
     };
     let value = d.truth.zeta * s * span;
     d.headline("condition_dependence", value, "s^-1");
+}
+
+/// The warm-up of the bearings' friction ([`TruthModel::warming`]); the headline is η's change
+/// from the first run to the last (their middles), the span over which a drift is reported.
+fn warming_friction(s: f64, d: &mut Draft) {
+    d.truth.warming = s;
+    let u = super::generator::session_middles(&d.set_size);
+    let eta = |u: f64| d.truth.for_session(u).eta;
+    let change = match (u.first(), u.last()) {
+        (Some(&a), Some(&b)) => eta(b) - eta(a),
+        _ => 0.0,
+    };
+    d.headline("parameter_drift", change, "s^-2");
 }
 
 #[cfg(test)]

@@ -150,6 +150,49 @@ impl Default for Measurement {
     }
 }
 
+impl SetSize {
+    /// The drive frequency of driven run `k`, Hz (rounded to mHz, as the file name states it).
+    fn drive_frequency(&self, k: usize) -> f64 {
+        let f = if self.driven > 1 {
+            self.f_min + (self.f_max - self.f_min) * k as f64 / (self.driven - 1) as f64
+        } else {
+            self.f_min
+        };
+        (f * 1000.0).round() / 1000.0
+    }
+    /// Samples of a ring-down.
+    fn ringdown_samples(&self) -> usize {
+        (self.ringdown_s * self.fps).floor() as usize
+    }
+    /// Samples of a driven run.
+    fn driven_samples(&self) -> usize {
+        (self.turns * self.samples_per_turn as f64).floor() as usize
+    }
+}
+
+/// The session position u ∈ [0, 1] of each run's middle (ring-downs first, then the driven runs,
+/// back to back; a run lasts from its first to its last sample).
+pub fn session_middles(size: &SetSize) -> Vec<f64> {
+    let rd = size.ringdown_samples().saturating_sub(1) as f64 / size.fps;
+    let durations: Vec<f64> = (0..size.ringdowns)
+        .map(|_| rd)
+        .chain((0..size.driven).map(|k| {
+            size.driven_samples().saturating_sub(1) as f64
+                / (size.drive_frequency(k) * size.samples_per_turn as f64)
+        }))
+        .collect();
+    let total: f64 = durations.iter().sum::<f64>().max(1e-300);
+    let mut start = 0.0;
+    durations
+        .iter()
+        .map(|d| {
+            let u = (start + 0.5 * d) / total;
+            start += d;
+            u
+        })
+        .collect()
+}
+
 /// Makes a recording set from the truth; `stated` is the set-up a lab would write down.
 pub fn generate(
     truth: &TruthModel,
@@ -161,19 +204,21 @@ pub fn generate(
 ) -> Result<RecordingSet> {
     size.validate()?;
     let mut runs = Vec::with_capacity(size.ringdowns + size.driven);
-    for k in 0..size.ringdowns {
+    let session = session_middles(size);
+    for (k, &u) in session[..size.ringdowns].iter().enumerate() {
         let alpha0 = TAU * (k as f64 + 0.37) / size.ringdowns as f64;
         let psi = truth.coupling_equilibrium(alpha0);
         let side = if k % 2 == 0 { 1.0 } else { -1.0 };
         let beta0 = psi + side * (FRAC_PI_2 - 0.1 + 0.2 * rng.uniform());
-        let n = (size.ringdown_s * size.fps).floor() as usize;
+        let n = size.ringdown_samples();
         let t: Vec<f64> = (0..n).map(|i| i as f64 / size.fps).collect();
         let drive = Drive {
             alpha0,
             rate: 0.0,
             ripple: 0.0,
         };
-        let beta = observe(truth, drive, beta0, &t, meas, integrator, rng)?;
+        let run_truth = truth.for_session(u);
+        let beta = observe(&run_truth, drive, beta0, &t, meas, integrator, rng)?;
         runs.push(Run {
             kind: RunKind::Ringdown { alpha0 },
             file: format!("ringdown_{k:02}.csv"),
@@ -183,13 +228,8 @@ pub fn generate(
         });
     }
     for k in 0..size.driven {
-        let f = if size.driven > 1 {
-            size.f_min + (size.f_max - size.f_min) * k as f64 / (size.driven - 1) as f64
-        } else {
-            size.f_min
-        };
-        let f = (f * 1000.0).round() / 1000.0;
-        let n = (size.turns * size.samples_per_turn as f64).floor() as usize;
+        let f = size.drive_frequency(k);
+        let n = size.driven_samples();
         let dt = 1.0 / (f * size.samples_per_turn as f64);
         let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
         let drive = Drive {
@@ -204,7 +244,9 @@ pub fn generate(
             })
             .collect();
         let beta0 = TAU * rng.uniform();
-        let run_truth = truth.for_drive_frequency(f);
+        let run_truth = truth
+            .for_drive_frequency(f)
+            .for_session(session[size.ringdowns + k]);
         let beta = observe(&run_truth, drive, beta0, &t, meas, integrator, rng)?;
         runs.push(Run {
             kind: RunKind::Driven { f_hz: f },

@@ -112,7 +112,15 @@ pub struct TruthModel {
     pub zeta_relative: f64,
     /// The driving motor's speed ripple ε, rad ([`Drive::ripple`]; the recorded α shows it).
     pub drive_ripple: f64,
+    /// Dry friction falling as the bearings warm up over the session: a run whose middle lies at
+    /// the session position u ∈ [0, 1] (recording time accumulated over the runs in file order)
+    /// has η(1 − a tanh(u/[`WARMING_WIDTH`])), a this value (applied per run by the generator,
+    /// [`TruthModel::for_session`]).
+    pub warming: f64,
 }
+
+/// The session position by which the warm-up of [`TruthModel::warming`] is 76 % done (tanh 1).
+pub const WARMING_WIDTH: f64 = 0.2;
 
 /// The input: held at α₀ (rate 0) or turned at a mean rate, with a speed ripple of one period
 /// per input turn.
@@ -161,6 +169,7 @@ impl TruthModel {
             friction_asymmetry: 0.0,
             zeta_relative: 0.0,
             drive_ripple: 0.0,
+            warming: 0.0,
         }
     }
 
@@ -168,6 +177,15 @@ impl TruthModel {
     pub fn for_drive_frequency(&self, f_hz: f64) -> Self {
         Self {
             zeta: self.zeta * (1.0 + self.zeta_per_hz * (f_hz - 1.0)),
+            ..self.clone()
+        }
+    }
+
+    /// The truth of a run whose middle lies at the session position `u` ∈ [0, 1]: the dry
+    /// friction η(1 − a tanh(u/[`WARMING_WIDTH`])) with a = [`TruthModel::warming`].
+    pub fn for_session(&self, u: f64) -> Self {
+        Self {
+            eta: self.eta * (1.0 - self.warming * (u / WARMING_WIDTH).tanh()),
             ..self.clone()
         }
     }

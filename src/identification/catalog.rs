@@ -187,7 +187,8 @@ fn condition_terms(p: DriftParam, clock: Clock) -> Vec<Term> {
 }
 
 /// The per-run parameter effects: `condition_dependence` (a base parameter linear in a run
-/// condition) and `parameter_drift` (linear in the session clock), for each of ζ, η and g.
+/// condition) and `parameter_drift` (linear in a session clock, or settling exponentially along it:
+/// [`Clock::session_orders`]), for each of ζ, η and g.
 fn drift_members() -> Vec<Effect> {
     let mut v = Vec::new();
     for p in DriftParam::ALL {
@@ -214,22 +215,25 @@ fn drift_members() -> Vec<Effect> {
                 discriminating_experiment: "repeat runs of one condition at the start and the end of a session, and record the conditions in shuffled order: a condition dependence stays with the condition, a drift with the time",
             });
         }
-        for clock in [Clock::RunIndex, Clock::SessionTime] {
+        for clock in Clock::session_orders() {
             v.push(Effect {
                 id: "parameter_drift",
                 class: "drift",
                 explanation: match p {
                     DriftParam::Eta => {
                         "the dry friction η changes over the recording session (linear in the \
-                         session position of the runs)"
+                         session position of the runs, or settling exponentially as in a \
+                         warm-up)"
                     }
                     DriftParam::Zeta => {
                         "the viscous damping ζ changes over the recording session (linear in the \
-                         session position of the runs)"
+                         session position of the runs, or settling exponentially as in a \
+                         warm-up)"
                     }
                     DriftParam::Coupling => {
                         "the coupling strength g changes over the recording session (linear in \
-                         the session position of the runs)"
+                         the session position of the runs, or settling exponentially as in a \
+                         warm-up)"
                     }
                 },
                 terms: vec![Term::Drift(p, clock)],
@@ -359,6 +363,22 @@ pub fn same_slot(a: &Effect, b: &Effect) -> bool {
     a.id == b.id && drift_param(a) == drift_param(b)
 }
 
+/// Whether two members of a family compete for one proposal ([`super::propose`]: the best of
+/// them by the weak form's ΔBIC is proposed): the same slot ([`same_slot`]) and, for a drift,
+/// the same kind of session clock, run index or recording time. The weak form's rows weigh the
+/// short ring-downs little, so it cannot tell the two clocks apart where they differ most (at
+/// the start of a session of ring-downs); the best member of each is proposed and the held-out
+/// judge decides, as for [`MemberChoice::Alternatives`].
+pub fn same_proposal(a: &Effect, b: &Effect) -> bool {
+    let session_time = |e: &Effect| {
+        e.terms.iter().find_map(|t| match t {
+            Term::Drift(_, c) => Some(c.follows_session_time()),
+            _ => None,
+        })
+    };
+    same_slot(a, b) && session_time(a) == session_time(b)
+}
+
 /// The angle harmonics (k, l) of cos/sin(kα + lβ) that modulate the dictionary's viscous and dry
 /// friction terms beyond (0, 1): the output angle's second harmonic, the input angle's first
 /// two, and the first two of the sum and of the difference (the magnets' relative angle).
@@ -433,9 +453,10 @@ pub fn effect_params(
 
 /// A drifting or condition-dependent base parameter, for each [`Term::Drift`] of `terms` with a
 /// coefficient: the driven runs' level minus the ring-downs' ([`Clock::RunKind`]), or the
-/// change v over the session or condition range (the column is s·(base term), s from −½ to ½),
-/// relative to the base value of `base` = (ζ, η, g), the values at the start and the end
-/// (base ∓ v/2), and which clock it runs on.
+/// change v from the first run to the last or over the condition range (the column is
+/// s·(base term), s from −½ to ½), relative to the base value of `base` = (ζ, η, g), the values
+/// at the start and the end (base ∓ v/2), and which clock it runs on (with a settling clock's
+/// τ).
 fn drift_params(
     terms: &[Term],
     get: &dyn Fn(Term) -> Option<(f64, f64)>,
@@ -458,7 +479,8 @@ fn drift_params(
                 p.insert(format!("{name}_driven_minus_ringdown_err"), s);
                 continue;
             }
-            // the column is s·(base term), s from −½ to ½: v is the change over the session
+            // the column is s·(base term), s from −½ (first run) to ½ (last run): v is the change
+            // between the first and the last run
             p.insert(format!("{name}_change"), v);
             p.insert(format!("{name}_change_err"), s);
             if reference != 0.0 {
@@ -469,8 +491,18 @@ fn drift_params(
             p.insert(format!("{name}_end"), reference + 0.5 * v);
             p.insert(
                 "clock_session_time".into(),
-                f64::from(u8::from(*clock == Clock::SessionTime)),
+                f64::from(u8::from(clock.follows_session_time())),
             );
+            // 0 for a linear drift, else the settling time in fractions of the session: the
+            // refitted one when the model frees it, else the clock's grid value
+            let tau = get(Term::Shape(Shape::DriftSettling));
+            p.insert(
+                "clock_settling_tau".into(),
+                tau.map_or(clock.settling_tau().unwrap_or(0.0), |t| t.0),
+            );
+            if let Some((_, err)) = tau {
+                p.insert("clock_settling_tau_err".into(), err);
+            }
             p.insert(
                 "clock_drive_frequency".into(),
                 f64::from(u8::from(*clock == Clock::DriveFrequency)),

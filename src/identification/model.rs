@@ -78,6 +78,10 @@ pub enum Shape {
     /// Shape δ of the Stribeck decay exp(−(|β̇|/w)^δ) (δ = 2 the Gaussian, δ = 1 the
     /// exponential decay).
     StribeckPower,
+    /// Settling time τ of a `parameter_drift` that settles exponentially,
+    /// (1 − e^(−u/τ))/(1 − e^(−1/τ)) with u ∈ [0, 1] from the first run to the last
+    /// ([`super::regression::settling`]), as a fraction of that span.
+    DriftSettling,
 }
 
 impl Shape {
@@ -89,6 +93,7 @@ impl Shape {
             Shape::LoadSide => "load_weight_side",
             Shape::StribeckWidth => "stribeck_width",
             Shape::StribeckPower => "stribeck_power",
+            Shape::DriftSettling => "drift_settling_tau",
         }
     }
     /// Range the simulation clamps the parameter to (outside it the family member is not
@@ -99,6 +104,8 @@ impl Shape {
             Shape::LoadWeight | Shape::LoadSide => (-50.0, 50.0),
             Shape::StribeckWidth => (1e-3, 20.0),
             Shape::StribeckPower => (0.5, 4.0),
+            // from a step after the first run of fifty to a drift close to linear
+            Shape::DriftSettling => (0.02, 2.0),
         }
     }
 }
@@ -159,6 +166,10 @@ pub struct Coefficients {
     /// Shape δ of the Stribeck decay (`None`: [`STRIBECK_POWER`], the Gaussian), clamped to
     /// [`Shape::range`].
     pub stribeck_power: Option<f64>,
+    /// Settling time of the model's settling drift ([`Shape::DriftSettling`]), as a fraction of
+    /// the session; `None`: the grid value its clock names. The drift is applied per run
+    /// ([`super::spec::coefficients_for_run`]), not by the simulation.
+    pub drift_settling: Option<f64>,
     /// Terms of the sparse search (`unexplained`) with their coefficients.
     pub extra: [(ExtraTerm, f64); 4],
 }

@@ -18,7 +18,7 @@
 use super::lm::gauss_newton_cov;
 use super::model::Shape;
 use super::propose::{DRAG_EXPONENT_GRID, LOAD_WEIGHT_GRID, STRIBECK_WIDTH_GRID};
-use super::regression::Term;
+use super::regression::{Term, SETTLING_HUNDREDTHS};
 use super::shooting::{SimFit, SimModel};
 use crate::numerics::Bisection;
 
@@ -68,6 +68,7 @@ pub fn ladder(s: Shape) -> Vec<f64> {
             0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.2, 2.0, 3.5, 6.0, 10.0, 20.0,
         ],
         Shape::StribeckPower => vec![0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0],
+        Shape::DriftSettling => vec![0.02, 0.05, 0.1, 0.2, 0.4, 0.8, 1.2, 2.0],
     }
 }
 
@@ -91,6 +92,10 @@ pub fn start_grid(s: Shape) -> Vec<f64> {
             .map(|&w| f64::from(w) / 100.0)
             .collect(),
         Shape::StribeckPower => vec![0.75, 1.0, 1.5, 2.0, 3.0],
+        Shape::DriftSettling => SETTLING_HUNDREDTHS
+            .iter()
+            .map(|&h| f64::from(h) / 100.0)
+            .collect(),
     }
 }
 
@@ -590,6 +595,7 @@ mod tests {
             Shape::LoadSide,
             Shape::StribeckWidth,
             Shape::StribeckPower,
+            Shape::DriftSettling,
         ] {
             let (lo, hi) = s.range();
             let l = ladder(s);

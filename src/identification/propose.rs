@@ -2,7 +2,9 @@
 //! best dictionary terms, each with starting values for the refit by simulation. The weak form
 //! only proposes; [`super::judge`] decides by simulation on held-out runs.
 
-use super::catalog::{catalog, dictionary, member_choice, same_slot, Effect, MemberChoice};
+use super::catalog::{
+    catalog, dictionary, member_choice, same_proposal, same_slot, Effect, MemberChoice,
+};
 use super::model::{Geometry, Shape};
 use super::preprocess::CleanRun;
 use super::regression::{
@@ -303,8 +305,8 @@ pub fn propose(
             out.push(c);
             continue;
         }
-        // one member per family (slot): the best by ΔBIC
-        match out.iter_mut().find(|o| same_slot(&o.effect, &c.effect)) {
+        // one member per family (slot; a drift's per kind of clock): the best by ΔBIC
+        match out.iter_mut().find(|o| same_proposal(&o.effect, &c.effect)) {
             Some(o) if o.weak_dbic <= c.weak_dbic => {}
             Some(o) => *o = c,
             None => out.push(c),

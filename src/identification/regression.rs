@@ -138,8 +138,15 @@ impl DriftParam {
 pub enum Clock {
     /// Position of the run in the set (file order), constant within a run.
     RunIndex,
-    /// Recording time accumulated over the runs in file order (runs back to back).
+    /// Recording time accumulated over the runs in file order (runs back to back), −½ at the
+    /// first run's middle and ½ at the last run's.
     SessionTime,
+    /// The run index's position settling exponentially, as a warm-up does: u ∈ [0, 1] the
+    /// position from the first run to the last, τ the `u8` in hundredths of that span
+    /// ([`settling`]).
+    RunIndexSettling(u8),
+    /// The session time's position settling exponentially ([`Clock::RunIndexSettling`]).
+    SessionTimeSettling(u8),
     /// A run condition, not a clock: the drive frequency of a driven run, scaled to [−½, ½] over
     /// the driven runs; 0 for the ring-downs (they have no drive frequency: their level is set
     /// free by [`Clock::RunKind`] in the same effect, never extrapolated to f = 0).
@@ -151,20 +158,55 @@ pub enum Clock {
     RunKind,
 }
 
+/// The settling times τ of [`Clock::RunIndexSettling`] and [`Clock::SessionTimeSettling`] in
+/// hundredths of the session, a factor 2 apart: from a change done after the first twentieth of
+/// the session (a warm-up run) to one that lasts most of it (τ ≳ ½ is close to the linear
+/// [`Clock::RunIndex`] and [`Clock::SessionTime`]). The weak form picks the member.
+pub const SETTLING_HUNDREDTHS: [u8; 4] = [5, 10, 20, 40];
+
+/// The settling shape (1 − e^(−u/τ)) / (1 − e^(−1/τ)) − ½ of the session position u ∈ [0, 1]:
+/// −½ at the first run, ½ at the last like the linear clocks, so the coefficient is the change
+/// between the two.
+pub fn settling(u: f64, tau: f64) -> f64 {
+    (-u / tau).exp_m1() / (-1.0 / tau).exp_m1() - 0.5
+}
+
 impl Clock {
     /// Name of the clock.
-    pub fn name(&self) -> &'static str {
+    pub fn name(&self) -> String {
         match self {
-            Clock::RunIndex => "run_index",
-            Clock::SessionTime => "session_time",
-            Clock::DriveFrequency => "drive_frequency",
-            Clock::VelocityRange => "velocity_range",
-            Clock::RunKind => "run_kind",
+            Clock::RunIndex => "run_index".into(),
+            Clock::SessionTime => "session_time".into(),
+            Clock::RunIndexSettling(h) => format!("run_index_settling_{h}"),
+            Clock::SessionTimeSettling(h) => format!("session_time_settling_{h}"),
+            Clock::DriveFrequency => "drive_frequency".into(),
+            Clock::VelocityRange => "velocity_range".into(),
+            Clock::RunKind => "run_kind".into(),
         }
     }
-    /// Whether it orders the session (a clock) rather than describing a run's conditions.
-    pub fn is_session_order(&self) -> bool {
-        matches!(self, Clock::RunIndex | Clock::SessionTime)
+    /// The session clocks: linear and settling ([`SETTLING_HUNDREDTHS`]) in the run index and in
+    /// the session time.
+    pub fn session_orders() -> Vec<Clock> {
+        let mut v = vec![Clock::RunIndex, Clock::SessionTime];
+        for h in SETTLING_HUNDREDTHS {
+            v.extend([Clock::RunIndexSettling(h), Clock::SessionTimeSettling(h)]);
+        }
+        v
+    }
+    /// The settling time τ as a fraction of the session; `None` for the linear clocks and the
+    /// conditions.
+    pub fn settling_tau(&self) -> Option<f64> {
+        match self {
+            Clock::RunIndexSettling(h) | Clock::SessionTimeSettling(h) => {
+                Some(f64::from(*h) / 100.0)
+            }
+            _ => None,
+        }
+    }
+    /// Whether it follows the accumulated recording time (rather than the run index or a
+    /// condition).
+    pub fn follows_session_time(&self) -> bool {
+        matches!(self, Clock::SessionTime | Clock::SessionTimeSettling(_))
     }
 }
 
@@ -324,30 +366,32 @@ impl Design {
     }
 }
 
-/// Where a sample sits in the session and its run (for drift and drive terms).
-#[derive(Debug, Clone, Copy)]
-struct SampleCtx {
-    /// Δ of the geometry.
-    delta: f64,
+/// Where a run (or a sample of it) sits in the session, and its conditions: the values of every
+/// [`Clock`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SessionPosition {
     /// Session position of the run by index, in [−½, ½].
-    s_index: f64,
-    /// Session position by accumulated recording time, in [−½, ½].
-    s_time: f64,
+    pub index: f64,
+    /// Session position by accumulated recording time: −½ at the first run's middle, ½ at the
+    /// last run's (a sample before the first middle or after the last lies beyond).
+    pub time: f64,
     /// Drive-frequency and velocity-range conditions of the run, in [−½, ½].
-    s_cond: (f64, f64),
+    pub cond: (f64, f64),
     /// Driven run.
-    driven: bool,
-    /// Input turns since the start of the run.
-    turns: f64,
+    pub driven: bool,
 }
 
-impl SampleCtx {
-    fn s(&self, clock: Clock) -> f64 {
+impl SessionPosition {
+    /// The value of `clock` here, in [−½, ½].
+    pub fn s(&self, clock: Clock) -> f64 {
+        let settle = |s: f64, h: u8| settling(s + 0.5, f64::from(h) / 100.0);
         match clock {
-            Clock::RunIndex => self.s_index,
-            Clock::SessionTime => self.s_time,
-            Clock::DriveFrequency => self.s_cond.0,
-            Clock::VelocityRange => self.s_cond.1,
+            Clock::RunIndex => self.index,
+            Clock::SessionTime => self.time,
+            Clock::RunIndexSettling(h) => settle(self.index, h),
+            Clock::SessionTimeSettling(h) => settle(self.time, h),
+            Clock::DriveFrequency => self.cond.0,
+            Clock::VelocityRange => self.cond.1,
             Clock::RunKind => {
                 if self.driven {
                     0.5
@@ -356,6 +400,23 @@ impl SampleCtx {
                 }
             }
         }
+    }
+}
+
+/// Where a sample sits in the session and its run (for drift and drive terms).
+#[derive(Debug, Clone, Copy)]
+struct SampleCtx {
+    /// Δ of the geometry.
+    delta: f64,
+    /// The sample's session position (session time at the sample).
+    pos: SessionPosition,
+    /// Input turns since the start of the run.
+    turns: f64,
+}
+
+impl SampleCtx {
+    fn s(&self, clock: Clock) -> f64 {
+        self.pos.s(clock)
     }
 }
 
@@ -381,7 +442,7 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
             false,
         ),
         Term::DrivenOffset => (
-            if ctx.driven {
+            if ctx.pos.driven {
                 dalpha_bracket(ctx.delta, al, b)
             } else {
                 0.0
@@ -389,7 +450,7 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
             false,
         ),
         Term::DrivenOffsetRate => (
-            if ctx.driven {
+            if ctx.pos.driven {
                 ctx.turns * dalpha_bracket(ctx.delta, al, b)
             } else {
                 0.0
@@ -433,23 +494,62 @@ fn duration(r: &CleanRun) -> f64 {
     }
 }
 
-/// Per run: (session position by index in [−½, ½], session time at its start, total session
-/// time). The session is the runs in file order, back to back.
-fn session_clocks(runs: &[CleanRun]) -> Vec<(f64, f64, f64)> {
+/// The session's clocks of one run: its position by index in [−½, ½], and the map from its
+/// sample times to the session-time position.
+#[derive(Debug, Clone, Copy)]
+struct RunClock {
+    /// Session position by index: −½ for the first run, ½ for the last.
+    index: f64,
+    /// Session time at the run's first sample (runs back to back in file order).
+    start: f64,
+    /// Session time of the first run's middle.
+    first_middle: f64,
+    /// Session time from the first run's middle to the last run's (0 for a single run).
+    span: f64,
+}
+
+impl RunClock {
+    /// The session-time position of the run's sample taken `dt` after its first: −½ at the first
+    /// run's middle, ½ at the last run's, so that a drift's coefficient is the change between the
+    /// first and the last run whatever its clock (and a settling clock's shape is fitted where
+    /// there are runs, not extrapolated to the session's ends).
+    fn time(&self, dt: f64) -> f64 {
+        if self.span > 0.0 {
+            (self.start + dt - self.first_middle) / self.span - 0.5
+        } else {
+            0.0
+        }
+    }
+}
+
+/// The clocks of each run (the session is the runs in file order, back to back).
+fn session_clocks(runs: &[CleanRun]) -> Vec<RunClock> {
     let n = runs.len();
-    let total: f64 = runs.iter().map(duration).sum::<f64>().max(1e-300);
     let mut start = 0.0;
-    runs.iter()
-        .enumerate()
-        .map(|(i, r)| {
-            let s_index = if n > 1 {
+    let starts: Vec<f64> = runs
+        .iter()
+        .map(|r| {
+            let s = start;
+            start += duration(r);
+            s
+        })
+        .collect();
+    let middle = |i: usize| starts[i] + 0.5 * duration(&runs[i]);
+    let (first_middle, span) = if n > 1 {
+        (middle(0), middle(n - 1) - middle(0))
+    } else {
+        (0.0, 0.0)
+    };
+    (0..n)
+        .map(|i| RunClock {
+            index: if n > 1 {
                 i as f64 / (n - 1) as f64 - 0.5
             } else {
                 0.0
-            };
-            let out = (s_index, start, total);
-            start += duration(r);
-            out
+            },
+            start: starts[i],
+            first_middle,
+            span,
         })
         .collect()
 }
@@ -487,37 +587,20 @@ pub fn run_conditions(runs: &[CleanRun]) -> Vec<(f64, f64)> {
     f.into_iter().zip(v).collect()
 }
 
-/// The value in [−½, ½] of every [`Clock`] for each run (session time at the run's middle).
-pub fn session_positions(runs: &[CleanRun]) -> Vec<[f64; 5]> {
+/// The session position of each run (session time at the run's middle).
+pub fn session_positions(runs: &[CleanRun]) -> Vec<SessionPosition> {
     let cond = run_conditions(runs);
     session_clocks(runs)
         .iter()
         .zip(runs)
         .zip(cond)
-        .map(|((&(si, start, total), r), c)| {
-            let kind = if r.ringdown { -0.5 } else { 0.5 };
-            [
-                si,
-                (start + 0.5 * duration(r)) / total - 0.5,
-                c.0,
-                c.1,
-                kind,
-            ]
+        .map(|((c, r), cond)| SessionPosition {
+            index: c.index,
+            time: c.time(0.5 * duration(r)),
+            cond,
+            driven: !r.ringdown,
         })
         .collect()
-}
-
-impl Clock {
-    /// Index into the rows of [`session_positions`].
-    pub fn index(&self) -> usize {
-        match self {
-            Clock::RunIndex => 0,
-            Clock::SessionTime => 1,
-            Clock::DriveFrequency => 2,
-            Clock::VelocityRange => 3,
-            Clock::RunKind => 4,
-        }
-    }
 }
 
 /// The samples of `r` in stick phases: runs of at least `rest_run` samples whose velocity is
@@ -579,13 +662,15 @@ pub fn build(
             continue;
         }
         let t_first = r.t[0];
-        let (s_index, run_start, total) = clocks[ri];
+        let clock = clocks[ri];
         let ctx_at = |t: f64| SampleCtx {
             delta,
-            s_index,
-            s_time: (run_start + t - t_first) / total - 0.5,
-            s_cond: conds[ri],
-            driven: !r.ringdown,
+            pos: SessionPosition {
+                index: clock.index,
+                time: clock.time(t - t_first),
+                cond: conds[ri],
+                driven: !r.ringdown,
+            },
             turns: r.alpha_rate.abs() * (t - t_first) / std::f64::consts::TAU,
         };
         let h = opts.half_width * r.dt;
@@ -932,6 +1017,96 @@ mod tests {
     use crate::identification::spec::coefficients;
     use crate::model::DrivenOscillator;
 
+    /// A run of `secs` seconds at 100 frames/s.
+    fn run_of(secs: f64, ringdown: bool) -> CleanRun {
+        let n = (secs * 100.0).round() as usize + 1;
+        CleanRun {
+            t: (0..n).map(|i| i as f64 / 100.0).collect(),
+            alpha: vec![0.0; n],
+            beta: vec![0.0; n],
+            v: vec![0.0; n],
+            dt: 0.01,
+            outliers: 0,
+            sigma_beta: 0.01,
+            sigma_camera: 0.01,
+            v_gain: 1.0,
+            alpha_rate: if ringdown { 0.0 } else { 6.0 },
+            ringdown,
+        }
+    }
+
+    /// Every session clock is −½ at the first run and ½ at the last: a drift's coefficient is the
+    /// change between them. Runs of 2, 10 and 4 s back to back have their middles at 1, 7 and
+    /// 14 s: session-time positions −½, 6/13 − ½ and ½; the settling clocks follow
+    /// (1 − e^(−u/τ))/(1 − e^(−1/τ)) − ½ of the same u, and the simulation's per-run value is the
+    /// weak form's at the run's middle.
+    #[test]
+    fn drift_clocks_run_from_the_first_run_to_the_last() {
+        let runs = [run_of(2.0, true), run_of(10.0, false), run_of(4.0, false)];
+        let pos = session_positions(&runs);
+        let u_time = [0.0, 6.0 / 13.0, 1.0];
+        for (k, p) in pos.iter().enumerate() {
+            assert!((p.s(Clock::RunIndex) - (k as f64 / 2.0 - 0.5)).abs() < 1e-15);
+            assert!((p.s(Clock::SessionTime) - (u_time[k] - 0.5)).abs() < 1e-12);
+            for h in SETTLING_HUNDREDTHS {
+                let tau = f64::from(h) / 100.0;
+                let shape = |u: f64| (1.0 - (-u / tau).exp()) / (1.0 - (-1.0 / tau).exp()) - 0.5;
+                let s = p.s(Clock::SessionTimeSettling(h));
+                assert!((s - shape(u_time[k])).abs() < 1e-12, "τ {tau}: {s}");
+                let s = p.s(Clock::RunIndexSettling(h));
+                assert!((s - shape(k as f64 / 2.0)).abs() < 1e-12, "τ {tau}: {s}");
+            }
+        }
+        // the weak form's sample clock at a run's middle is the simulation's run value
+        let clocks = session_clocks(&runs);
+        for (k, r) in runs.iter().enumerate() {
+            assert!((clocks[k].time(0.5 * duration(r)) - pos[k].time).abs() < 1e-15);
+        }
+        // a settling clock is ahead of the linear one: most of its change comes early
+        for h in SETTLING_HUNDREDTHS {
+            assert!(pos[1].s(Clock::SessionTimeSettling(h)) > pos[1].s(Clock::SessionTime));
+        }
+    }
+
+    /// A settling drift's time is a shape parameter of the final refit: freed from the clock's
+    /// grid value (`free_shapes`, once), baked back into the clock in hundredths (`fix_shapes`),
+    /// and applied to each run at its position ((1 − e^(−u/τ))/(1 − e^(−1/τ)) − ½ at the run's
+    /// u), also when held outside θ (a profile).
+    #[test]
+    fn a_settling_drift_carries_its_time_as_a_shape() {
+        use crate::identification::model::Shape;
+        use crate::identification::spec::{coefficients_for_run, fix_shapes, free_shapes};
+        let runs = [run_of(2.0, true), run_of(10.0, false), run_of(4.0, false)];
+        let drift = Term::Drift(DriftParam::Eta, Clock::RunIndexSettling(10));
+        let terms = [Term::Zeta, Term::Eta, Term::SinACosB, Term::CosASinB, drift];
+        let coef = [1.1, 23.0, -295.0, 60.0, -4.0];
+        let (free, theta) = free_shapes(&terms, &coef);
+        assert_eq!(free.last(), Some(&Term::Shape(Shape::DriftSettling)));
+        assert_eq!(theta.last(), Some(&0.1));
+        assert_eq!(free_shapes(&free, &theta).0, free, "freed once");
+        let mut theta = theta;
+        *theta.last_mut().unwrap() = 0.23;
+        let (fixed, _) = fix_shapes(&free, &theta);
+        assert_eq!(
+            fixed[4],
+            Term::Drift(DriftParam::Eta, Clock::RunIndexSettling(23))
+        );
+        let shape = |u: f64| (1.0 - (-u / 0.23f64).exp()) / (1.0 - (-1.0 / 0.23f64).exp()) - 0.5;
+        for (k, u) in [0.0, 0.5, 1.0].into_iter().enumerate() {
+            let eta = coefficients_for_run(&free, &theta, &runs, k, &[]).eta;
+            assert!(
+                (eta - (23.0 - 4.0 * shape(u))).abs() < 1e-12,
+                "run {k}: {eta}"
+            );
+            let held =
+                coefficients_for_run(&terms, &coef, &runs, k, &[(Shape::DriftSettling, 0.23)]);
+            assert!((held.eta - eta).abs() < 1e-12, "held, run {k}");
+        }
+        // a linear drift has no settling time to free
+        let linear = [Term::Eta, Term::Drift(DriftParam::Eta, Clock::RunIndex)];
+        assert_eq!(free_shapes(&linear, &[23.0, -4.0]).0, linear.to_vec());
+    }
+
     /// Every dictionary term's weak-form column is the force its coefficient adds to the
     /// simulated model (the smooth acceleration, or the dry friction's level for a −sgn β̇
     /// column): the proposer and the judge fit the same term.
@@ -942,10 +1117,12 @@ mod tests {
         let geo = Geometry::new(0.5, 0.5);
         let ctx = SampleCtx {
             delta: crate::model::gear::shaft_index(geo.theta(), geo.phi()),
-            s_index: 0.0,
-            s_time: 0.0,
-            s_cond: (0.0, 0.0),
-            driven: true,
+            pos: SessionPosition {
+                index: 0.0,
+                time: 0.0,
+                cond: (0.0, 0.0),
+                driven: true,
+            },
             turns: 0.0,
         };
         let theta = 0.7;

@@ -30,7 +30,7 @@ use super::predict::{
 };
 use super::preprocess::CleanRun;
 use super::regression::Term;
-use super::spec::{coefficients_for_run, set_shape, simulable};
+use super::spec::{coefficients_for_run, simulable};
 use crate::numerics::least_squares::{lstsq_determined, DEFAULT_RCOND};
 use faer::Mat;
 use nalgebra::{DMatrix, DVector};
@@ -153,11 +153,14 @@ impl SimModel<'_> {
     }
     /// Coefficients of run `run` at θ.
     pub fn coefficients(&self, theta: &[f64], run: usize) -> Coefficients {
-        let mut c = coefficients_for_run(&self.terms, &theta[..self.terms.len()], self.runs, run);
+        let mut c = coefficients_for_run(
+            &self.terms,
+            &theta[..self.terms.len()],
+            self.runs,
+            run,
+            &self.held_shapes,
+        );
         c.eta_static_excess += self.eta_static_excess;
-        for &(s, v) in &self.held_shapes {
-            set_shape(&mut c, s, v);
-        }
         c
     }
     /// The window's system at θ.

@@ -5,7 +5,9 @@
 
 use super::model::{Coefficients, ExtraTerm, Shape};
 use super::preprocess::CleanRun;
-use super::regression::{grid_weight, load_grid_term, session_positions, DriftParam, Term};
+use super::regression::{
+    grid_weight, load_grid_term, session_positions, settling, Clock, DriftParam, Term,
+};
 
 /// The column standing for `t` at the shape values `shapes`: a family's term with its shape
 /// parameter baked in (the drag's −β̇|β̇| becomes −(|β̇|/V)^p sgn β̇ on the grid of tenths, the
@@ -27,6 +29,16 @@ pub fn column_term(t: Term, shapes: &[(Shape, f64)]) -> Term {
             let d = shape(Shape::StribeckPower).unwrap_or(super::model::STRIBECK_POWER);
             Term::StribeckGrid((100.0 * w).round() as u8, (10.0 * d).round() as u8)
         }),
+        Term::Drift(p, clock) => shape(Shape::DriftSettling).and_then(|tau| {
+            let h = (100.0 * tau).round().max(1.0) as u8;
+            match clock {
+                Clock::RunIndexSettling(_) => Some(Term::Drift(p, Clock::RunIndexSettling(h))),
+                Clock::SessionTimeSettling(_) => {
+                    Some(Term::Drift(p, Clock::SessionTimeSettling(h)))
+                }
+                _ => None,
+            }
+        }),
         _ => None,
     }
     .unwrap_or(t)
@@ -41,6 +53,7 @@ pub fn set_shape(c: &mut Coefficients, s: Shape, v: f64) {
         Shape::LoadSide => c.load_weight[1] = v,
         Shape::StribeckWidth => c.stribeck_width = v,
         Shape::StribeckPower => c.stribeck_power = Some(v),
+        Shape::DriftSettling => c.drift_settling = Some(v),
     }
 }
 
@@ -68,8 +81,16 @@ pub fn fix_shapes(terms: &[Term], coef: &[f64]) -> (Vec<Term>, Vec<f64>) {
 /// after the terms' (the latency): they are kept at the end.
 pub fn free_shapes(terms: &[Term], theta: &[f64]) -> (Vec<Term>, Vec<f64>) {
     let (mut t, mut v) = (Vec::new(), Vec::new());
+    // one settling time per model: with two settling drifts it stays at their grid values
+    // (and a model whose settling time is already free keeps its one entry)
+    let free_settling = terms.iter().filter(|t| settling_tau(**t).is_some()).count() == 1
+        && !terms.contains(&Term::Shape(Shape::DriftSettling));
     for (&term, &x) in terms.iter().zip(theta) {
         let (base, shapes) = match term {
+            Term::Drift(..) if free_settling && settling_tau(term).is_some() => (
+                term,
+                vec![(Shape::DriftSettling, settling_tau(term).unwrap_or(0.0))],
+            ),
             Term::PowDrag(p) => (Term::Quad, vec![(Shape::DragExponent, f64::from(p) / 10.0)]),
             Term::LoadGrid(z, n, radial) => {
                 let [wz, wn] = grid_weight(z, n);
@@ -212,15 +233,29 @@ pub fn coefficients(terms: &[Term], coef: &[f64]) -> Coefficients {
     c
 }
 
-/// The coefficients that hold in run `run`: [`coefficients`] plus the parameter drift at the
-/// run's session position (its middle), and the driven-run input offsets only on driven runs.
+/// The settling time of a settling drift term's clock (`None` for other terms).
+fn settling_tau(t: Term) -> Option<f64> {
+    match t {
+        Term::Drift(_, clock) => clock.settling_tau(),
+        _ => None,
+    }
+}
+
+/// The coefficients that hold in run `run`: [`coefficients`] with the shapes `held` (held outside
+/// the coefficients, e.g. on a profile) plus the parameter drift at the run's session position
+/// (its middle; a settling drift with the model's settling time, else its clock's), and the
+/// driven-run input offsets only on driven runs.
 pub fn coefficients_for_run(
     terms: &[Term],
     coef: &[f64],
     runs: &[CleanRun],
     run: usize,
+    held: &[(Shape, f64)],
 ) -> Coefficients {
     let mut c = coefficients(terms, coef);
+    for &(s, v) in held {
+        set_shape(&mut c, s, v);
+    }
     if runs[run].ringdown {
         c.alpha_offset = 0.0;
         c.alpha_offset_per_turn = 0.0;
@@ -231,7 +266,11 @@ pub fn coefficients_for_run(
     let pos = session_positions(runs)[run];
     for (&t, &v) in terms.iter().zip(coef) {
         if let Term::Drift(p, clock) = t {
-            let s = pos[clock.index()];
+            let s = match (clock, c.drift_settling) {
+                (Clock::RunIndexSettling(_), Some(tau)) => settling(pos.index + 0.5, tau),
+                (Clock::SessionTimeSettling(_), Some(tau)) => settling(pos.time + 0.5, tau),
+                _ => pos.s(clock),
+            };
             let dv = v * s;
             match p {
                 DriftParam::Zeta => c.zeta += dv,
