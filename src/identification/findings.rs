@@ -164,15 +164,26 @@ pub fn params_of(effect: &Effect, st: &ModelState) -> BTreeMap<String, f64> {
             .into_iter()
             .collect()
         }
-        "unexplained" => effect
-            .terms
-            .iter()
-            .filter_map(|t| {
-                map.get(&t.name())
-                    .map(|v| [(t.name(), v.0), (format!("{}_err", t.name()), v.1)])
-            })
-            .flatten()
-            .collect(),
+        "unexplained" => {
+            let mut p: BTreeMap<String, f64> = effect
+                .terms
+                .iter()
+                .filter_map(|t| {
+                    map.get(&t.name())
+                        .map(|v| [(t.name(), v.0), (format!("{}_err", t.name()), v.1)])
+                })
+                .flatten()
+                .collect();
+            if let Some([(a, sa), (phi, sphi)]) =
+                effect.terms.first().and_then(|&t| quadrature(st, t))
+            {
+                p.insert("harmonic_amplitude".into(), a);
+                p.insert("harmonic_amplitude_err".into(), sa);
+                p.insert("harmonic_phase_deg".into(), phi.to_degrees());
+                p.insert("harmonic_phase_err_deg".into(), sphi.to_degrees());
+            }
+            p
+        }
         "power_law_drag" => {
             let mut p = effect_params(effect, &map, base_values(&map));
             if let Some((q, e)) = drag_coefficient(st) {
@@ -255,6 +266,40 @@ pub fn angle_offsets(st: &ModelState) -> Option<[(f64, f64); 2]> {
             .collect();
         first_order(st, value[j], &grad)
     }))
+}
+
+/// The cosine and sine members of a dictionary term's angle harmonic X (torque, viscous or dry
+/// friction modulated by cos/sin X), `None` for a term without a partner.
+fn harmonic_pair(t: Term) -> Option<[Term; 2]> {
+    match t {
+        Term::Cos(k, l) | Term::Sin(k, l) => Some([Term::Cos(k, l), Term::Sin(k, l)]),
+        Term::VTrig(k, l, _) => Some([Term::VTrig(k, l, false), Term::VTrig(k, l, true)]),
+        Term::STrig(k, l, _) => Some([Term::STrig(k, l, false), Term::STrig(k, l, true)]),
+        Term::VCosB | Term::VSinB => Some([Term::VCosB, Term::VSinB]),
+        Term::SCosB | Term::SSinB => Some([Term::SCosB, Term::SSinB]),
+        _ => None,
+    }
+}
+
+/// An `unexplained` term and its quadrature partner (the sine of the same harmonic X for a
+/// cosine, and back) both in the final model `st`, read as one harmonic with a phase:
+/// c cos X + s sin X = A cos(X − φ), A = √(c² + s²), φ = atan2(s, c) (rad), each (value, 1σ) by
+/// first-order propagation through the refit's covariance. A friction modulated by cos(β − 0.5)
+/// is found as two terms, cos β and sin β: this is the one physical modulation they are.
+/// `None` without the partner in the model.
+pub fn quadrature(st: &ModelState, t: Term) -> Option<[(f64, f64); 2]> {
+    let [tc, ts] = harmonic_pair(t)?;
+    let at = |t: Term| st.terms.iter().position(|&x| x == t);
+    let (ic, is) = (at(tc)?, at(ts)?);
+    let (c, s) = (st.fit.theta[ic], st.fit.theta[is]);
+    let a = c.hypot(s);
+    if !(a.is_finite() && a > 0.0) {
+        return None;
+    }
+    Some([
+        first_order(st, a, &[(ic, c / a), (is, s / a)]),
+        first_order(st, s.atan2(c), &[(ic, -s / (a * a)), (is, c / (a * a))]),
+    ])
 }
 
 /// A function of θ entries with its 1σ by first-order propagation through the refit's
@@ -900,6 +945,50 @@ mod tests {
             }
         }
         c
+    }
+
+    /// Two dictionary terms of one harmonic in a final model, −sgn β̇ (c cos β + s sin β), are
+    /// read as one modulation A cos(β − φ): A = √(c² + s²), φ = atan2(s, c), with σ through the
+    /// covariance, checked against central differences of A and φ and the covariance's
+    /// quadratic form; a term without its partner in the model has none.
+    #[test]
+    fn a_cosine_and_sine_pair_is_one_harmonic_with_a_phase() {
+        let (c, s) = (6.27, 3.42);
+        let cov = nalgebra::DMatrix::from_row_slice(2, 2, &[0.0044, 0.0009, 0.0009, 0.0017]);
+        let st = state(
+            vec![Term::SCosB, Term::SSinB],
+            vec![c, s],
+            vec![0.0044f64.sqrt(), 0.0017f64.sqrt()],
+            cov.clone(),
+        );
+        let [(a, sa), (phi, sphi)] = quadrature(&st, Term::SSinB).unwrap();
+        assert!((a - (c * c + s * s).sqrt()).abs() < 1e-12);
+        // A cos(β − φ) is the pair at every β
+        for b in [0.0, 1.0, 2.5, 4.0] {
+            let pair = c * f64::cos(b) + s * f64::sin(b);
+            assert!((a * (b - phi).cos() - pair).abs() < 1e-12, "β = {b}");
+        }
+        let h = 1e-6;
+        let d = |f: &dyn Fn(f64, f64) -> f64| {
+            let g = [
+                (f(c + h, s) - f(c - h, s)) / (2.0 * h),
+                (f(c, s + h) - f(c, s - h)) / (2.0 * h),
+            ];
+            (g[0] * g[0] * cov[(0, 0)]
+                + 2.0 * g[0] * g[1] * cov[(0, 1)]
+                + g[1] * g[1] * cov[(1, 1)])
+                .sqrt()
+        };
+        assert!((sa - d(&|c, s| c.hypot(s))).abs() < 1e-8, "{sa}");
+        assert!((sphi - d(&|c, s| s.atan2(c))).abs() < 1e-8, "{sphi}");
+        let alone = state(
+            vec![Term::SCosB],
+            vec![c],
+            vec![0.07],
+            cov.view((0, 0), (1, 1)).into(),
+        );
+        assert!(quadrature(&alone, Term::SCosB).is_none());
+        assert!(quadrature(&st, Term::Eta).is_none());
     }
 
     /// Zero offsets of the input and of the output angle reading are told apart by the
