@@ -187,8 +187,8 @@ fn condition_terms(p: DriftParam, clock: Clock) -> Vec<Term> {
 }
 
 /// The per-run parameter effects: `condition_dependence` (a base parameter linear in a run
-/// condition) and `parameter_drift` (linear in a session clock, or settling exponentially along it:
-/// [`Clock::session_orders`]), for each of ζ, η and g.
+/// condition) and `parameter_drift` (linear in a session clock, or settling exponentially along
+/// it: [`Clock::session_orders`]), for each of ζ, η and g.
 fn drift_members() -> Vec<Effect> {
     let mut v = Vec::new();
     for p in DriftParam::ALL {
