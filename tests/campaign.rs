@@ -725,14 +725,17 @@ fn the_backward_check_drops_an_effect_the_recordings_do_not_need() {
 /// torque, and the latter's final model predicts the held-out windows better and is kept. Since
 /// the settling drifts, the drag's round-1 rival is a settling `parameter_drift` member, whose
 /// branch goes on to accept the latency and the torque and drops the drift in the backward
-/// check (the same verdict, findings and sizes). Seed 2:
+/// check (the same verdict, findings and sizes); the drag's branch now takes the latency and the
+/// torque too, but keeps the drag, and predicts the held-out windows significantly worse (z 10.2
+/// for the kept branch). Seed 2:
 /// with the greedy rule one candidate of a round-1 tie (`drive_steps` when the significance was
 /// tested on the raw χ² gains, docs/diagnosis.md) was accepted and neither true effect after it;
 /// the branch of its rival goes on to accept the latency and the torque, and what they make
 /// superfluous is dropped by the backward check at the end. On both sets: exactly one fork, in
 /// round 1, between two candidates of which neither predicts significantly better (|z| < 3);
-/// only the kept branch holds both true effects, and its final model predicts significantly
-/// better than the other branch's (z ≥ 3, also when the other branch was left early); the
+/// the kept branch holds both true effects (on seed 2 only it; on seed 3 the other holds the
+/// drag besides), and its final model predicts significantly better than the other branch's
+/// (z ≥ 3, also when the other branch was left early); the
 /// verdict names the two true effects and nothing else, their sizes within ±2σ on seed 3 and
 /// within ±3σ on seed 2 (the torque 11.75 ± 0.08 s⁻² for 12, 3.0σ; the latency within ±2σ).
 #[test]
@@ -765,13 +768,16 @@ fn close_rivals_are_told_apart_by_their_branches() {
         assert!(f.round_z.abs() < 3.0, "{lines}");
         assert!(f.final_z >= 3.0, "{lines}");
         let holds_both = |effects: &[String]| truth.iter().all(|t| effects.contains(t));
-        assert!(
-            holds_both(&f.kept_effects) && !holds_both(&f.other_effects),
-            "{lines}"
-        );
-        if c.seed == 3 {
-            // the branch of the drag that absorbed the latency is the one left
+        assert!(holds_both(&f.kept_effects), "{lines}");
+        if c.seed == 2 {
+            assert!(!holds_both(&f.other_effects), "{lines}");
+        } else {
+            // the drag's branch is the one left, and it keeps the drag that is not in the truth
             assert_eq!(f.other.as_str(), "corotating_drag", "{lines}");
+            assert!(
+                f.other_effects.iter().any(|e| e == "corotating_drag"),
+                "{lines}"
+            );
         }
     }
 }
