@@ -384,7 +384,12 @@ pub struct SessionPosition {
 impl SessionPosition {
     /// The value of `clock` here, in [−½, ½].
     pub fn s(&self, clock: Clock) -> f64 {
-        let settle = |s: f64, h: u8| settling(s + 0.5, f64::from(h) / 100.0);
+        self.s_with(clock, None)
+    }
+    /// The value of `clock` here, a settling clock with the settling time `tau` (a fraction of
+    /// the span) in place of its grid value when given.
+    pub fn s_with(&self, clock: Clock, tau: Option<f64>) -> f64 {
+        let settle = |s: f64, h: u8| settling(s + 0.5, tau.unwrap_or(f64::from(h) / 100.0));
         match clock {
             Clock::RunIndex => self.index,
             Clock::SessionTime => self.time,

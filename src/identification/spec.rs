@@ -5,9 +5,7 @@
 
 use super::model::{Coefficients, ExtraTerm, Shape};
 use super::preprocess::CleanRun;
-use super::regression::{
-    grid_weight, load_grid_term, session_positions, settling, Clock, DriftParam, Term,
-};
+use super::regression::{grid_weight, load_grid_term, session_positions, Clock, DriftParam, Term};
 
 /// The column standing for `t` at the shape values `shapes`: a family's term with its shape
 /// parameter baked in (the drag's −β̇|β̇| becomes −(|β̇|/V)^p sgn β̇ on the grid of tenths, the
@@ -266,11 +264,7 @@ pub fn coefficients_for_run(
     let pos = session_positions(runs)[run];
     for (&t, &v) in terms.iter().zip(coef) {
         if let Term::Drift(p, clock) = t {
-            let s = match (clock, c.drift_settling) {
-                (Clock::RunIndexSettling(_), Some(tau)) => settling(pos.index + 0.5, tau),
-                (Clock::SessionTimeSettling(_), Some(tau)) => settling(pos.time + 0.5, tau),
-                _ => pos.s(clock),
-            };
+            let s = pos.s_with(clock, c.drift_settling);
             let dv = v * s;
             match p {
                 DriftParam::Zeta => c.zeta += dv,
