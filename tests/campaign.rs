@@ -417,10 +417,12 @@ fn refit_sizes_are_unbiased_at_low_noise() {
         eta_static_excess: 0.0,
         tol: opts.tol,
         held_shapes: Vec::new(),
+        session: Default::default(),
     };
     let sopts = ShootingOptions {
         patience: 4,
         reselect: Reselect::Always,
+        central_differences: true,
         ..ShootingOptions::default()
     };
     let f = refit(&model, &theta0, &base.wins, &sopts).unwrap();
@@ -1158,6 +1160,7 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
             fit_latency: false,
             eta_static_excess: 0.0,
             held_shapes: Vec::new(),
+            session: Default::default(),
         };
         let sopts = ShootingOptions {
             patience: 4,
@@ -1316,6 +1319,7 @@ fn a_shape_sigma_matches_the_curvature_of_its_profile() {
     let sopts = ShootingOptions {
         patience: 4,
         reselect: Reselect::Always,
+        central_differences: true,
         ..ShootingOptions::default()
     };
     let f = refit_to_convergence(&model, &theta0, &base.wins, &sopts).unwrap();

@@ -340,12 +340,14 @@ pub fn fit_base(
             eta_static_excess: 0.0,
             tol: opts.tol,
             held_shapes: Vec::new(),
+            session: Default::default(),
         };
         let chosen = choose_windows(&prep.runs, opts.shooting.max_windows);
         wins = mask_windows(&model, &weak.coef, &chosen);
         // converged: every candidate is judged against this fit
         let converged = ShootingOptions {
             patience: CONVERGED_PATIENCE,
+            central_differences: true,
             ..opts.shooting
         };
         if let Some(f) = refit(&model, &weak.coef, &wins, &converged) {
@@ -739,6 +741,7 @@ fn report(
         eta_static_excess: 0.0,
         tol: opts.tol,
         held_shapes: Vec::new(),
+        session: Default::default(),
     };
     let base_pred: Vec<Prediction> = par_map(nr, |r| {
         predict(

@@ -96,10 +96,7 @@ pub struct HeldOut {
 /// The held-out errors of `model` with its refit `fit` (see the module).
 pub fn heldout(model: &SimModel, fit: &SimFit, wins: &[Win], folds: &Folds) -> HeldOut {
     let thetas: Vec<Vec<f64>> = (0..folds.k)
-        .map(|f| {
-            fit.step_without(wins, |run| folds.of_run[run] == f)
-                .unwrap_or_else(|| fit.theta.clone())
-        })
+        .map(|f| theta_without(fit, wins, |run| folds.of_run[run] == f))
         .collect();
     let (chi2_fit, warm) = fit.window_chi2(model, wins);
     let chi2: Vec<Option<f64>> = par_map(wins.len(), |k| {
@@ -108,6 +105,104 @@ pub fn heldout(model: &SimModel, fit: &SimFit, wins: &[Win], folds: &Folds) -> H
         model.window_chi2_from(th, w, warm[k])
     });
     HeldOut { chi2, chi2_fit }
+}
+
+/// θ refitted without the windows of the runs for which `out(run)` holds: the one Gauss–Newton
+/// step of [`SimFit::step_without`], shortened where it leaves the region the refit's own noise
+/// explains ([`leave_out_statistic`] m above the χ²_p quantile q at [`IMPLAUSIBLE_STEP_P`]) to
+/// that region's edge (the step times √(q/m), the length a trust region would allow along it);
+/// θ itself when the step cannot be taken (no more rows than parameters left).
+pub fn theta_without(fit: &SimFit, wins: &[Win], out: impl Fn(usize) -> bool) -> Vec<f64> {
+    let Some(step) = fit.step_without(wins, &out) else {
+        return fit.theta.clone();
+    };
+    let p = fit.theta.len();
+    match leave_out_statistic(fit, &step, wins, &out) {
+        Some(m) if m.is_finite() && chi2_upper_tail(m, p) >= IMPLAUSIBLE_STEP_P => step,
+        None => step,
+        Some(m) => {
+            let q = chi2_upper_quantile(IMPLAUSIBLE_STEP_P, p);
+            let c = if m.is_finite() { (q / m).sqrt() } else { 0.0 };
+            (0..p)
+                .map(|k| fit.theta[k] + c * (step[k] - fit.theta[k]))
+                .collect()
+        }
+    }
+}
+
+/// The w with P(χ²_k > w) = `p`, by bisection on [`chi2_upper_tail`].
+pub fn chi2_upper_quantile(p: f64, k: usize) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    while chi2_upper_tail(hi, k) > p && hi < 1e6 {
+        hi *= 2.0;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if chi2_upper_tail(mid, k) > p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// P-value below which a leave-fold-out step is taken to have left the region where the
+/// linearisation holds ([`step_is_plausible`]).
+pub const IMPLAUSIBLE_STEP_P: f64 = 1e-6;
+
+/// Whether the leave-fold-out step to `step` from the refit θ is of the size the refit's own
+/// noise explains. For a model linear in θ with exchangeable rows, leaving out a fraction φ of
+/// the rows moves θ by δ with ‖Jδ‖² ≈ s² χ²_p · φ/(1 − φ) (J the refit's Jacobian on all its
+/// rows, s² = χ²/(rows − p) its residual scale, p the parameters). The statistic
+/// m = ‖Jδ‖² (1 − φ)/(φ s² ι), ι the refit's covariance inflation (its residuals' excess
+/// variance over white noise, [`SimFit::inflation`]), is compared with χ²_p: a step whose upper
+/// tail lies below [`IMPLAUSIBLE_STEP_P`] comes from rows that no longer determine θ (a few
+/// windows left, two columns nearly dependent on them: a compliance step moved g from 292 to
+/// 2·10⁶ s⁻² where the candidate's screening refit followed 4 to 8 windows), and the held-out
+/// windows would be predicted with a model that no fit supports.
+pub fn step_is_plausible(
+    fit: &SimFit,
+    step: &[f64],
+    wins: &[Win],
+    out: impl Fn(usize) -> bool,
+) -> bool {
+    leave_out_statistic(fit, step, wins, out)
+        .is_none_or(|m| m.is_finite() && chi2_upper_tail(m, fit.theta.len()) >= IMPLAUSIBLE_STEP_P)
+}
+
+/// The statistic m of [`step_is_plausible`] (χ²_p-distributed for a linear model with
+/// exchangeable windows); `None` when no used window is left out, or all are, or the refit has
+/// no more rows than parameters.
+pub fn leave_out_statistic(
+    fit: &SimFit,
+    step: &[f64],
+    wins: &[Win],
+    out: impl Fn(usize) -> bool,
+) -> Option<f64> {
+    let p = fit.theta.len();
+    let rows = fit.jac.nrows();
+    let out_rows: usize = fit
+        .used
+        .iter()
+        .filter(|&&(wi, _)| out(wins[wi].run))
+        .map(|&(wi, _)| wins[wi].keep.len())
+        .sum();
+    if out_rows == 0 || rows <= p || out_rows >= rows {
+        return None;
+    }
+    let phi = out_rows as f64 / rows as f64;
+    let s2 = fit.resid.iter().map(|r| r * r).sum::<f64>() / (rows - p) as f64;
+    let delta: Vec<f64> = (0..p).map(|k| step[k] - fit.theta[k]).collect();
+    let moved: f64 = (0..rows)
+        .map(|i| {
+            (0..p)
+                .map(|k| fit.jac[(i, k)] * delta[k])
+                .sum::<f64>()
+                .powi(2)
+        })
+        .sum();
+    Some(moved * (1.0 - phi) / (phi * s2 * fit.inflation.max(1.0)))
 }
 
 /// rms (rad) of the windows predicted in `chi2` (σ of each run's camera).
@@ -377,6 +472,94 @@ mod tests {
     /// One parameter: the two-sided tail of z = b/σ; two independent ones: the χ²₂ tail
     /// exp(−W/2), exact, against the Wilson–Hilferty equivalent; correlation counts (b = (1, 1)
     /// along a direction of small variance is far from zero); a singular block gives 0.
+    /// A linear fit (y = a + b t + noise on 10 windows of identical design, one run each) at its
+    /// least-squares optimum, and its leave-run-out steps.
+    fn linear_fit(seed: u64, slope_seen_by_run_1_only: bool) -> (SimFit, Vec<Win>) {
+        use crate::identification::lm::tests::normals as noise;
+        use crate::identification::predict::RecordedInput;
+        let (nw, len) = (10, 12);
+        let wins: Vec<Win> = (0..nw)
+            .map(|k| Win {
+                run: k,
+                lo: 0,
+                hi: len,
+                keep: vec![true; len],
+                input: RecordedInput::default(),
+            })
+            .collect();
+        let e = noise(nw * len, seed);
+        // the second column: t, or (in the degenerate case) nearly the first except in run 1
+        let col = |i: usize| {
+            let t = (i % len) as f64 / len as f64;
+            match (slope_seen_by_run_1_only, i / len) {
+                (false, _) | (true, 1) => t,
+                (true, _) => 1.0 + 1e-3 * t,
+            }
+        };
+        let y: Vec<f64> = (0..nw * len).map(|i| 0.5 + 2.0 * col(i) + e[i]).collect();
+        let x = nalgebra::DMatrix::from_fn(nw * len, 2, |i, c| if c == 0 { 1.0 } else { col(i) });
+        let a = faer::Mat::from_fn(nw * len, 2, |i, c| x[(i, c)]);
+        let ls = crate::numerics::least_squares::lstsq(&a, &y, 1e-13).unwrap();
+        let theta = ls.x.clone();
+        let resid: Vec<f64> = (0..nw * len)
+            .map(|i| x[(i, 0)] * theta[0] + x[(i, 1)] * theta[1] - y[i])
+            .collect();
+        let fit = SimFit {
+            theta,
+            err: vec![1.0; 2],
+            cov: nalgebra::DMatrix::identity(2, 2),
+            jac: x,
+            resid,
+            used: (0..nw).map(|k| (k, k * len)).collect(),
+            states: vec![[0.0; 2]; nw],
+            rms_rad: 1.0,
+            rms_start_rad: 1.0,
+            samples: nw * len,
+            inflation: 1.0,
+            converged: true,
+        };
+        (fit, wins)
+    }
+
+    /// The leave-fold-out statistic is χ²_p for a linear fit with exchangeable windows: its mean
+    /// over 40 seeds × 10 folds is p = 2 (within 4 standard errors), and no step is flagged; a
+    /// fit whose slope only one run determines has that run's step flagged.
+    #[test]
+    fn leave_out_statistic_is_chi2_and_flags_undetermined_steps() {
+        let (mut sum, mut n, mut flagged) = (0.0, 0usize, 0usize);
+        for seed in 0..40 {
+            let (fit, wins) = linear_fit(seed, false);
+            for r in 0..10 {
+                let step = fit.step_without(&wins, |run| run == r).unwrap();
+                sum += leave_out_statistic(&fit, &step, &wins, |run| run == r).unwrap();
+                n += 1;
+                flagged += usize::from(!step_is_plausible(&fit, &step, &wins, |run| run == r));
+            }
+        }
+        let mean = sum / n as f64;
+        // Var χ²_2 = 4: the standard error of the mean of 400 is 0.1
+        assert!((mean - 2.0).abs() < 0.4, "mean {mean}");
+        assert_eq!(flagged, 0);
+        let (fit, wins) = linear_fit(1, true);
+        let step = fit.step_without(&wins, |run| run == 1).unwrap();
+        assert!(
+            !step_is_plausible(&fit, &step, &wins, |run| run == 1),
+            "{step:?}"
+        );
+        // the held-out θ is the step shortened to the edge of the plausible region
+        let short = theta_without(&fit, &wins, |run| run == 1);
+        let m = leave_out_statistic(&fit, &short, &wins, |run| run == 1).unwrap();
+        let q = chi2_upper_quantile(IMPLAUSIBLE_STEP_P, 2);
+        assert!((m / q - 1.0).abs() < 1e-9, "{m} {q}");
+        // P(χ²_2 > w) = e^(−w/2): the quantile at 10⁻⁶ is 2 ln 10⁶
+        assert!((q - 2.0 * 1e6f64.ln()).abs() < 1e-6 * q, "{q}");
+        let step = fit.step_without(&wins, |run| run == 4).unwrap();
+        assert!(
+            step_is_plausible(&fit, &step, &wins, |run| run == 4),
+            "{step:?}"
+        );
+    }
+
     #[test]
     fn added_parameters_z_is_the_wald_test_as_a_normal_equivalent() {
         let f = fit_with(

@@ -421,6 +421,62 @@ pub fn angle_harmonic(k: i8, l: i8, sin: bool, alpha: f64, beta: f64) -> (f64, f
     }
 }
 
+/// e^{i m x} = (cos mx, sin mx) for a small integer m from (sin x, cos x) by repeated complex
+/// multiplication (de Moivre): no call of sin or cos, which dominate the right-hand side of the
+/// window simulations otherwise (error a few ulps per factor for the |m| ≤ 3 of the dictionary).
+#[inline]
+fn cis_power(m: i8, (s, c): (f64, f64)) -> (f64, f64) {
+    let (mut re, mut im) = (1.0, 0.0);
+    for _ in 0..m.unsigned_abs() {
+        (re, im) = (re * c - im * s, re * s + im * c);
+    }
+    if m < 0 {
+        im = -im;
+    }
+    (re, im)
+}
+
+/// (sin(x + d), cos(x + d)) from (sin x, cos x): the rotation by d, with sin d and cos d from
+/// their Taylor series to d⁹ and d¹⁰ where |d| ≤ 0.05 (truncation below 10⁻²¹), else from sin and
+/// cos.
+#[inline]
+fn rotate_small((s, c): (f64, f64), d: f64) -> (f64, f64) {
+    if d == 0.0 {
+        return (s, c);
+    }
+    let (sd, cd) = if d.abs() <= 0.05 {
+        let d2 = d * d;
+        let sd = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0 * (1.0 - d2 / 72.0))));
+        let cd = 1.0
+            - d2 / 2.0
+                * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0 * (1.0 - d2 / 56.0 * (1.0 - d2 / 90.0))));
+        (sd, cd)
+    } else {
+        d.sin_cos()
+    };
+    (s * cd + c * sd, c * cd - s * sd)
+}
+
+/// [`angle_harmonic`] from (sin α, cos α) and (sin β, cos β): e^{i(kα + lβ)} = e^{ikα} e^{ilβ}
+/// ([`cis_power`]).
+#[inline]
+pub fn angle_harmonic_sc(
+    k: i8,
+    l: i8,
+    sin: bool,
+    sc_alpha: (f64, f64),
+    sc_beta: (f64, f64),
+) -> (f64, f64) {
+    let (ca, sa) = cis_power(k, sc_alpha);
+    let (cb, sb) = cis_power(l, sc_beta);
+    let (cx, sx) = (ca * cb - sa * sb, sa * cb + ca * sb);
+    if sin {
+        (sx, cx)
+    } else {
+        (cx, -sx)
+    }
+}
+
 /// The augmented gear as a driven oscillator.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AugmentedGear {
@@ -455,31 +511,37 @@ impl AugmentedGear {
     /// The input magnet's angle α_in = α + ε + χ τ_in(α_in, β) (Newton iteration) and its
     /// derivative dα_in/dβ = χ τ_β / (1 − χ τ_α).
     pub fn input_angle(&self, alpha: f64, beta: f64) -> (f64, f64) {
-        self.input_angle_at(alpha, beta.sin_cos())
+        let (a, da, _) = self.input_angle_sc(alpha, beta.sin_cos());
+        (a, da)
     }
-    /// [`Self::input_angle`] with (sin β, cos β) given (the right-hand side has them).
-    fn input_angle_at(&self, alpha: f64, (sb, cb): (f64, f64)) -> (f64, f64) {
+    /// [`Self::input_angle`] with (sin β, cos β) given (the right-hand side has them), and
+    /// (sin, cos) of the input magnet's angle. One sine and cosine,
+    /// at α + ε: the Newton iterates differ from it by the small twist δ = χ τ_in, whose sine and
+    /// cosine are rotations by their Taylor series ([`rotate_small`]).
+    fn input_angle_sc(&self, alpha: f64, (sb, cb): (f64, f64)) -> (f64, f64, (f64, f64)) {
         let c = &self.c;
         let a0 = alpha + c.alpha_offset;
+        let sc0 = a0.sin_cos();
         if c.compliance == 0.0 {
-            return (a0, 0.0);
+            return (a0, 0.0, sc0);
         }
-        // τ_in and its partial derivatives at input angle a
-        let tau = |a: f64| {
-            let (sa, ca) = a.sin_cos();
+        // τ_in and its partial derivatives at the input angle a0 + δ
+        let tau = |d: f64| {
+            let (sa, ca) = rotate_small(sc0, d);
             (
                 c.c_sc * ca * sb + c.c_cs * sa * cb - c.c_cc * sa * sb - c.c_ss * ca * cb,
                 -c.c_sc * sa * sb + c.c_cs * ca * cb - c.c_cc * ca * sb + c.c_ss * sa * cb,
                 c.c_sc * ca * cb - c.c_cs * sa * sb - c.c_cc * sa * cb + c.c_ss * ca * sb,
+                (sa, ca),
             )
         };
-        let mut a = a0 + c.compliance * tau(a0).0;
+        let mut d = c.compliance * tau(0.0).0;
         for _ in 0..3 {
-            let (t, ta, _) = tau(a);
-            a -= (a - a0 - c.compliance * t) / (1.0 - c.compliance * ta);
+            let (t, ta, _, _) = tau(d);
+            d -= (d - c.compliance * t) / (1.0 - c.compliance * ta);
         }
-        let (_, ta, tb) = tau(a);
-        (a, c.compliance * tb / (1.0 - c.compliance * ta))
+        let (_, ta, tb, sc) = tau(d);
+        (a0 + d, c.compliance * tb / (1.0 - c.compliance * ta), sc)
     }
     /// a, ∂a/∂β, ∂a/∂ω at the recorded input angle `alpha` (`sc_beta` = (sin β, cos β)), and
     /// (sin α, cos α) when the input magnet's angle is `alpha` itself (no offset, no compliance)
@@ -487,22 +549,18 @@ impl AugmentedGear {
     fn smooth(
         &self,
         alpha: f64,
-        beta: f64,
         sc_beta: (f64, f64),
         omega: f64,
     ) -> ((f64, f64, f64), Option<(f64, f64)>) {
-        let (a_in, da_dbeta) = self.input_angle_at(alpha, sc_beta);
-        let sc_in = a_in.sin_cos();
-        let (a, a_beta, a_omega, a_alpha) = self.smooth_at(a_in, sc_in, beta, sc_beta, omega);
+        let (a_in, da_dbeta, sc_in) = self.input_angle_sc(alpha, sc_beta);
+        let (a, a_beta, a_omega, a_alpha) = self.smooth_at(sc_in, sc_beta, omega);
         let shared = (a_in == alpha).then_some(sc_in);
         ((a, a_beta + a_alpha * da_dbeta, a_omega), shared)
     }
-    /// a, ∂a/∂β, ∂a/∂ω, ∂a/∂α at the input angle `alpha` (sin and cos of both angles given).
+    /// a, ∂a/∂β, ∂a/∂ω, ∂a/∂α at the input angle α and β given by their sines and cosines.
     fn smooth_at(
         &self,
-        alpha: f64,
         (sa, ca): (f64, f64),
-        beta: f64,
         (sb, cb): (f64, f64),
         omega: f64,
     ) -> (f64, f64, f64, f64) {
@@ -530,7 +588,7 @@ impl AugmentedGear {
         for (k, &(ak, bk)) in c.st_harmonics.iter().enumerate() {
             if ak != 0.0 || bk != 0.0 {
                 let m = (k + 2) as f64;
-                let (s, co) = (m * beta).sin_cos();
+                let (co, s) = cis_power(k as i8 + 2, (sb, cb));
                 a += ak * s + bk * co;
                 a_beta += m * (ak * co - bk * s);
             }
@@ -541,13 +599,13 @@ impl AugmentedGear {
             }
             match term {
                 ExtraTerm::Trig { k, l, sin } => {
-                    let (v, d) = angle_harmonic(k, l, sin, alpha, beta);
+                    let (v, d) = angle_harmonic_sc(k, l, sin, (sa, ca), (sb, cb));
                     a += th * v;
                     a_beta += th * l as f64 * d;
                     a_alpha += th * k as f64 * d;
                 }
                 ExtraTerm::VelTrig { k, l, sin } => {
-                    let (v, d) = angle_harmonic(k, l, sin, alpha, beta);
+                    let (v, d) = angle_harmonic_sc(k, l, sin, (sa, ca), (sb, cb));
                     a -= th * omega * v;
                     a_beta -= th * omega * l as f64 * d;
                     a_alpha -= th * omega * k as f64 * d;
@@ -567,18 +625,19 @@ impl AugmentedGear {
     fn friction(
         &self,
         alpha: f64,
-        beta: f64,
         sc_beta: (f64, f64),
         sc_alpha: Option<(f64, f64)>,
         with_beta: bool,
     ) -> (f64, f64) {
         let (mut r, mut r_beta) = (self.c.eta, 0.0);
+        let mut sc_alpha = sc_alpha;
+        let mut sc_alpha = || *sc_alpha.get_or_insert_with(|| alpha.sin_cos());
         if self.c.eta_load != 0.0 {
             let (lo, hi) = Shape::LoadWeight.range();
             let w = self.c.load_weight.map(|x| x.clamp(lo, hi));
             let at = LoadPoint {
                 shafts: self.geo.shafts,
-                alpha: sc_alpha.unwrap_or_else(|| alpha.sin_cos()),
+                alpha: sc_alpha(),
                 beta: sc_beta,
             };
             let (h, h_beta) = at.load(w, self.c.load_radial, with_beta);
@@ -587,7 +646,7 @@ impl AugmentedGear {
         }
         for &(term, th) in &self.c.extra {
             if let ExtraTerm::FricTrig { k, l, sin } = term {
-                let (v, d) = angle_harmonic(k, l, sin, alpha, beta);
+                let (v, d) = angle_harmonic_sc(k, l, sin, sc_alpha(), sc_beta);
                 r += th * v;
                 r_beta += th * l as f64 * d;
             }
@@ -610,7 +669,6 @@ impl AugmentedGear {
     fn floored_friction(
         &self,
         alpha: f64,
-        beta: f64,
         omega: f64,
         sc: ((f64, f64), Option<(f64, f64)>),
         with_beta: bool,
@@ -620,7 +678,7 @@ impl AugmentedGear {
         if held == Some(true) {
             return (sv, 0.0, sv_omega);
         }
-        let (rho, rho_beta) = self.friction(alpha, beta, sc.0, sc.1, with_beta);
+        let (rho, rho_beta) = self.friction(alpha, sc.0, sc.1, with_beta);
         match held {
             Some(_) => (rho + sv, rho_beta, sv_omega),
             None if rho > 0.0 => ((rho + sv).max(0.0), rho_beta, sv_omega),
@@ -631,8 +689,8 @@ impl AugmentedGear {
     fn forces_on(&self, t: f64, beta: f64, omega: f64, held: Option<bool>) -> Forces {
         let al = self.alpha(t);
         let sc_beta = beta.sin_cos();
-        let ((a, _, _), sc_alpha) = self.smooth(al, beta, sc_beta, omega);
-        let (r, _, _) = self.floored_friction(al, beta, omega, (sc_beta, sc_alpha), false, held);
+        let ((a, _, _), sc_alpha) = self.smooth(al, sc_beta, omega);
+        let (r, _, _) = self.floored_friction(al, omega, (sc_beta, sc_alpha), false, held);
         Forces {
             a: a + self.corot_bend(t),
             r,
@@ -642,9 +700,9 @@ impl AugmentedGear {
     fn forces_jet_on(&self, t: f64, beta: f64, omega: f64, held: Option<bool>) -> ForcesJet {
         let al = self.alpha(t);
         let sc_beta = beta.sin_cos();
-        let ((a, a_beta, a_omega), sc_alpha) = self.smooth(al, beta, sc_beta, omega);
+        let ((a, a_beta, a_omega), sc_alpha) = self.smooth(al, sc_beta, omega);
         let (r, r_beta, r_omega) =
-            self.floored_friction(al, beta, omega, (sc_beta, sc_alpha), true, held);
+            self.floored_friction(al, omega, (sc_beta, sc_alpha), true, held);
         let mut j = ForcesJet::new(a + self.corot_bend(t), r);
         j.a_beta = a_beta;
         j.a_omega = a_omega;
@@ -678,10 +736,8 @@ impl DrivenOscillator for AugmentedGear {
         self.forces_jet_on(t, beta, omega, None)
     }
     fn friction_floor(&self, t: f64, beta: f64, _omega: f64) -> Option<f64> {
-        self.friction_varies().then(|| {
-            self.friction(self.alpha(t), beta, beta.sin_cos(), None, false)
-                .0
-        })
+        self.friction_varies()
+            .then(|| self.friction(self.alpha(t), beta.sin_cos(), None, false).0)
     }
     fn forces_held(&self, t: f64, beta: f64, omega: f64, floored: bool) -> Forces {
         self.forces_on(t, beta, omega, Some(floored))
@@ -698,7 +754,7 @@ impl DrivenOscillator for AugmentedGear {
     }
     fn static_friction(&self, t: f64, beta: f64) -> f64 {
         let al = self.alpha(t);
-        let (fr, _) = self.friction(al, beta, beta.sin_cos(), None, false);
+        let (fr, _) = self.friction(al, beta.sin_cos(), None, false);
         fr.max(0.0) + self.c.eta_static_excess.max(0.0)
     }
 }
@@ -735,6 +791,38 @@ impl Rng {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The rotation by a small angle is sin and cos of the sum, on both sides of the switch to
+    /// the library functions.
+    #[test]
+    fn small_rotation_matches_sin_and_cos() {
+        for x in [0.3, -2.1, 7.9] {
+            for d in [1e-9, -3e-4, 0.01, -0.049, 0.05, 0.051, -0.7] {
+                let (s, c) = rotate_small(f64::sin_cos(x), d);
+                assert!((s - (x + d).sin()).abs() < 1e-15, "{x} {d}");
+                assert!((c - (x + d).cos()).abs() < 1e-15, "{x} {d}");
+            }
+        }
+    }
+
+    /// The product form of the angle harmonics is the harmonic itself (every (k, l) of the
+    /// dictionary and beyond, value and phase derivative).
+    #[test]
+    fn harmonics_by_products_match_sin_and_cos() {
+        for (alpha, beta) in [(0.3, -2.1), (5.9, 1.7), (-11.2, 40.3)] {
+            let (sca, scb) = (f64::sin_cos(alpha), f64::sin_cos(beta));
+            for k in -3..=3 {
+                for l in -3..=3 {
+                    for sin in [false, true] {
+                        let want = angle_harmonic(k, l, sin, alpha, beta);
+                        let got = angle_harmonic_sc(k, l, sin, sca, scb);
+                        assert!((want.0 - got.0).abs() < 1e-13, "{k} {l} {sin}");
+                        assert!((want.1 - got.1).abs() < 1e-13, "{k} {l} {sin}");
+                    }
+                }
+            }
+        }
+    }
     #[test]
     fn force_shape_is_symmetric_and_positive() {
         let geo = Geometry::new(0.5, 0.4);

@@ -1097,14 +1097,14 @@ mod tests {
             Term::Drift(DriftParam::Eta, Clock::RunIndexSettling(23))
         );
         let shape = |u: f64| (1.0 - (-u / 0.23f64).exp()) / (1.0 - (-1.0 / 0.23f64).exp()) - 0.5;
+        let pos = session_positions(&runs);
         for (k, u) in [0.0, 0.5, 1.0].into_iter().enumerate() {
-            let eta = coefficients_for_run(&free, &theta, &runs, k, &[]).eta;
+            let eta = coefficients_for_run(&free, &theta, pos[k], &[]).eta;
             assert!(
                 (eta - (23.0 - 4.0 * shape(u))).abs() < 1e-12,
                 "run {k}: {eta}"
             );
-            let held =
-                coefficients_for_run(&terms, &coef, &runs, k, &[(Shape::DriftSettling, 0.23)]);
+            let held = coefficients_for_run(&terms, &coef, pos[k], &[(Shape::DriftSettling, 0.23)]);
             assert!((held.eta - eta).abs() < 1e-12, "held, run {k}");
         }
         // a linear drift has no settling time to free

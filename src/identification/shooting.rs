@@ -29,12 +29,12 @@ use super::predict::{
     window_system, RecordedInput,
 };
 use super::preprocess::CleanRun;
-use super::regression::Term;
+use super::regression::{session_positions, SessionPosition, Term};
 use super::spec::{coefficients_for_run, simulable};
 use crate::numerics::least_squares::{lstsq_determined, DEFAULT_RCOND};
 use faer::Mat;
 use nalgebra::{DMatrix, DVector};
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 
 /// Options of the refit.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,6 +45,11 @@ pub struct ShootingOptions {
     pub patience: usize,
     /// Whether the windows left out at the start are tried again at the solution ([`refit`]).
     pub reselect: Reselect,
+    /// Whether the Jacobian's coefficient columns are central differences (else forward
+    /// differences, half the simulations: [`varpro_jacobian`]). Central for the fits whose σ
+    /// are reported and that are refitted to convergence ([`CONVERGED_PATIENCE`]); forward for
+    /// the judge's refits, a few Levenberg–Marquardt steps each.
+    pub central_differences: bool,
 }
 
 /// When a refit tries the windows its start could not follow again at its solution and refits
@@ -76,6 +81,7 @@ impl Default for ShootingOptions {
             max_windows: 240,
             patience: 1,
             reselect: Reselect::Never,
+            central_differences: false,
         }
     }
 }
@@ -123,6 +129,9 @@ pub struct SimModel<'a> {
     /// Shape parameters held at these values outside θ (a profile over a family's shape,
     /// [`super::profile`]; empty: every shape of the model is an entry of θ).
     pub held_shapes: Vec<(Shape, f64)>,
+    /// The runs' session positions (the clocks of the drift terms), computed at the first
+    /// simulation that needs them ([`Self::session_position`]) and kept with the model.
+    pub session: OnceLock<Vec<SessionPosition>>,
 }
 
 impl<'a> SimModel<'a> {
@@ -138,6 +147,7 @@ impl<'a> SimModel<'a> {
             eta_static_excess: 0.0,
             tol,
             held_shapes: Vec::new(),
+            session: OnceLock::new(),
         }
     }
 }
@@ -151,13 +161,16 @@ impl SimModel<'_> {
             self.latency
         }
     }
+    /// The session position of run `run` ([`session_positions`], computed once per model).
+    pub fn session_position(&self, run: usize) -> SessionPosition {
+        self.session.get_or_init(|| session_positions(self.runs))[run]
+    }
     /// Coefficients of run `run` at θ.
     pub fn coefficients(&self, theta: &[f64], run: usize) -> Coefficients {
         let mut c = coefficients_for_run(
             &self.terms,
             &theta[..self.terms.len()],
-            self.runs,
-            run,
+            self.session_position(run),
             &self.held_shapes,
         );
         c.eta_static_excess += self.eta_static_excess;
@@ -636,7 +649,11 @@ fn fit_windows(
             }
         };
         Some(varpro_jacobian(
-            model, theta, wins, &used, &states, row, false,
+            model,
+            theta,
+            (wins, &used[..], &states[..], row),
+            false,
+            opts.central_differences,
         ))
     };
     let r0 = residuals(theta0)?;
@@ -670,7 +687,8 @@ fn fit_windows(
         // valley along it
         residuals(&sol.p)?;
         let states = warm.lock().ok()?.states.clone();
-        sol.jac = varpro_jacobian(model, &sol.p, wins, &used, &states, row, true);
+        let at = (wins, &used[..], &states[..], row);
+        sol.jac = varpro_jacobian(model, &sol.p, at, true, opts.central_differences);
         sol.cov = scaled_cov(&sol.jac, sol.rss);
     }
     let samples: usize = used.iter().map(|&(wi, _)| wins[wi].kept()).sum();
@@ -706,6 +724,10 @@ struct Projected {
     best: (f64, Vec<[f64; 2]>),
 }
 
+/// The windows a refit uses, for [`varpro_jacobian`]: all windows, the used ones (index, first
+/// row), their projected states, and the number of rows.
+type UsedWindows<'a> = (&'a [Win], &'a [(usize, usize)], &'a [[f64; 2]], usize);
+
 /// Relative finite-difference step of a term coefficient in [`varpro_jacobian`] (of
 /// max(|θ_k|, 1)); the latency's step is [`LATENCY_STEP`].
 const COEF_STEP: f64 = 1e-4;
@@ -718,7 +740,7 @@ const LATENCY_STEP: f64 = 1e-5;
 ///
 /// J_w = (I − Q_w Q_wᵀ) ∂r_w/∂θ,  Q_w an orthonormal basis of the columns of ∂r_w/∂x_w,
 ///
-/// ∂r_w/∂θ by central differences of simulations from the same state (steps [`COEF_STEP`],
+/// ∂r_w/∂θ by central (or, as `central` says, forward) differences of simulations from the same state (steps [`COEF_STEP`],
 /// [`LATENCY_STEP`]), ∂r_w/∂x_w exactly from the variational equations of the simulation at θ
 /// ([`window_residuals_jacobian`]). At a projected state (∂r_w/∂x_wᵀ r_w = 0)
 /// this is the derivative of the profiled residuals to first order, and it does not depend on how
@@ -732,11 +754,9 @@ const LATENCY_STEP: f64 = 1e-5;
 fn varpro_jacobian(
     model: &SimModel,
     theta: &[f64],
-    wins: &[Win],
-    used: &[(usize, usize)],
-    states: &[[f64; 2]],
-    rows: usize,
+    (wins, used, states, rows): UsedWindows,
     inward: bool,
+    central: bool,
 ) -> DMatrix<f64> {
     let n = theta.len();
     let nt = model.terms.len();
@@ -772,13 +792,17 @@ fn varpro_jacobian(
             } else {
                 COEF_STEP * theta[c].abs().max(1.0)
             };
-            let (up, down) = match model.terms.get(c) {
+            let (mut up, mut down) = match model.terms.get(c) {
                 Some(Term::Shape(sh)) if inward => {
                     let (lo, hi) = sh.range();
                     (theta[c] + h <= hi, theta[c] - h >= lo)
                 }
                 _ => (true, true),
             };
+            if !central {
+                // one side only: forward, backward where forward is out of range
+                (up, down) = (up, down && !up);
+            }
             let mut side = |dir: f64, inside: bool| {
                 let r = if inside {
                     th[c] = theta[c] + dir * h;

@@ -4,8 +4,7 @@
 //! another to build a model.
 
 use super::model::{Coefficients, ExtraTerm, Shape};
-use super::preprocess::CleanRun;
-use super::regression::{grid_weight, load_grid_term, session_positions, Clock, DriftParam, Term};
+use super::regression::{grid_weight, load_grid_term, Clock, DriftParam, SessionPosition, Term};
 
 /// The column standing for `t` at the shape values `shapes`: a family's term with its shape
 /// parameter baked in (the drag's −β̇|β̇| becomes −(|β̇|/V)^p sgn β̇ on the grid of tenths, the
@@ -239,29 +238,27 @@ fn settling_tau(t: Term) -> Option<f64> {
     }
 }
 
-/// The coefficients that hold in run `run`: [`coefficients`] with the shapes `held` (held outside
-/// the coefficients, e.g. on a profile) plus the parameter drift at the run's session position
-/// (its middle; a settling drift with the model's settling time, else its clock's), and the
-/// driven-run input offsets only on driven runs.
+/// The coefficients that hold in the run at session position `pos`: [`coefficients`] with the
+/// shapes `held` (held outside the coefficients, e.g. on a profile) plus the parameter drift at
+/// the run's position (its middle; a settling drift with the model's settling time, else its
+/// clock's), and the driven-run input offsets only on driven runs.
 pub fn coefficients_for_run(
     terms: &[Term],
     coef: &[f64],
-    runs: &[CleanRun],
-    run: usize,
+    pos: SessionPosition,
     held: &[(Shape, f64)],
 ) -> Coefficients {
     let mut c = coefficients(terms, coef);
     for &(s, v) in held {
         set_shape(&mut c, s, v);
     }
-    if runs[run].ringdown {
+    if !pos.driven {
         c.alpha_offset = 0.0;
         c.alpha_offset_per_turn = 0.0;
     }
     if !terms.iter().any(|t| matches!(t, Term::Drift(..))) {
         return c;
     }
-    let pos = session_positions(runs)[run];
     for (&t, &v) in terms.iter().zip(coef) {
         if let Term::Drift(p, clock) = t {
             let s = pos.s_with(clock, c.drift_settling);
