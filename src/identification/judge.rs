@@ -469,24 +469,12 @@ mod tests {
         SimFit::with_covariance(theta, err, cov)
     }
 
-    /// One parameter: the two-sided tail of z = b/σ; two independent ones: the χ²₂ tail
-    /// exp(−W/2), exact, against the Wilson–Hilferty equivalent; correlation counts (b = (1, 1)
-    /// along a direction of small variance is far from zero); a singular block gives 0.
     /// A linear fit (y = a + b t + noise on 10 windows of identical design, one run each) at its
     /// least-squares optimum, and its leave-run-out steps.
     fn linear_fit(seed: u64, slope_seen_by_run_1_only: bool) -> (SimFit, Vec<Win>) {
         use crate::identification::lm::tests::normals as noise;
-        use crate::identification::predict::RecordedInput;
         let (nw, len) = (10, 12);
-        let wins: Vec<Win> = (0..nw)
-            .map(|k| Win {
-                run: k,
-                lo: 0,
-                hi: len,
-                keep: vec![true; len],
-                input: RecordedInput::default(),
-            })
-            .collect();
+        let wins: Vec<Win> = (0..nw).map(|k| Win::whole(k, len)).collect();
         let e = noise(nw * len, seed);
         // the second column: t, or (in the degenerate case) nearly the first except in run 1
         let col = |i: usize| {
@@ -504,21 +492,7 @@ mod tests {
         let resid: Vec<f64> = (0..nw * len)
             .map(|i| x[(i, 0)] * theta[0] + x[(i, 1)] * theta[1] - y[i])
             .collect();
-        let fit = SimFit {
-            theta,
-            err: vec![1.0; 2],
-            cov: nalgebra::DMatrix::identity(2, 2),
-            jac: x,
-            resid,
-            used: (0..nw).map(|k| (k, k * len)).collect(),
-            states: vec![[0.0; 2]; nw],
-            rms_rad: 1.0,
-            rms_start_rad: 1.0,
-            samples: nw * len,
-            inflation: 1.0,
-            converged: true,
-        };
-        (fit, wins)
+        (SimFit::of_windows(theta, x, resid, len), wins)
     }
 
     /// The leave-fold-out statistic is χ²_p for a linear fit with exchangeable windows: its mean
@@ -560,6 +534,9 @@ mod tests {
         );
     }
 
+    /// One parameter: the two-sided tail of z = b/σ; two independent ones: the χ²₂ tail
+    /// exp(−W/2), exact, against the Wilson–Hilferty equivalent; correlation counts (b = (1, 1)
+    /// along a direction of small variance is far from zero); a singular block gives 0.
     #[test]
     fn added_parameters_z_is_the_wald_test_as_a_normal_equivalent() {
         let f = fit_with(

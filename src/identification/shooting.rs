@@ -267,7 +267,46 @@ impl SimModel<'_> {
 }
 
 #[cfg(test)]
+impl Win {
+    /// Samples 0..len of run `run`, every frame kept (the unit tests' windows).
+    pub(crate) fn whole(run: usize, len: usize) -> Self {
+        Self {
+            run,
+            lo: 0,
+            hi: len,
+            keep: vec![true; len],
+            input: RecordedInput::default(),
+        }
+    }
+}
+
+#[cfg(test)]
 impl SimFit {
+    /// A fit at θ with Jacobian `jac` and residuals `resid` on consecutive windows of `len` rows
+    /// each (window k on run k, [`Win::whole`]), white (inflation 1), unit σ and covariance: the
+    /// unit tests of the leave-fold-out step.
+    pub(crate) fn of_windows(
+        theta: Vec<f64>,
+        jac: DMatrix<f64>,
+        resid: Vec<f64>,
+        len: usize,
+    ) -> Self {
+        let (p, nw) = (theta.len(), resid.len() / len);
+        Self {
+            theta,
+            err: vec![1.0; p],
+            cov: DMatrix::identity(p, p),
+            jac,
+            resid,
+            used: (0..nw).map(|k| (k, k * len)).collect(),
+            states: vec![[0.0; 2]; nw],
+            rms_rad: 1.0,
+            rms_start_rad: 1.0,
+            samples: nw * len,
+            inflation: 1.0,
+            converged: true,
+        }
+    }
     /// A fit with only θ, its σ and its covariance set, for the unit tests of what reads them
     /// (the Wald test, the reported sizes).
     pub(crate) fn with_covariance(theta: Vec<f64>, err: Vec<f64>, cov: DMatrix<f64>) -> Self {
@@ -1031,15 +1070,7 @@ mod tests {
     fn the_leave_fold_out_step_is_the_refit_and_holds_unseen_parameters() {
         // 3 windows of 8 rows on runs 0, 1, 2; y = 0.5 + 2t + noise; columns 1, t, 0, 1 + t
         let (nw, len) = (3, 8);
-        let wins: Vec<Win> = (0..nw)
-            .map(|k| Win {
-                run: k,
-                lo: 0,
-                hi: len,
-                keep: vec![true; len],
-                input: RecordedInput::default(),
-            })
-            .collect();
+        let wins: Vec<Win> = (0..nw).map(|k| Win::whole(k, len)).collect();
         let e = noise(nw * len, 3);
         let t = |i: usize| (i % len) as f64 / len as f64 + (i / len) as f64;
         let y: Vec<f64> = (0..nw * len)
@@ -1052,20 +1083,7 @@ mod tests {
         let resid: Vec<f64> = (0..nw * len)
             .map(|i| (0..4).map(|c| x[(i, c)] * theta[c]).sum::<f64>() - y[i])
             .collect();
-        let fit = SimFit {
-            theta: theta.clone(),
-            err: vec![1.0; 4],
-            cov: DMatrix::identity(4, 4),
-            jac: x.clone(),
-            resid,
-            used: (0..nw).map(|k| (k, k * len)).collect(),
-            states: vec![[0.0; 2]; nw],
-            rms_rad: 1.0,
-            rms_start_rad: 1.0,
-            samples: nw * len,
-            inflation: 1.0,
-            converged: true,
-        };
+        let fit = SimFit::of_windows(theta.clone(), x.clone(), resid, len);
         let without = fit.step_without(&wins, |run| run == 1).unwrap();
         let rows: Vec<usize> = (0..nw * len).filter(|i| i / len != 1).collect();
         let a = Mat::from_fn(rows.len(), 2, |k, c| x[(rows[k], c)]);
