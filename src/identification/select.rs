@@ -594,14 +594,13 @@ pub fn judge_round(
     }
     let z_crit = z_threshold(cands.len());
     let judged = par_map(cands.len(), |k| {
-        // the refit on all windows starts where the screening's refit on half of them ended
         let c = &cands[k];
-        let scr = screen_state(ctx, cur, c);
-        let st = match &scr {
-            Some((sc, s)) if sc.z >= SCREEN_Z => evaluate_from(ctx, cur, c, Some(&s.fit.theta)),
+        let scr = screen(ctx, cur, c);
+        let st = match scr {
+            Some(sc) if sc.z >= SCREEN_Z => evaluate(ctx, cur, c),
             _ => None,
         };
-        (scr.map(|(sc, _)| sc), st)
+        (scr, st)
     });
     let mut out = Vec::with_capacity(judged.len());
     for (c, (scr, st)) in cands.into_iter().zip(judged) {
