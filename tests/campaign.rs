@@ -422,7 +422,6 @@ fn refit_sizes_are_unbiased_at_low_noise() {
     let sopts = ShootingOptions {
         patience: 4,
         reselect: Reselect::Always,
-        central_differences: true,
         ..ShootingOptions::default()
     };
     let f = refit(&model, &theta0, &base.wins, &sopts).unwrap();
@@ -1319,7 +1318,6 @@ fn a_shape_sigma_matches_the_curvature_of_its_profile() {
     let sopts = ShootingOptions {
         patience: 4,
         reselect: Reselect::Always,
-        central_differences: true,
         ..ShootingOptions::default()
     };
     let f = refit_to_convergence(&model, &theta0, &base.wins, &sopts).unwrap();

@@ -347,7 +347,6 @@ pub fn fit_base(
         // converged: every candidate is judged against this fit
         let converged = ShootingOptions {
             patience: CONVERGED_PATIENCE,
-            central_differences: true,
             ..opts.shooting
         };
         if let Some(f) = refit(&model, &weak.coef, &wins, &converged) {

@@ -153,22 +153,22 @@ fn start_theta(cur: &ModelState, cand: &Candidate) -> Vec<f64> {
     th
 }
 
-/// Refits `cur` + `cand` on the windows `wins` from `start` (else [`start_theta`]; those windows
-/// its start cannot follow tried again at the solution as `reselect` says;
+/// Refits `cur` + `cand` on the windows `wins` (those its start cannot follow tried again at
+/// the solution as `reselect` says;
 /// [`refit_from_better_start`] with `cur_followed` the number of them the current model follows)
 /// and gives its held-out errors on them.
 fn evaluate_on(
     ctx: &SelectCtx,
-    (wins, cur_followed): (&[Win], usize),
+    wins: &[Win],
+    cur_followed: usize,
     cur: &ModelState,
     cand: &Candidate,
-    start: Option<&[f64]>,
     reselect: Reselect,
 ) -> Option<ModelState> {
     let mut terms = cur.terms.clone();
     terms.extend(judged_terms(cur, cand).0);
     let fit_latency = cur.fit_latency || cand.latency.is_some();
-    let theta0 = start.map_or_else(|| start_theta(cur, cand), <[f64]>::to_vec);
+    let theta0 = start_theta(cur, cand);
     let model = SimModel {
         runs: ctx.runs,
         geo: *ctx.geo,
@@ -247,20 +247,9 @@ fn refit_from_better_start(
 /// always, and not in the screening ([`screen`]): re-selecting every candidate's windows raised
 /// the CPU of a diagnosis by 45–85 % where the start follows nearly all of them.
 pub fn evaluate(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<ModelState> {
-    evaluate_from(ctx, cur, cand, None)
-}
-
-/// [`evaluate`] with the refit started from `start` (the screening's refit: [`screen_state`])
-/// instead of the weak-form start.
-pub fn evaluate_from(
-    ctx: &SelectCtx,
-    cur: &ModelState,
-    cand: &Candidate,
-    start: Option<&[f64]>,
-) -> Option<ModelState> {
-    let on = (ctx.wins, cur.fit.used.len());
+    let followed = cur.fit.used.len();
     let reselect = Reselect::OnceBelow(CANDIDATE_RESELECT_BELOW);
-    evaluate_on(ctx, on, cur, cand, start, reselect)
+    evaluate_on(ctx, ctx.wins, followed, cur, cand, reselect)
 }
 
 /// The fraction of the judging windows below which a candidate's refit re-selects its windows
@@ -307,7 +296,6 @@ fn held_refit(
 ) -> Option<(f64, Vec<f64>)> {
     let opts = ShootingOptions {
         patience: CONVERGED_PATIENCE,
-        central_differences: true,
         reselect: Reselect::Always,
         ..*ctx.shooting
     };
@@ -430,7 +418,6 @@ pub fn try_refit_state(
     };
     let opts = ShootingOptions {
         patience: CONVERGED_PATIENCE,
-        central_differences: true,
         reselect,
         ..*ctx.shooting
     };
@@ -513,24 +500,15 @@ pub const SCREEN_Z: f64 = 1.0;
 /// full-set z reaches the threshold (≥ 3) has an expected half-set z of ≥ 3/√2 ≈ 2.1, far above
 /// [`SCREEN_Z`].
 pub fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Comparison> {
-    screen_state(ctx, cur, cand).map(|(c, _)| c)
-}
-
-/// [`screen`] and the screened refit (on every second judging window).
-pub fn screen_state(
-    ctx: &SelectCtx,
-    cur: &ModelState,
-    cand: &Candidate,
-) -> Option<(Comparison, ModelState)> {
     let idx: Vec<usize> = (0..ctx.wins.len()).step_by(2).collect();
     let sub: Vec<Win> = idx.iter().map(|&k| ctx.wins[k].clone()).collect();
     let followed = cur.fit.used.iter().filter(|&&(wi, _)| wi % 2 == 0).count();
-    let st = evaluate_on(ctx, (&sub, followed), cur, cand, None, Reselect::Never)?;
+    let st = evaluate_on(ctx, &sub, followed, cur, cand, Reselect::Never)?;
     let cur_sub = HeldOut {
         chi2: idx.iter().map(|&k| cur.held.chi2[k]).collect(),
         chi2_fit: idx.iter().map(|&k| cur.held.chi2_fit[k]).collect(),
     };
-    Some((compare(&cur_sub, &st.held, &sub, ctx.runs), st))
+    Some(compare(&cur_sub, &st.held, &sub, ctx.runs))
 }
 
 /// `round[k]` accepted: the model refitted to convergence; the other candidates' states dropped.

@@ -45,11 +45,6 @@ pub struct ShootingOptions {
     pub patience: usize,
     /// Whether the windows left out at the start are tried again at the solution ([`refit`]).
     pub reselect: Reselect,
-    /// Whether the Jacobian's coefficient columns are central differences (the default; else
-    /// forward differences, half the simulations: [`varpro_jacobian`]). The diagnosis uses
-    /// central differences throughout: forward ones in the judge's refits moved a campaign case
-    /// and the one-step held-out z of a test by 0.6 (docs/performance.md, "A faster judge").
-    pub central_differences: bool,
 }
 
 /// When a refit tries the windows its start could not follow again at its solution and refits
@@ -81,7 +76,6 @@ impl Default for ShootingOptions {
             max_windows: 240,
             patience: 1,
             reselect: Reselect::Never,
-            central_differences: true,
         }
     }
 }
@@ -688,11 +682,7 @@ fn fit_windows(
             }
         };
         Some(varpro_jacobian(
-            model,
-            theta,
-            (wins, &used[..], &states[..], row),
-            false,
-            opts.central_differences,
+            model, theta, wins, &used, &states, row, false,
         ))
     };
     let r0 = residuals(theta0)?;
@@ -726,8 +716,7 @@ fn fit_windows(
         // valley along it
         residuals(&sol.p)?;
         let states = warm.lock().ok()?.states.clone();
-        let at = (wins, &used[..], &states[..], row);
-        sol.jac = varpro_jacobian(model, &sol.p, at, true, opts.central_differences);
+        sol.jac = varpro_jacobian(model, &sol.p, wins, &used, &states, row, true);
         sol.cov = scaled_cov(&sol.jac, sol.rss);
     }
     let samples: usize = used.iter().map(|&(wi, _)| wins[wi].kept()).sum();
@@ -763,10 +752,6 @@ struct Projected {
     best: (f64, Vec<[f64; 2]>),
 }
 
-/// The windows a refit uses, for [`varpro_jacobian`]: all windows, the used ones (index, first
-/// row), their projected states, and the number of rows.
-type UsedWindows<'a> = (&'a [Win], &'a [(usize, usize)], &'a [[f64; 2]], usize);
-
 /// Relative finite-difference step of a term coefficient in [`varpro_jacobian`] (of
 /// max(|θ_k|, 1)); the latency's step is [`LATENCY_STEP`].
 const COEF_STEP: f64 = 1e-4;
@@ -779,7 +764,7 @@ const LATENCY_STEP: f64 = 1e-5;
 ///
 /// J_w = (I − Q_w Q_wᵀ) ∂r_w/∂θ,  Q_w an orthonormal basis of the columns of ∂r_w/∂x_w,
 ///
-/// ∂r_w/∂θ by central (or, as `central` says, forward) differences of simulations from the same state (steps [`COEF_STEP`],
+/// ∂r_w/∂θ by central differences of simulations from the same state (steps [`COEF_STEP`],
 /// [`LATENCY_STEP`]), ∂r_w/∂x_w exactly from the variational equations of the simulation at θ
 /// ([`window_residuals_jacobian`]). At a projected state (∂r_w/∂x_wᵀ r_w = 0)
 /// this is the derivative of the profiled residuals to first order, and it does not depend on how
@@ -793,9 +778,11 @@ const LATENCY_STEP: f64 = 1e-5;
 fn varpro_jacobian(
     model: &SimModel,
     theta: &[f64],
-    (wins, used, states, rows): UsedWindows,
+    wins: &[Win],
+    used: &[(usize, usize)],
+    states: &[[f64; 2]],
+    rows: usize,
     inward: bool,
-    central: bool,
 ) -> DMatrix<f64> {
     let n = theta.len();
     let nt = model.terms.len();
@@ -831,17 +818,13 @@ fn varpro_jacobian(
             } else {
                 COEF_STEP * theta[c].abs().max(1.0)
             };
-            let (mut up, mut down) = match model.terms.get(c) {
+            let (up, down) = match model.terms.get(c) {
                 Some(Term::Shape(sh)) if inward => {
                     let (lo, hi) = sh.range();
                     (theta[c] + h <= hi, theta[c] - h >= lo)
                 }
                 _ => (true, true),
             };
-            if !central {
-                // one side only: forward, backward where forward is out of range
-                (up, down) = (up, down && !up);
-            }
             let mut side = |dir: f64, inside: bool| {
                 let r = if inside {
                     th[c] = theta[c] + dir * h;
