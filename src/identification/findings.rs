@@ -916,6 +916,7 @@ mod tests {
             held: super::super::judge::HeldOut {
                 chi2: Vec::new(),
                 chi2_fit: Vec::new(),
+                start: Vec::new(),
             },
             effects: Vec::new(),
         }

@@ -507,6 +507,7 @@ pub fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Com
     let cur_sub = HeldOut {
         chi2: idx.iter().map(|&k| cur.held.chi2[k]).collect(),
         chi2_fit: idx.iter().map(|&k| cur.held.chi2_fit[k]).collect(),
+        start: idx.iter().map(|&k| cur.held.start[k]).collect(),
     };
     Some(compare(&cur_sub, &st.held, &sub, ctx.runs))
 }

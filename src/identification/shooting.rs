@@ -216,6 +216,11 @@ impl SimModel<'_> {
     }
     /// (χ², frames) of window `w` at θ: its state fitted (multi-start) with the model fixed.
     pub fn window_chi2(&self, theta: &[f64], w: &Win) -> Option<(f64, usize)> {
+        self.window_fit(theta, w).map(|(c, _)| (c, w.kept()))
+    }
+    /// (χ², state) of window `w` at θ: its initial state fitted (multi-start) with the model
+    /// fixed.
+    pub fn window_fit(&self, theta: &[f64], w: &Win) -> Option<(f64, [f64; 2])> {
         let r = &self.runs[w.run];
         let sys = self.system(theta, w);
         let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
@@ -229,7 +234,26 @@ impl SimModel<'_> {
             true,
             self.tol,
         )?;
-        Some((f.rss, w.kept()))
+        Some((f.rss, [f.p[0], f.p[1]]))
+    }
+}
+
+/// Where the prediction of a window at a θ near a refit's starts ([`SimModel::window_chi2_from`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum WarmStart {
+    /// The state the refit projected for a window it used (the model follows it there).
+    Followed([f64; 2]),
+    /// The best state of a multi-start search at the refit's θ for a window the refit did not
+    /// use (the model does not follow it, or its state could not be fitted at the start).
+    Searched([f64; 2]),
+}
+
+impl WarmStart {
+    /// The state.
+    pub fn state(self) -> [f64; 2] {
+        match self {
+            WarmStart::Followed(x) | WarmStart::Searched(x) => x,
+        }
     }
 }
 
@@ -243,12 +267,19 @@ impl SimModel<'_> {
         let (res, _) = project_state(&sys, t, b, &w.keep, r.sigma_camera.max(1e-12), x, self.tol)?;
         Some(res.iter().map(|v| v * v).sum())
     }
-    /// χ² of window `w` at θ: from the warm start when there is one and its fit is good
-    /// (≤ 4 per frame), else the better of that and a multi-start state fit.
-    pub fn window_chi2_from(&self, theta: &[f64], w: &Win, warm: Option<[f64; 2]>) -> Option<f64> {
-        let from_warm = warm.and_then(|x| self.window_chi2_warm(theta, w, x));
+    /// χ² of window `w` at θ, from the warm start of a refit at a nearby θ (a leave-fold-out
+    /// refit is one Gauss–Newton step from it):
+    /// - [`WarmStart::Followed`]: its projection when the fit is good (≤ 4 per frame), else the
+    ///   better of that and a multi-start state fit (the step moved the window off its branch);
+    /// - [`WarmStart::Searched`]: its projection (the multi-start search for the window was made
+    ///   at the refit's θ, and found no state the model follows; repeating it at every θ of the
+    ///   folds was a quarter of a diagnosis's time);
+    /// - none, or a projection that fails: a multi-start state fit.
+    pub fn window_chi2_from(&self, theta: &[f64], w: &Win, warm: Option<WarmStart>) -> Option<f64> {
+        let from_warm = warm.and_then(|x| self.window_chi2_warm(theta, w, x.state()));
+        let searched = matches!(warm, Some(WarmStart::Searched(_)));
         match from_warm {
-            Some(c) if c <= 4.0 * w.kept() as f64 => Some(c),
+            Some(c) if searched || c <= 4.0 * w.kept() as f64 => Some(c),
             _ => {
                 let fresh = self.window_chi2(theta, w).map(|x| x.0);
                 match (fresh, from_warm) {
@@ -332,27 +363,27 @@ impl SimFit {
         warm
     }
     /// χ² of every window of `wins` at the solution: from the residuals for the used windows,
-    /// by a fresh state fit for the others; and the warm start of each used window.
+    /// by a fresh (multi-start) state fit for the others; and the warm start of each window
+    /// ([`WarmStart`]).
     pub fn window_chi2(
         &self,
         model: &SimModel,
         wins: &[Win],
-    ) -> (Vec<Option<f64>>, Vec<Option<[f64; 2]>>) {
-        let mut warm: Vec<Option<[f64; 2]>> = vec![None; wins.len()];
+    ) -> (Vec<Option<f64>>, Vec<Option<WarmStart>>) {
+        let mut warm: Vec<Option<WarmStart>> = vec![None; wins.len()];
         let mut chi2: Vec<Option<f64>> = vec![None; wins.len()];
         for (k, &(wi, row0)) in self.used.iter().enumerate() {
-            warm[wi] = Some(self.states[k]);
+            warm[wi] = Some(WarmStart::Followed(self.states[k]));
             let n = wins[wi].keep.len();
             chi2[wi] = Some(self.resid[row0..row0 + n].iter().map(|v| v * v).sum());
         }
         let missing: Vec<usize> = (0..wins.len()).filter(|&k| chi2[k].is_none()).collect();
         let fresh = par_map(missing.len(), |j| {
-            model
-                .window_chi2(&self.theta, &wins[missing[j]])
-                .map(|x| x.0)
+            model.window_fit(&self.theta, &wins[missing[j]])
         });
         for (j, k) in missing.into_iter().enumerate() {
-            chi2[k] = fresh[j];
+            chi2[k] = fresh[j].map(|f| f.0);
+            warm[k] = fresh[j].map(|f| WarmStart::Searched(f.1));
         }
         (chi2, warm)
     }
