@@ -964,11 +964,7 @@ fn one_step_held_out_agrees_with_exact_leave_fold_out_refits() {
                 chi2[k] = model.window_chi2_from(&th, w, warm[k]);
             }
         }
-        HeldOut {
-            chi2,
-            chi2_fit,
-            start: warm,
-        }
+        HeldOut { chi2, chi2_fit }
     };
     on_base_model("static_torque_2h", 2.0, 2, |sctx, b| {
         let cands = propose(sctx.propose, &b.terms, None, &b.effects);

@@ -77,17 +77,17 @@ pub fn judge(
                 .unwrap_or(0.0)
         })
         .collect();
+    let warm = st.fit.warm_starts(wins.len());
     let chi2: Vec<Option<f64>> = par_map(wins.len(), |k| {
         let w = &wins[k];
         let f = folds.of_run[w.run];
         let mut m = st.model(runs, geo, tol);
         m.eta_static_excess = excess[f];
-        m.window_chi2_from(&thetas[f], w, st.held.start.get(k).copied().flatten())
+        m.window_chi2_from(&thetas[f], w, warm[k])
     });
     let held = HeldOut {
         chi2,
         chi2_fit: st.held.chi2_fit.clone(),
-        start: st.held.start.clone(),
     };
     let cmp = compare(&st.held, &held, wins, runs);
     let z_crit = z_threshold(SLOT_MEMBERS);

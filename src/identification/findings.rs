@@ -916,7 +916,6 @@ mod tests {
             held: super::super::judge::HeldOut {
                 chi2: Vec::new(),
                 chi2_fit: Vec::new(),
-                start: Vec::new(),
             },
             effects: Vec::new(),
         }

@@ -54,7 +54,7 @@
 //!   kept: [`super::beam`]).
 
 use super::preprocess::CleanRun;
-use super::shooting::{par_map, refit, ShootingOptions, SimFit, SimModel, WarmStart, Win};
+use super::shooting::{par_map, refit, ShootingOptions, SimFit, SimModel, Win};
 
 /// Folds by run.
 #[derive(Debug, Clone, PartialEq)]
@@ -91,8 +91,6 @@ pub struct HeldOut {
     pub chi2: Vec<Option<f64>>,
     /// In-sample χ² of each window (the model fitted on all runs).
     pub chi2_fit: Vec<Option<f64>>,
-    /// The in-sample state of each window, where its held-out predictions start.
-    pub start: Vec<Option<WarmStart>>,
 }
 
 /// The held-out errors of `model` with its refit `fit` (see the module).
@@ -106,11 +104,7 @@ pub fn heldout(model: &SimModel, fit: &SimFit, wins: &[Win], folds: &Folds) -> H
         let th = &thetas[folds.of_run[w.run]];
         model.window_chi2_from(th, w, warm[k])
     });
-    HeldOut {
-        chi2,
-        chi2_fit,
-        start: warm,
-    }
+    HeldOut { chi2, chi2_fit }
 }
 
 /// θ refitted without the windows of the runs for which `out(run)` holds: the one Gauss–Newton
@@ -592,7 +586,6 @@ mod tests {
                 .map(|k| (k != 11).then_some(20.0 + k as f64))
                 .collect(),
             chi2_fit: vec![None; 12],
-            start: Vec::new(),
         };
         // better by 5 on windows 0..8, fails on 8 and 9, wins window 10 that the current model
         // could not simulate, and neither simulates window 11
@@ -605,7 +598,6 @@ mod tests {
                 })
                 .collect(),
             chi2_fit: vec![None; 12],
-            start: Vec::new(),
         };
         let mut b2 = before.clone();
         b2.chi2[10] = None;
@@ -632,7 +624,6 @@ mod tests {
                 .map(|k| Some(c * if k == 0 { 1000.0 } else { 20.0 }))
                 .collect(),
             chi2_fit: vec![None; 40],
-            start: Vec::new(),
         };
         let after = |c: f64| HeldOut {
             chi2: (0..40)
@@ -647,7 +638,6 @@ mod tests {
                 })
                 .collect(),
             chi2_fit: vec![None; 40],
-            start: Vec::new(),
         };
         let c = compare(&before(1.0), &after(1.0), &wins, std::slice::from_ref(&run));
         assert!(

@@ -12,7 +12,8 @@ use super::profile::{delta_chi2, profile_shape, profile_side, ProfileSide, Shape
 use super::propose::{propose, Candidate, ProposeCtx};
 use super::regression::Term;
 use super::shooting::{
-    par_map, refit, Reselect, ShootingOptions, SimFit, SimModel, Win, CONVERGED_PATIENCE,
+    par_map, refit, refit_sharing, Reselect, ShootingOptions, SimFit, SimModel, StartSearches, Win,
+    CONVERGED_PATIENCE,
 };
 use super::spec::{fix_shapes, free_shapes};
 use crate::progress::{stage, Observer};
@@ -161,9 +162,9 @@ fn evaluate_on(
     ctx: &SelectCtx,
     wins: &[Win],
     cur_followed: usize,
-    cur: &ModelState,
-    cand: &Candidate,
+    (cur, cand): (&ModelState, &Candidate),
     reselect: Reselect,
+    searches: Option<&StartSearches>,
 ) -> Option<ModelState> {
     let mut terms = cur.terms.clone();
     terms.extend(judged_terms(cur, cand).0);
@@ -188,7 +189,7 @@ fn evaluate_on(
         reselect,
         ..*ctx.shooting
     };
-    let fit = refit_from_better_start(&model, cur, &theta0, wins, &opts, cur_followed)?;
+    let fit = refit_from_better_start(&model, cur, &theta0, wins, &opts, (cur_followed, searches))?;
     let held = heldout(&model, &fit, wins, ctx.folds);
     let mut effects = cur.effects.clone();
     effects.push(cand.effect.clone());
@@ -218,9 +219,9 @@ fn refit_from_better_start(
     theta0: &[f64],
     wins: &[Win],
     opts: &ShootingOptions,
-    cur_followed: usize,
+    (cur_followed, searches): (usize, Option<&StartSearches>),
 ) -> Option<SimFit> {
-    let fit = refit(model, theta0, wins, opts);
+    let fit = refit_sharing(model, theta0, wins, opts, searches);
     if fit.as_ref().is_some_and(|f| f.used.len() >= cur_followed) {
         return fit;
     }
@@ -247,9 +248,20 @@ fn refit_from_better_start(
 /// always, and not in the screening ([`screen`]): re-selecting every candidate's windows raised
 /// the CPU of a diagnosis by 45–85 % where the start follows nearly all of them.
 pub fn evaluate(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<ModelState> {
+    evaluate_sharing(ctx, cur, cand, None)
+}
+
+/// [`evaluate`], the searches of the windows at the candidate's start shared with its
+/// screening ([`screen_sharing`], the same `searches`).
+pub fn evaluate_sharing(
+    ctx: &SelectCtx,
+    cur: &ModelState,
+    cand: &Candidate,
+    searches: Option<&StartSearches>,
+) -> Option<ModelState> {
     let followed = cur.fit.used.len();
     let reselect = Reselect::OnceBelow(CANDIDATE_RESELECT_BELOW);
-    evaluate_on(ctx, ctx.wins, followed, cur, cand, reselect)
+    evaluate_on(ctx, ctx.wins, followed, (cur, cand), reselect, searches)
 }
 
 /// The fraction of the judging windows below which a candidate's refit re-selects its windows
@@ -500,14 +512,24 @@ pub const SCREEN_Z: f64 = 1.0;
 /// full-set z reaches the threshold (≥ 3) has an expected half-set z of ≥ 3/√2 ≈ 2.1, far above
 /// [`SCREEN_Z`].
 pub fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Comparison> {
+    screen_sharing(ctx, cur, cand, None)
+}
+
+/// [`screen`], the searches of its windows at the candidate's start kept in `searches` for the
+/// candidate's refit on all windows ([`evaluate_sharing`]).
+pub fn screen_sharing(
+    ctx: &SelectCtx,
+    cur: &ModelState,
+    cand: &Candidate,
+    searches: Option<&StartSearches>,
+) -> Option<Comparison> {
     let idx: Vec<usize> = (0..ctx.wins.len()).step_by(2).collect();
     let sub: Vec<Win> = idx.iter().map(|&k| ctx.wins[k].clone()).collect();
     let followed = cur.fit.used.iter().filter(|&&(wi, _)| wi % 2 == 0).count();
-    let st = evaluate_on(ctx, &sub, followed, cur, cand, Reselect::Never)?;
+    let st = evaluate_on(ctx, &sub, followed, (cur, cand), Reselect::Never, searches)?;
     let cur_sub = HeldOut {
         chi2: idx.iter().map(|&k| cur.held.chi2[k]).collect(),
         chi2_fit: idx.iter().map(|&k| cur.held.chi2_fit[k]).collect(),
-        start: idx.iter().map(|&k| cur.held.start[k]).collect(),
     };
     Some(compare(&cur_sub, &st.held, &sub, ctx.runs))
 }
@@ -574,9 +596,10 @@ pub fn judge_round(
     let z_crit = z_threshold(cands.len());
     let judged = par_map(cands.len(), |k| {
         let c = &cands[k];
-        let scr = screen(ctx, cur, c);
+        let searches = StartSearches::default();
+        let scr = screen_sharing(ctx, cur, c, Some(&searches));
         let st = match scr {
-            Some(sc) if sc.z >= SCREEN_Z => evaluate(ctx, cur, c),
+            Some(sc) if sc.z >= SCREEN_Z => evaluate_sharing(ctx, cur, c, Some(&searches)),
             _ => None,
         };
         (scr, st)

@@ -34,6 +34,7 @@ use super::spec::{coefficients_for_run, simulable};
 use crate::numerics::least_squares::{lstsq_determined, DEFAULT_RCOND};
 use faer::Mat;
 use nalgebra::{DMatrix, DVector};
+use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
 /// Options of the refit.
@@ -216,11 +217,6 @@ impl SimModel<'_> {
     }
     /// (χ², frames) of window `w` at θ: its state fitted (multi-start) with the model fixed.
     pub fn window_chi2(&self, theta: &[f64], w: &Win) -> Option<(f64, usize)> {
-        self.window_fit(theta, w).map(|(c, _)| (c, w.kept()))
-    }
-    /// (χ², state) of window `w` at θ: its initial state fitted (multi-start) with the model
-    /// fixed.
-    pub fn window_fit(&self, theta: &[f64], w: &Win) -> Option<(f64, [f64; 2])> {
         let r = &self.runs[w.run];
         let sys = self.system(theta, w);
         let (t, b) = (&r.t[w.lo..w.hi], &r.beta[w.lo..w.hi]);
@@ -234,26 +230,7 @@ impl SimModel<'_> {
             true,
             self.tol,
         )?;
-        Some((f.rss, [f.p[0], f.p[1]]))
-    }
-}
-
-/// Where the prediction of a window at a θ near a refit's starts ([`SimModel::window_chi2_from`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum WarmStart {
-    /// The state the refit projected for a window it used (the model follows it there).
-    Followed([f64; 2]),
-    /// The best state of a multi-start search at the refit's θ for a window the refit did not
-    /// use (the model does not follow it, or its state could not be fitted at the start).
-    Searched([f64; 2]),
-}
-
-impl WarmStart {
-    /// The state.
-    pub fn state(self) -> [f64; 2] {
-        match self {
-            WarmStart::Followed(x) | WarmStart::Searched(x) => x,
-        }
+        Some((f.rss, w.kept()))
     }
 }
 
@@ -267,19 +244,12 @@ impl SimModel<'_> {
         let (res, _) = project_state(&sys, t, b, &w.keep, r.sigma_camera.max(1e-12), x, self.tol)?;
         Some(res.iter().map(|v| v * v).sum())
     }
-    /// χ² of window `w` at θ, from the warm start of a refit at a nearby θ (a leave-fold-out
-    /// refit is one Gauss–Newton step from it):
-    /// - [`WarmStart::Followed`]: its projection when the fit is good (≤ 4 per frame), else the
-    ///   better of that and a multi-start state fit (the step moved the window off its branch);
-    /// - [`WarmStart::Searched`]: its projection (the multi-start search for the window was made
-    ///   at the refit's θ, and found no state the model follows; repeating it at every θ of the
-    ///   folds was a quarter of a diagnosis's time);
-    /// - none, or a projection that fails: a multi-start state fit.
-    pub fn window_chi2_from(&self, theta: &[f64], w: &Win, warm: Option<WarmStart>) -> Option<f64> {
-        let from_warm = warm.and_then(|x| self.window_chi2_warm(theta, w, x.state()));
-        let searched = matches!(warm, Some(WarmStart::Searched(_)));
+    /// χ² of window `w` at θ: from the warm start when there is one and its fit is good
+    /// (≤ 4 per frame), else the better of that and a multi-start state fit.
+    pub fn window_chi2_from(&self, theta: &[f64], w: &Win, warm: Option<[f64; 2]>) -> Option<f64> {
+        let from_warm = warm.and_then(|x| self.window_chi2_warm(theta, w, x));
         match from_warm {
-            Some(c) if searched || c <= 4.0 * w.kept() as f64 => Some(c),
+            Some(c) if c <= 4.0 * w.kept() as f64 => Some(c),
             _ => {
                 let fresh = self.window_chi2(theta, w).map(|x| x.0);
                 match (fresh, from_warm) {
@@ -363,27 +333,27 @@ impl SimFit {
         warm
     }
     /// χ² of every window of `wins` at the solution: from the residuals for the used windows,
-    /// by a fresh (multi-start) state fit for the others; and the warm start of each window
-    /// ([`WarmStart`]).
+    /// by a fresh state fit for the others; and the warm start of each used window.
     pub fn window_chi2(
         &self,
         model: &SimModel,
         wins: &[Win],
-    ) -> (Vec<Option<f64>>, Vec<Option<WarmStart>>) {
-        let mut warm: Vec<Option<WarmStart>> = vec![None; wins.len()];
+    ) -> (Vec<Option<f64>>, Vec<Option<[f64; 2]>>) {
+        let mut warm: Vec<Option<[f64; 2]>> = vec![None; wins.len()];
         let mut chi2: Vec<Option<f64>> = vec![None; wins.len()];
         for (k, &(wi, row0)) in self.used.iter().enumerate() {
-            warm[wi] = Some(WarmStart::Followed(self.states[k]));
+            warm[wi] = Some(self.states[k]);
             let n = wins[wi].keep.len();
             chi2[wi] = Some(self.resid[row0..row0 + n].iter().map(|v| v * v).sum());
         }
         let missing: Vec<usize> = (0..wins.len()).filter(|&k| chi2[k].is_none()).collect();
         let fresh = par_map(missing.len(), |j| {
-            model.window_fit(&self.theta, &wins[missing[j]])
+            model
+                .window_chi2(&self.theta, &wins[missing[j]])
+                .map(|x| x.0)
         });
         for (j, k) in missing.into_iter().enumerate() {
-            chi2[k] = fresh[j].map(|f| f.0);
-            warm[k] = fresh[j].map(|f| WarmStart::Searched(f.1));
+            chi2[k] = fresh[j];
         }
         (chi2, warm)
     }
@@ -574,11 +544,27 @@ pub fn refit(
     wins: &[Win],
     opts: &ShootingOptions,
 ) -> Option<SimFit> {
+    refit_sharing(model, theta0, wins, opts, None)
+}
+
+/// [`refit`], the multi-start searches of its windows at the start θ₀ shared through `searches`
+/// with other refits of the same model from the same θ₀ (a candidate's screening on every second
+/// window and its refit on all of them: [`super::select::judge_round`]).
+pub fn refit_sharing(
+    model: &SimModel,
+    theta0: &[f64],
+    wins: &[Win],
+    opts: &ShootingOptions,
+    searches: Option<&StartSearches>,
+) -> Option<SimFit> {
     if !simulable(&model.terms) || wins.is_empty() {
         return None;
     }
     let all: Vec<usize> = (0..wins.len()).collect();
-    let mut states = followed_windows(model, theta0, wins, &all);
+    let mut states = match searches {
+        Some(memo) => memo.followed(model, theta0, wins, &all),
+        None => followed_windows(model, theta0, wins, &all),
+    };
     let mut fit = fit_windows(model, theta0, wins, &states, opts)?;
     let rms_start_rad = fit.rms_start_rad;
     let rounds = match opts.reselect {
@@ -609,6 +595,57 @@ pub fn refit(
     }
     fit.rms_start_rad = rms_start_rad;
     Some(fit)
+}
+
+/// The windows' multi-start state searches made at a start θ (the result of
+/// [`followed_windows`] for each window, by θ and window), for refits of one model that start
+/// from the same θ ([`refit_sharing`]). The searches are deterministic, so a shared result is
+/// the one the refit would compute; only refits of the same model may share one.
+#[derive(Debug, Default)]
+pub struct StartSearches {
+    found: Mutex<HashMap<SearchKey, Option<[f64; 2]>>>,
+}
+
+/// A search's θ (its bits) and window (run, first and end frame).
+type SearchKey = (Vec<u64>, usize, usize, usize);
+
+impl StartSearches {
+    /// [`followed_windows`] of `model` at θ, each window searched at most once per θ.
+    fn followed(
+        &self,
+        model: &SimModel,
+        theta: &[f64],
+        wins: &[Win],
+        which: &[usize],
+    ) -> Vec<Option<[f64; 2]>> {
+        let bits: Vec<u64> = theta.iter().map(|v| v.to_bits()).collect();
+        let key = |w: &Win| (bits.clone(), w.run, w.lo, w.hi);
+        let known: Vec<Option<Option<[f64; 2]>>> = match self.found.lock() {
+            Ok(m) => which
+                .iter()
+                .map(|&k| m.get(&key(&wins[k])).copied())
+                .collect(),
+            Err(_) => vec![None; which.len()],
+        };
+        let todo: Vec<usize> = which
+            .iter()
+            .zip(&known)
+            .filter(|(_, h)| h.is_none())
+            .map(|(&k, _)| k)
+            .collect();
+        let mut out = followed_windows(model, theta, wins, &todo);
+        if let Ok(mut m) = self.found.lock() {
+            for &k in &todo {
+                m.insert(key(&wins[k]), out[k]);
+            }
+        }
+        for (&k, h) in which.iter().zip(known) {
+            if let Some(x) = h {
+                out[k] = x;
+            }
+        }
+        out
+    }
 }
 
 /// Most rounds of re-selecting the windows at the solution ([`refit`]).
@@ -1075,6 +1112,86 @@ mod tests {
     use super::*;
 
     use crate::identification::lm::tests::normals as noise;
+
+    /// A ring-down of the base model θ = (ζ, η, −g, gΔ) = (1, 5, −295, 59) from β = 1.2 rad, 200
+    /// frames at 50 per second, camera noise 0.01 rad (seed 5), and its four windows of 50 frames.
+    fn ringdown(theta: &[f64]) -> (Vec<CleanRun>, Vec<Win>) {
+        let n = 200;
+        let t: Vec<f64> = (0..n).map(|k| k as f64 / 50.0).collect();
+        let run = |beta: Vec<f64>| CleanRun {
+            alpha: vec![0.0; n],
+            beta,
+            v: vec![0.0; n],
+            t: t.clone(),
+            dt: 0.02,
+            outliers: 0,
+            sigma_beta: 0.01,
+            sigma_camera: 0.01,
+            v_gain: 1.0,
+            alpha_rate: 0.0,
+            ringdown: true,
+        };
+        let quiet = [run(vec![0.0; n])];
+        let terms = super::super::regression::BASE_TERMS.to_vec();
+        let model = SimModel::of_terms(&quiet, Geometry::new(0.5, 0.5), terms, 1e-8);
+        let whole = Win::whole(0, n);
+        let sys = model.system(theta, &whole);
+        let clean = window_residuals(&sys, &t, &vec![0.0; n], &whole.keep, 1.0, [1.2, 0.0], 1e-8)
+            .expect("the ring-down simulates");
+        let e = noise(n, 5);
+        let beta: Vec<f64> = clean.iter().zip(&e).map(|(b, e)| b + 0.01 * e).collect();
+        let wins = (0..4)
+            .map(|k| Win {
+                lo: 50 * k,
+                hi: 50 * k + 50,
+                keep: vec![true; 50],
+                ..Win::whole(0, 50)
+            })
+            .collect();
+        (vec![run(beta)], wins)
+    }
+
+    /// The searches a refit shares ([`StartSearches`]) are consulted: a window marked as not
+    /// followed at the start is left out; with genuine entries (those of a refit on every second
+    /// window, as a screening makes them) the shared refit on all windows is the plain one bit
+    /// for bit, and it adds only the windows not searched before.
+    #[test]
+    fn shared_start_searches_are_the_refits_own() {
+        let truth = [1.0, 5.0, -295.0, 59.0];
+        let (runs, wins) = ringdown(&truth);
+        let terms = super::super::regression::BASE_TERMS.to_vec();
+        let model = SimModel::of_terms(&runs, Geometry::new(0.5, 0.5), terms, 1e-8);
+        let theta0 = [1.1, 4.5, -300.0, 60.0];
+        let opts = ShootingOptions::default();
+        let plain = refit(&model, &theta0, &wins, &opts).expect("the plain refit");
+        assert_eq!(plain.used.len(), 4, "the start follows every window");
+        let bits: Vec<u64> = theta0.iter().map(|v| v.to_bits()).collect();
+        // a window marked as not followed at θ₀ is not used
+        let marked = StartSearches::default();
+        marked.found.lock().unwrap().insert((bits, 0, 0, 50), None);
+        let f = refit_sharing(&model, &theta0, &wins, &opts, Some(&marked)).expect("the refit");
+        assert!(f.used.iter().all(|&(w, _)| w != 0), "{:?}", f.used);
+        // genuine entries from every second window, then the refit on all of them
+        let shared = StartSearches::default();
+        let half = [wins[0].clone(), wins[2].clone()];
+        refit_sharing(&model, &theta0, &half, &opts, Some(&shared)).expect("the half refit");
+        assert_eq!(shared.found.lock().unwrap().len(), 2);
+        let f = refit_sharing(&model, &theta0, &wins, &opts, Some(&shared)).expect("the refit");
+        assert_eq!(shared.found.lock().unwrap().len(), 4);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&f.theta), bits(&plain.theta));
+        assert_eq!(f.used, plain.used);
+        assert_eq!(f.states, plain.states);
+        // and the refit moves to the ring-down's damping and friction (within 2 %; the locked
+        // input at α = 0 leaves the coupling's −g column unseen, held at its start)
+        for k in [0, 1] {
+            assert!(
+                (plain.theta[k] / truth[k] - 1.0).abs() < 0.02,
+                "{:?}",
+                plain.theta
+            );
+        }
+    }
 
     /// The leave-fold-out step of a fit linear in θ is the exact refit without the fold (the
     /// independent check: least squares on the kept rows alone), and a parameter the rows do not
