@@ -549,19 +549,7 @@ mod tests {
 
     /// A ring-down run (σ_camera = 0.01 rad) and `n` windows of 20 frames on it.
     fn one_run_of_windows(n: usize) -> (CleanRun, Vec<Win>) {
-        let run = CleanRun {
-            t: vec![],
-            alpha: vec![],
-            beta: vec![],
-            v: vec![],
-            dt: 0.01,
-            outliers: 0,
-            sigma_beta: 0.01,
-            sigma_camera: 0.01,
-            v_gain: 1.0,
-            alpha_rate: 0.0,
-            ringdown: true,
-        };
+        let run = CleanRun::test_ringdown(vec![], vec![], 0.01);
         let wins = (0..n)
             .map(|k| Win {
                 run: 0,

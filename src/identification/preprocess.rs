@@ -593,6 +593,27 @@ pub fn speed_noise(pieces: &[SpeedPiece]) -> Option<SpeedNoise> {
 }
 
 #[cfg(test)]
+impl CleanRun {
+    /// A clean ring-down (locked input at α = 0, velocity estimate 0, camera noise 0.01 rad) of
+    /// the angles `beta` at the times `t`, frame interval `dt`: the unit tests' runs.
+    pub(crate) fn test_ringdown(t: Vec<f64>, beta: Vec<f64>, dt: f64) -> Self {
+        Self {
+            alpha: vec![0.0; t.len()],
+            v: vec![0.0; t.len()],
+            t,
+            beta,
+            dt,
+            outliers: 0,
+            sigma_beta: 0.01,
+            sigma_camera: 0.01,
+            v_gain: 1.0,
+            alpha_rate: 0.0,
+            ringdown: true,
+        }
+    }
+}
+
+#[cfg(test)]
 mod tests {
     #[test]
     fn polynomial_weights_reproduce_a_cubic_and_its_slope() {

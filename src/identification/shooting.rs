@@ -1118,19 +1118,7 @@ mod tests {
     fn ringdown(theta: &[f64]) -> (Vec<CleanRun>, Vec<Win>) {
         let n = 200;
         let t: Vec<f64> = (0..n).map(|k| k as f64 / 50.0).collect();
-        let run = |beta: Vec<f64>| CleanRun {
-            alpha: vec![0.0; n],
-            beta,
-            v: vec![0.0; n],
-            t: t.clone(),
-            dt: 0.02,
-            outliers: 0,
-            sigma_beta: 0.01,
-            sigma_camera: 0.01,
-            v_gain: 1.0,
-            alpha_rate: 0.0,
-            ringdown: true,
-        };
+        let run = |beta: Vec<f64>| CleanRun::test_ringdown(t.clone(), beta, 0.02);
         let quiet = [run(vec![0.0; n])];
         let terms = super::super::regression::BASE_TERMS.to_vec();
         let model = SimModel::of_terms(&quiet, Geometry::new(0.5, 0.5), terms, 1e-8);
