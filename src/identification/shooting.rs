@@ -1113,8 +1113,8 @@ mod tests {
 
     use crate::identification::lm::tests::normals as noise;
 
-    /// A ring-down of the base model θ = (ζ, η, −g, gΔ) = (1, 5, −295, 59) from β = 1.2 rad, 200
-    /// frames at 50 per second, camera noise 0.01 rad (seed 5), and its four windows of 50 frames.
+    /// A ring-down of the base model at θ = (ζ, η, −g, gΔ) from β = 1.2 rad, 200 frames at 50
+    /// per second, camera noise 0.01 rad (seed 5), and its four windows of 50 frames.
     fn ringdown(theta: &[f64]) -> (Vec<CleanRun>, Vec<Win>) {
         let n = 200;
         let t: Vec<f64> = (0..n).map(|k| k as f64 / 50.0).collect();
