@@ -129,8 +129,8 @@ pub fn backward(
             heldout(
                 &fin.model(ctx.runs, ctx.geo, ctx.tol),
                 &fin.fit,
-                ctx.wins,
-                ctx.folds,
+                (ctx.wins, ctx.folds),
+                ctx.shooting,
             )
         });
         let cmp = compare(&reduced.held, held, ctx.wins, ctx.runs);

@@ -351,7 +351,7 @@ pub fn fit_base(
         };
         if let Some(f) = refit(&model, &weak.coef, &wins, &converged) {
             stage(progress, "base model: held-out predictions of the folds");
-            let held = super::judge::heldout(&model, &f, &wins, folds);
+            let held = super::judge::heldout(&model, &f, (&wins, folds), &opts.shooting);
             state = Some(ModelState {
                 terms: BASE_TERMS.to_vec(),
                 fit_latency: false,

@@ -54,7 +54,7 @@
 //!   kept: [`super::beam`]).
 
 use super::preprocess::CleanRun;
-use super::shooting::{par_map, refit, ShootingOptions, SimFit, SimModel, Win};
+use super::shooting::{par_map, refit, Reselect, ShootingOptions, SimFit, SimModel, Win};
 
 /// Folds by run.
 #[derive(Debug, Clone, PartialEq)]
@@ -93,10 +93,16 @@ pub struct HeldOut {
     pub chi2_fit: Vec<Option<f64>>,
 }
 
-/// The held-out errors of `model` with its refit `fit` (see the module).
-pub fn heldout(model: &SimModel, fit: &SimFit, wins: &[Win], folds: &Folds) -> HeldOut {
+/// The held-out errors of `model` with its refit `fit` (see the module); `judge` the judge's
+/// refit options (the patience of a leave-fold-out refit, [`theta_without`]).
+pub fn heldout(
+    model: &SimModel,
+    fit: &SimFit,
+    (wins, folds): (&[Win], &Folds),
+    judge: &ShootingOptions,
+) -> HeldOut {
     let thetas: Vec<Vec<f64>> = (0..folds.k)
-        .map(|f| theta_without(model, fit, wins, |run| folds.of_run[run] == f))
+        .map(|f| theta_without(model, fit, wins, |run| folds.of_run[run] == f, judge))
         .collect();
     let (chi2_fit, warm) = fit.window_chi2(model, wins);
     let chi2: Vec<Option<f64>> = par_map(wins.len(), |k| {
@@ -110,8 +116,8 @@ pub fn heldout(model: &SimModel, fit: &SimFit, wins: &[Win], folds: &Folds) -> H
 /// θ refitted without the windows of the runs for which `out(run)` holds: the one Gauss–Newton
 /// step of [`SimFit::step_without`] when it stays where the linearisation holds
 /// ([`step_is_plausible`]), else a Levenberg–Marquardt refit from θ on the remaining windows
-/// ([`refit`] with the judge's patience), whose steps are checked against the simulated
-/// residuals; θ itself when neither can be taken (no window left to fit). (Shortening the step
+/// ([`refit`] with the judge's options `judge`, its windows fixed), whose steps are checked
+/// against the simulated residuals; θ itself when neither can be taken (no window left to fit). (Shortening the step
 /// to the plausible region instead was tried: it lost a campaign case and moved the one-step
 /// held-out z away from the exact leave-fold-out refits' — docs/diagnosis.md.)
 pub fn theta_without(
@@ -119,6 +125,7 @@ pub fn theta_without(
     fit: &SimFit,
     wins: &[Win],
     out: impl Fn(usize) -> bool,
+    judge: &ShootingOptions,
 ) -> Vec<f64> {
     let Some(step) = fit.step_without(wins, &out) else {
         return fit.theta.clone();
@@ -132,7 +139,11 @@ pub fn theta_without(
         .filter(|&&(wi, _)| !out(wins[wi].run))
         .map(|&(wi, _)| wins[wi].clone())
         .collect();
-    refit(model, &fit.theta, &kept, &ShootingOptions::default())
+    let opts = ShootingOptions {
+        reselect: Reselect::Never,
+        ..*judge
+    };
+    refit(model, &fit.theta, &kept, &opts)
         .map(|f| f.theta)
         .unwrap_or_else(|| fit.theta.clone())
 }

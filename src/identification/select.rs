@@ -190,7 +190,7 @@ fn evaluate_on(
         ..*ctx.shooting
     };
     let fit = refit_from_better_start(&model, cur, &theta0, wins, &opts, (cur_followed, searches))?;
-    let held = heldout(&model, &fit, wins, ctx.folds);
+    let held = heldout(&model, &fit, (wins, ctx.folds), ctx.shooting);
     let mut effects = cur.effects.clone();
     effects.push(cand.effect.clone());
     Some(ModelState {
@@ -435,7 +435,7 @@ pub fn try_refit_state(
     };
     let fit = refit_to_convergence(&model, theta0, ctx.wins, &opts)?;
     let held = if new_heldout {
-        heldout(&model, &fit, ctx.wins, ctx.folds)
+        heldout(&model, &fit, (ctx.wins, ctx.folds), ctx.shooting)
     } else {
         st.held.clone()
     };
