@@ -238,6 +238,8 @@ pub fn width_member(
         candidate: cands[k].clone(),
         cmp,
         screen: Some(scr),
+        screen_fit: None,
+        screen_beaten: None,
         z_crit,
         accepted,
         state: st.filter(|_| accepted),

@@ -698,9 +698,11 @@ pub fn judged_finding(
 }
 
 /// The other candidates of the round of `t` judged on the same model that were significant too
-/// (they explain part of the same mismatch), as "effect (terms): z, gain". Not rivals: the
-/// family's other members (the judge chose among them) and the members of an effect accepted in
-/// the same round (close rivals accepted together, [`super::beam`]).
+/// (they explain part of the same mismatch), as "effect (terms): z, gain"; also those significant
+/// on the screening's windows that the screening's leader predicted significantly better there
+/// (not refitted on all windows, [`super::select::judge_round`]), with their screening numbers.
+/// Not rivals: the family's other members (the judge chose among them) and the members of an
+/// effect accepted in the same round (close rivals accepted together, [`super::beam`]).
 pub fn rivals(t: &Tried, tried: &[Tried]) -> Vec<String> {
     let same_round = |o: &&Tried| o.round == t.round;
     let accepted_ids: Vec<&str> = tried
@@ -716,21 +718,29 @@ pub fn rivals(t: &Tried, tried: &[Tried]) -> Vec<String> {
         .filter(|o| o.candidate.effect.id != t.candidate.effect.id)
         .filter(|o| !accepted_ids.contains(&o.candidate.effect.id))
         .filter_map(|o| {
-            let c = o.cmp?;
-            c.improves(o.z_crit).then(|| {
-                format!(
-                    "{} ({}): held-out z = {:.1}, χ² gain {:.0}",
-                    o.candidate.effect.id,
-                    o.candidate
-                        .terms
-                        .iter()
-                        .map(|x| x.name())
-                        .collect::<Vec<_>>()
-                        .join(", "),
-                    c.z,
-                    c.gain
-                )
-            })
+            let name = format!(
+                "{} ({})",
+                o.candidate.effect.id,
+                o.candidate
+                    .terms
+                    .iter()
+                    .map(|x| x.name())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            match (o.cmp, o.screen, &o.screen_beaten) {
+                (Some(c), ..) => c
+                    .improves(o.z_crit)
+                    .then(|| format!("{name}: held-out z = {:.1}, χ² gain {:.0}", c.z, c.gain)),
+                (None, Some(s), Some(b)) => s.improves(o.z_crit).then(|| {
+                    format!(
+                        "{name}: screening (half the windows) held-out z = {:.1}, χ² gain {:.0}; \
+                         {} predicts them better at z = {:.1}",
+                        s.z, s.gain, b.label, b.cmp.z
+                    )
+                }),
+                _ => None,
+            }
         })
         .collect()
 }
@@ -766,6 +776,10 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                 "heldout_z_cluster_by_run": t.cmp.map(|m| m.z_cluster),
                 "heldout_z_chi2": t.cmp.map(|m| m.z_chi2),
                 "screening_z": t.screen.map(|m| m.z),
+                "screening_in_sample_z": t.screen_fit.map(|m| m.z),
+                "screening_in_sample_chi2_gain": t.screen_fit.map(|m| m.gain),
+                "screening_beaten_by": t.screen_beaten.as_ref().map(|b| b.label.clone()),
+                "screening_beaten_z": t.screen_beaten.as_ref().map(|b| b.cmp.z),
                 "z_threshold": t.z_crit,
                 "heldout_chi2_gain": t.cmp.map(|m| m.gain),
                 "heldout_rms_before_rad": t.cmp.map(|m| m.rms_before),
@@ -780,13 +794,25 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                      parameters are consistent with zero (Wald z = {:.2} < {:.2}) and the model \
                      without it predicts the held-out windows as well (z = {:.2} < {:.2})",
                     d.wald_z, t.z_crit, d.heldout_z, t.z_crit) } else { match t.cmp {
-                    None => match t.screen {
-                        Some(s) => format!(
+                    None => match (t.screen, t.screen_fit, &t.screen_beaten) {
+                        (Some(s), _, Some(b)) => format!(
+                            "screening (half the windows): held-out z = {:.2}, but {} predicts \
+                             them significantly better (z = {:.2} ≥ {:.2}, χ² gain {:.1}); not \
+                             refitted on all windows",
+                            s.z, b.label, b.cmp.z, t.z_crit, b.cmp.gain
+                        ),
+                        (Some(s), _, None) => format!(
                             "screening (half the windows): held-out z = {:.2} < {}",
                             s.z,
                             super::select::SCREEN_Z
                         ),
-                        None => "the refit by simulation failed".to_string(),
+                        (None, Some(f), _) => format!(
+                            "screening (half the windows): its refit fits them no better than the \
+                             current model (in-sample z = {:.2}, χ² gain {:.1}); not predicted \
+                             held out",
+                            f.z, f.gain
+                        ),
+                        (None, None, _) => "the refit by simulation failed".to_string(),
                     },
                     Some(m) if m.z < t.z_crit => format!(
                         "held-out improvement not significant (z = {:.2} < {:.2})", m.z, t.z_crit),

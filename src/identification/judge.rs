@@ -101,10 +101,27 @@ pub fn heldout(
     (wins, folds): (&[Win], &Folds),
     judge: &ShootingOptions,
 ) -> HeldOut {
+    heldout_after(
+        model,
+        fit,
+        (wins, folds),
+        judge,
+        fit.window_chi2(model, wins),
+    )
+}
+
+/// [`heldout`] with the refit's in-sample χ² of the windows and their fitted states
+/// ([`SimFit::window_chi2`]) already computed.
+pub fn heldout_after(
+    model: &SimModel,
+    fit: &SimFit,
+    (wins, folds): (&[Win], &Folds),
+    judge: &ShootingOptions,
+    (chi2_fit, warm): (Vec<Option<f64>>, Vec<Option<[f64; 2]>>),
+) -> HeldOut {
     let thetas: Vec<Vec<f64>> = (0..folds.k)
         .map(|f| theta_without(model, fit, wins, |run| folds.of_run[run] == f, judge))
         .collect();
-    let (chi2_fit, warm) = fit.window_chi2(model, wins);
     let chi2: Vec<Option<f64>> = par_map(wins.len(), |k| {
         let w = &wins[k];
         let th = &thetas[folds.of_run[w.run]];

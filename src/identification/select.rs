@@ -5,7 +5,9 @@
 //! branch of its own: [`super::beam`]). Every candidate tried is kept with its numbers. Also the refits of the final model (polish, profiles).
 
 use super::catalog::{member_choice, same_slot, Effect, MemberChoice};
-use super::judge::{added_parameters_z, compare, heldout, z_threshold, Comparison, Folds, HeldOut};
+use super::judge::{
+    added_parameters_z, compare, heldout, heldout_after, z_threshold, Comparison, Folds, HeldOut,
+};
 use super::model::Geometry;
 use super::preprocess::CleanRun;
 use super::profile::{delta_chi2, profile_shape, profile_side, ProfileSide, ShapeProfile};
@@ -70,6 +72,14 @@ pub struct Tried {
     pub cmp: Option<Comparison>,
     /// Its screening comparison (every second judging window).
     pub screen: Option<Comparison>,
+    /// Its in-sample comparison on the screening's windows when its refit there fitted them
+    /// significantly worse than the current model (z ≤ −[`SCREEN_Z`] with a χ² loss); the
+    /// screening then stopped before the held-out prediction, and `screen` is `None`
+    /// ([`Screening::FitsWorse`]).
+    pub screen_fit: Option<Comparison>,
+    /// The screening's leader when it predicts this candidate's screening windows significantly
+    /// better: the candidate was then not refitted on all windows ([`judge_round`]).
+    pub screen_beaten: Option<BeatenOnScreening>,
     /// The threshold of the round.
     pub z_crit: f64,
     /// Accepted.
@@ -96,6 +106,19 @@ pub struct Tried {
     /// a joined rival's slot refitted on top of the accepted one, [`super::beam`]); `None` for
     /// the round's own candidates, judged on the round's model.
     pub on_top_of: Option<&'static str>,
+}
+
+/// A candidate of a round whose screening windows the round's screening leader
+/// ([`judge_round`]) predicts significantly better.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BeatenOnScreening {
+    /// The leader (an index into the round's candidates, as [`judge_round`] returns them).
+    pub leader: usize,
+    /// The leader's effect and terms, "effect (terms)".
+    pub label: String,
+    /// The paired comparison of the leader against the candidate on the screening's windows
+    /// (positive gain: the leader predicts better).
+    pub cmp: Comparison,
 }
 
 impl Tried {
@@ -154,18 +177,49 @@ fn start_theta(cur: &ModelState, cand: &Candidate) -> Vec<f64> {
     th
 }
 
+/// A candidate refitted on a set of windows ([`evaluate_on`]).
+enum Refitted {
+    /// The model with it, its held-out errors predicted.
+    Judged(Box<ModelState>),
+    /// Its refit fits the windows significantly worse than the current model does (the
+    /// in-sample comparison, [`fit_gain`]): its held-out errors are not predicted.
+    FitsWorse(Comparison),
+}
+
+/// The in-sample comparison of a candidate's refit (its windows' χ² `after`) with the current
+/// model (`before`, its in-sample χ² of the same windows): [`compare`] with the fitted χ² in
+/// place of the held-out ones.
+fn fit_gain(
+    before: &[Option<f64>],
+    after: &[Option<f64>],
+    wins: &[Win],
+    runs: &[CleanRun],
+) -> Comparison {
+    let as_held = |c: &[Option<f64>]| HeldOut {
+        chi2: c.to_vec(),
+        chi2_fit: c.to_vec(),
+    };
+    compare(&as_held(before), &as_held(after), wins, runs)
+}
+
 /// Refits `cur` + `cand` on the windows `wins` (those its start cannot follow tried again at
 /// the solution as `reselect` says;
 /// [`refit_from_better_start`] with `cur_followed` the number of them the current model follows)
-/// and gives its held-out errors on them.
+/// and gives its held-out errors on them. With `gate` (the current model's in-sample χ² of
+/// `wins`), a refit that fits them significantly worse than the current model ([`fit_gain`]
+/// worsens at [`SCREEN_Z`], the screening's threshold mirrored) is not predicted held out:
+/// `cand` nests the current model, whose θ is a point of its parameter space, so such a refit
+/// has run away from the minimum it would be judged at (a weak-form start far off), and its
+/// prediction costs more than the refit (the leave-fold-out predictions search a state for
+/// every window it does not follow).
 fn evaluate_on(
     ctx: &SelectCtx,
     wins: &[Win],
     cur_followed: usize,
     (cur, cand): (&ModelState, &Candidate),
-    reselect: Reselect,
-    searches: Option<&StartSearches>,
-) -> Option<ModelState> {
+    (reselect, searches): (Reselect, Option<&StartSearches>),
+    gate: Option<&[Option<f64>]>,
+) -> Option<Refitted> {
     let mut terms = cur.terms.clone();
     terms.extend(judged_terms(cur, cand).0);
     let fit_latency = cur.fit_latency || cand.latency.is_some();
@@ -190,16 +244,23 @@ fn evaluate_on(
         ..*ctx.shooting
     };
     let fit = refit_from_better_start(&model, cur, &theta0, wins, &opts, (cur_followed, searches))?;
-    let held = heldout(&model, &fit, (wins, ctx.folds), ctx.shooting);
+    let in_sample = fit.window_chi2(&model, wins);
+    if let Some(before) = gate {
+        let c = fit_gain(before, &in_sample.0, wins, ctx.runs);
+        if c.worsens(SCREEN_Z) {
+            return Some(Refitted::FitsWorse(c));
+        }
+    }
+    let held = heldout_after(&model, &fit, (wins, ctx.folds), ctx.shooting, in_sample);
     let mut effects = cur.effects.clone();
     effects.push(cand.effect.clone());
-    Some(ModelState {
+    Some(Refitted::Judged(Box::new(ModelState {
         terms,
         fit_latency,
         fit,
         held,
         effects,
-    })
+    })))
 }
 
 /// The refit of `model` (`cur` + `cand`) on `wins` from the weak-form start θ₀ and, when its
@@ -261,7 +322,17 @@ pub fn evaluate_sharing(
 ) -> Option<ModelState> {
     let followed = cur.fit.used.len();
     let reselect = Reselect::OnceBelow(CANDIDATE_RESELECT_BELOW);
-    evaluate_on(ctx, ctx.wins, followed, (cur, cand), reselect, searches)
+    match evaluate_on(
+        ctx,
+        ctx.wins,
+        followed,
+        (cur, cand),
+        (reselect, searches),
+        None,
+    )? {
+        Refitted::Judged(st) => Some(*st),
+        Refitted::FitsWorse(_) => None,
+    }
 }
 
 /// The fraction of the judging windows below which a candidate's refit re-selects its windows
@@ -508,30 +579,75 @@ pub fn refit_to_convergence(
 /// Screening z below which a candidate is not refitted on all judging windows.
 pub const SCREEN_Z: f64 = 1.0;
 
+/// A candidate's screening on every second judging window ([`screen_sharing`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Screening {
+    /// Its held-out comparison with the current model there, and its held-out errors there.
+    HeldOut(Comparison, HeldOut),
+    /// Its refit fits those windows significantly worse than the current model: the in-sample
+    /// comparison (not predicted held out; [`evaluate_on`]'s gate).
+    FitsWorse(Comparison),
+}
+
 /// Screening: `cand` refitted and judged on every second judging window. A candidate whose
 /// full-set z reaches the threshold (≥ 3) has an expected half-set z of ≥ 3/√2 ≈ 2.1, far above
 /// [`SCREEN_Z`].
 pub fn screen(ctx: &SelectCtx, cur: &ModelState, cand: &Candidate) -> Option<Comparison> {
-    screen_sharing(ctx, cur, cand, None)
+    match screen_on(ctx, cur, cand, None, false)? {
+        Screening::HeldOut(c, _) => Some(c),
+        Screening::FitsWorse(_) => None,
+    }
 }
 
-/// [`screen`], the searches of its windows at the candidate's start kept in `searches` for the
-/// candidate's refit on all windows ([`evaluate_sharing`]).
+/// [`screen`] as a round screens: the searches of its windows at the candidate's start kept in
+/// `searches` for the candidate's refit on all windows ([`evaluate_sharing`]), and a refit that
+/// fits the screening's windows significantly worse than the current model not predicted held
+/// out ([`Screening::FitsWorse`]).
 pub fn screen_sharing(
     ctx: &SelectCtx,
     cur: &ModelState,
     cand: &Candidate,
     searches: Option<&StartSearches>,
-) -> Option<Comparison> {
+) -> Option<Screening> {
+    screen_on(ctx, cur, cand, searches, true)
+}
+
+/// The screening's windows: every second judging window (their indices and the windows).
+fn screening_windows(ctx: &SelectCtx) -> (Vec<usize>, Vec<Win>) {
     let idx: Vec<usize> = (0..ctx.wins.len()).step_by(2).collect();
-    let sub: Vec<Win> = idx.iter().map(|&k| ctx.wins[k].clone()).collect();
+    let sub = idx.iter().map(|&k| ctx.wins[k].clone()).collect();
+    (idx, sub)
+}
+
+/// [`screen`] and [`screen_sharing`] (`gated`: the latter).
+fn screen_on(
+    ctx: &SelectCtx,
+    cur: &ModelState,
+    cand: &Candidate,
+    searches: Option<&StartSearches>,
+    gated: bool,
+) -> Option<Screening> {
+    let (idx, sub) = screening_windows(ctx);
     let followed = cur.fit.used.iter().filter(|&&(wi, _)| wi % 2 == 0).count();
-    let st = evaluate_on(ctx, &sub, followed, (cur, cand), Reselect::Never, searches)?;
     let cur_sub = HeldOut {
         chi2: idx.iter().map(|&k| cur.held.chi2[k]).collect(),
         chi2_fit: idx.iter().map(|&k| cur.held.chi2_fit[k]).collect(),
     };
-    Some(compare(&cur_sub, &st.held, &sub, ctx.runs))
+    let gate = gated.then_some(cur_sub.chi2_fit.as_slice());
+    let refitted = evaluate_on(
+        ctx,
+        &sub,
+        followed,
+        (cur, cand),
+        (Reselect::Never, searches),
+        gate,
+    )?;
+    Some(match refitted {
+        Refitted::Judged(st) => {
+            Screening::HeldOut(compare(&cur_sub, &st.held, &sub, ctx.runs), st.held)
+        }
+        Refitted::FitsWorse(c) => Screening::FitsWorse(c),
+    })
 }
 
 /// `round[k]` accepted: the model refitted to convergence; the other candidates' states dropped.
@@ -580,7 +696,12 @@ pub fn close_rival(
 
 /// The candidates of `round` proposed for `cur`, each screened and judged by simulation (in
 /// parallel, their lines printed afterwards in the proposer's order, so the output does not
-/// depend on the number of threads). `None` when nothing is proposed.
+/// depend on the number of threads). A candidate is refitted on all judging windows when its
+/// screening z reaches [`SCREEN_Z`] and the screening's leader ([`screening_leader`]) does not
+/// predict the screening's windows significantly better than it ([`beaten_on_screening`]), or
+/// when the leader, refitted on all windows, may not be accepted itself ([`may_be_accepted`]):
+/// a screening's gain need not carry over (a Stribeck member screened at z = 9.2 and was worse
+/// on all windows, gain −2.0·10⁴). `None` when nothing is proposed.
 pub fn judge_round(
     ctx: &SelectCtx,
     cur: &ModelState,
@@ -594,23 +715,109 @@ pub fn judge_round(
         return None;
     }
     let z_crit = z_threshold(cands.len());
-    let judged = par_map(cands.len(), |k| {
-        let c = &cands[k];
-        let searches = StartSearches::default();
-        let scr = screen_sharing(ctx, cur, c, Some(&searches));
-        let st = match scr {
-            Some(sc) if sc.z >= SCREEN_Z => evaluate_sharing(ctx, cur, c, Some(&searches)),
+    let searches: Vec<StartSearches> = cands.iter().map(|_| StartSearches::default()).collect();
+    let screened = par_map(cands.len(), |k| {
+        screen_sharing(ctx, cur, &cands[k], Some(&searches[k]))
+    });
+    let mut beaten = beaten_on_screening(&screening_windows(ctx).1, ctx.runs, &screened, z_crit);
+    let refitted = |which: Vec<bool>| {
+        par_map(cands.len(), |k| match &screened[k] {
+            Some(Screening::HeldOut(sc, _)) if sc.z >= SCREEN_Z && which[k] => {
+                evaluate_sharing(ctx, cur, &cands[k], Some(&searches[k]))
+            }
+            _ => None,
+        })
+    };
+    let mut states = refitted(beaten.iter().map(Option::is_none).collect());
+    // the leader stands in for the candidates it beat only when it may be accepted itself
+    let leader_stands = screening_leader(&screened)
+        .and_then(|j| states[j].as_ref())
+        .is_some_and(|st| may_be_accepted(ctx, cur, st, z_crit));
+    if !leader_stands && beaten.iter().any(Option::is_some) {
+        let more = refitted(beaten.iter().map(Option::is_some).collect());
+        for (st, m) in states.iter_mut().zip(more) {
+            if m.is_some() {
+                *st = m;
+            }
+        }
+        beaten.iter_mut().for_each(|b| *b = None);
+    }
+    let leader = |j: usize| {
+        let c = &cands[j];
+        let terms: Vec<String> = c.terms.iter().map(|t| t.name()).collect();
+        format!("{} ({})", c.effect.id, terms.join(", "))
+    };
+    let mut out = Vec::with_capacity(cands.len());
+    for (k, (c, st)) in cands.iter().zip(states).enumerate() {
+        let held_out = match &screened[k] {
+            Some(Screening::HeldOut(sc, _)) => Some(*sc),
             _ => None,
         };
-        (scr, st)
-    });
-    let mut out = Vec::with_capacity(judged.len());
-    for (c, (scr, st)) in cands.into_iter().zip(judged) {
-        let t = tried(ctx, cur, c, (scr, st), (round, z_crit));
+        let mut t = tried(ctx, cur, c.clone(), (held_out, st), (round, z_crit));
+        if let Some(Screening::FitsWorse(fc)) = &screened[k] {
+            t.screen_fit = Some(*fc);
+        }
+        t.screen_beaten = beaten[k].map(|(j, cmp)| BeatenOnScreening {
+            leader: j,
+            label: leader(j),
+            cmp,
+        });
         report_tried(&t, label, progress);
         out.push(t);
     }
     Some(out)
+}
+
+/// Whether the refitted model `st` (a candidate on top of `cur`) may be accepted at `z_crit`: the
+/// rule of [`significant`] (held-out improvement and its added parameters' Wald z).
+fn may_be_accepted(ctx: &SelectCtx, cur: &ModelState, st: &ModelState, z_crit: f64) -> bool {
+    compare(&cur.held, &st.held, ctx.wins, ctx.runs).improves(z_crit)
+        && added_parameters_z(&st.fit, &added(cur, st)) >= z_crit
+}
+
+/// The screening's leader: of the candidates whose screening z reaches [`SCREEN_Z`], the one with
+/// the largest screening gain (an index into `screened`).
+fn screening_leader(screened: &[Option<Screening>]) -> Option<usize> {
+    screened
+        .iter()
+        .enumerate()
+        .filter_map(|(k, s)| match s {
+            Some(Screening::HeldOut(c, _)) if c.z >= SCREEN_Z => Some((k, c.gain)),
+            _ => None,
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(k, _)| k)
+}
+
+/// For each screened candidate that reaches [`SCREEN_Z`]: the leader ([`screening_leader`]) and
+/// its paired comparison against the candidate on the screening's windows `sub` when the leader
+/// predicts them significantly better (the judge's rule, [`Comparison::improves`] at the round's
+/// `z_crit`). Such a candidate is not refitted on all windows: the round accepts the candidate of
+/// largest held-out gain, and its close rivals are those it does not predict significantly
+/// better; a candidate the leader beats at z ≥ z_crit on half the windows has an expected
+/// full-set z of √2 z_crit against it.
+fn beaten_on_screening(
+    sub: &[Win],
+    runs: &[CleanRun],
+    screened: &[Option<Screening>],
+    z_crit: f64,
+) -> Vec<Option<(usize, Comparison)>> {
+    let mut out = vec![None; screened.len()];
+    let Some(lead) = screening_leader(screened) else {
+        return out;
+    };
+    let Some(Screening::HeldOut(_, lead_held)) = &screened[lead] else {
+        return out;
+    };
+    for (k, s) in screened.iter().enumerate() {
+        if let Some(Screening::HeldOut(c, held)) = s {
+            if k != lead && c.z >= SCREEN_Z {
+                let vs = compare(held, lead_held, sub, runs);
+                out[k] = vs.improves(z_crit).then_some((lead, vs));
+            }
+        }
+    }
+    out
 }
 
 /// The record of `c` tried on top of `cur` in round `round` (threshold `z_crit`): its screening
@@ -634,6 +841,8 @@ pub fn tried(
         added_z,
         cmp,
         screen: scr,
+        screen_fit: None,
+        screen_beaten: None,
         z_crit,
         accepted: false,
         state: st,
@@ -682,6 +891,38 @@ pub fn report_tried(t: &Tried, label: &str, progress: &dyn Observer) {
         ),
     );
     let (scr, cmp) = (t.screen, t.cmp);
+    if let Some(BeatenOnScreening {
+        label: lead,
+        cmp: b,
+        ..
+    }) = &t.screen_beaten
+    {
+        let sc = t.screen.map(|c| format!("{:.2} (gain {:.1})", c.z, c.gain));
+        stage(
+            progress,
+            &format!(
+                "  screening z = {}; {lead} predicts the screening's windows significantly \
+                 better (z = {:.2} ≥ {:.2}, χ² gain {:.1}): not refitted on all windows",
+                sc.unwrap_or("–".into()),
+                b.z,
+                t.z_crit,
+                b.gain
+            ),
+        );
+        return;
+    }
+    if let Some(f) = t.screen_fit {
+        stage(
+            progress,
+            &format!(
+                "  screening: its refit fits the screening's windows no better than the current \
+                 model (in-sample z = {:.2}, χ² gain {:.1}), not predicted held out (threshold \
+                 {:.2}); windows it could not simulate: {}",
+                f.z, f.gain, t.z_crit, f.failed_after
+            ),
+        );
+        return;
+    }
     stage(
         progress,
         &format!(
