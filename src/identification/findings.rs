@@ -807,9 +807,9 @@ pub fn rejected(tried: &[Tried]) -> Vec<serde_json::Value> {
                             super::select::SCREEN_Z
                         ),
                         (None, Some(f), _) => format!(
-                            "screening (half the windows): its refit fits them no better than the \
-                             current model (in-sample z = {:.2}, χ² gain {:.1}); not predicted \
-                             held out",
+                            "screening (half the windows): its refit fits them significantly \
+                             worse than the current model, which it nests (in-sample z = {:.2}, \
+                             χ² gain {:.1}): a refit that ran away; not predicted held out",
                             f.z, f.gain
                         ),
                         (None, None, _) => "the refit by simulation failed".to_string(),

@@ -915,9 +915,9 @@ pub fn report_tried(t: &Tried, label: &str, progress: &dyn Observer) {
         stage(
             progress,
             &format!(
-                "  screening: its refit fits the screening's windows no better than the current \
-                 model (in-sample z = {:.2}, χ² gain {:.1}), not predicted held out (threshold \
-                 {:.2}); windows it could not simulate: {}",
+                "  screening: its refit fits the screening's windows significantly worse than the \
+                 current model (in-sample z = {:.2}, χ² gain {:.1}), not predicted held out \
+                 (threshold {:.2}); windows it could not simulate: {}",
                 f.z, f.gain, t.z_crit, f.failed_after
             ),
         );
