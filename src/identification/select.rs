@@ -195,9 +195,10 @@ fn fit_gain(
     wins: &[Win],
     runs: &[CleanRun],
 ) -> Comparison {
+    // compare reads only `chi2`
     let as_held = |c: &[Option<f64>]| HeldOut {
         chi2: c.to_vec(),
-        chi2_fit: c.to_vec(),
+        chi2_fit: Vec::new(),
     };
     compare(&as_held(before), &as_held(after), wins, runs)
 }
@@ -699,7 +700,7 @@ pub fn close_rival(
 /// depend on the number of threads). A candidate is refitted on all judging windows when its
 /// screening z reaches [`SCREEN_Z`] and the screening's leader ([`screening_leader`]) does not
 /// predict the screening's windows significantly better than it ([`beaten_on_screening`]), or
-/// when the leader, refitted on all windows, may not be accepted itself ([`may_be_accepted`]):
+/// when the leader, refitted on all windows, may not be accepted itself ([`significant`]):
 /// a screening's gain need not carry over (a Stribeck member screened at z = 9.2 and was worse
 /// on all windows, gain −2.0·10⁴). `None` when nothing is proposed.
 pub fn judge_round(
@@ -728,51 +729,47 @@ pub fn judge_round(
             _ => None,
         })
     };
-    let mut states = refitted(beaten.iter().map(Option::is_none).collect());
-    // the leader stands in for the candidates it beat only when it may be accepted itself
-    let leader_stands = screening_leader(&screened)
-        .and_then(|j| states[j].as_ref())
-        .is_some_and(|st| may_be_accepted(ctx, cur, st, z_crit));
-    if !leader_stands && beaten.iter().any(Option::is_some) {
-        let more = refitted(beaten.iter().map(Option::is_some).collect());
-        for (st, m) in states.iter_mut().zip(more) {
-            if m.is_some() {
-                *st = m;
-            }
-        }
-        beaten.iter_mut().for_each(|b| *b = None);
-    }
-    let leader = |j: usize| {
-        let c = &cands[j];
-        let terms: Vec<String> = c.terms.iter().map(|t| t.name()).collect();
-        format!("{} ({})", c.effect.id, terms.join(", "))
-    };
-    let mut out = Vec::with_capacity(cands.len());
-    for (k, (c, st)) in cands.iter().zip(states).enumerate() {
+    let record = |k: usize, st: Option<ModelState>| {
         let held_out = match &screened[k] {
             Some(Screening::HeldOut(sc, _)) => Some(*sc),
             _ => None,
         };
-        let mut t = tried(ctx, cur, c.clone(), (held_out, st), (round, z_crit));
+        let mut t = tried(ctx, cur, cands[k].clone(), (held_out, st), (round, z_crit));
         if let Some(Screening::FitsWorse(fc)) = &screened[k] {
             t.screen_fit = Some(*fc);
         }
-        t.screen_beaten = beaten[k].map(|(j, cmp)| BeatenOnScreening {
-            leader: j,
-            label: leader(j),
-            cmp,
+        t
+    };
+    let states = refitted(beaten.iter().map(Option::is_none).collect());
+    let mut out: Vec<Tried> = states
+        .into_iter()
+        .enumerate()
+        .map(|(k, st)| record(k, st))
+        .collect();
+    // the leader stands in for the candidates it beat only when it may be accepted itself
+    let leader_stands = screening_leader(&screened).is_some_and(|j| significant(&out[j], z_crit));
+    if !leader_stands && beaten.iter().any(Option::is_some) {
+        let more = refitted(beaten.iter().map(Option::is_some).collect());
+        for (k, m) in more.into_iter().enumerate() {
+            if m.is_some() {
+                out[k] = record(k, m);
+            }
+        }
+        beaten.iter_mut().for_each(|b| *b = None);
+    }
+    for (k, t) in out.iter_mut().enumerate() {
+        t.screen_beaten = beaten[k].map(|(j, cmp)| {
+            let c = &cands[j];
+            let terms: Vec<String> = c.terms.iter().map(|t| t.name()).collect();
+            BeatenOnScreening {
+                leader: j,
+                label: format!("{} ({})", c.effect.id, terms.join(", ")),
+                cmp,
+            }
         });
-        report_tried(&t, label, progress);
-        out.push(t);
+        report_tried(t, label, progress);
     }
     Some(out)
-}
-
-/// Whether the refitted model `st` (a candidate on top of `cur`) may be accepted at `z_crit`: the
-/// rule of [`significant`] (held-out improvement and its added parameters' Wald z).
-fn may_be_accepted(ctx: &SelectCtx, cur: &ModelState, st: &ModelState, z_crit: f64) -> bool {
-    compare(&cur.held, &st.held, ctx.wins, ctx.runs).improves(z_crit)
-        && added_parameters_z(&st.fit, &added(cur, st)) >= z_crit
 }
 
 /// The screening's leader: of the candidates whose screening z reaches [`SCREEN_Z`], the one with
