@@ -230,6 +230,59 @@ pub const EFFECTS: &[EffectSpec] = &[
                linear and exponential drifts); headline: η's change from the first run's \
                middle to the last's",
     },
+    EffectSpec {
+        id: "offcentre_coupling",
+        expected: &["unexplained"],
+        reference: 0.03,
+        unit: "1",
+        form: "an output magnet mounted off-centre: the whole coupling torque times \
+               1 + m cos(β − φ), m = size, φ drawn uniformly (out of catalog)",
+    },
+    EffectSpec {
+        id: "bearing_bump",
+        expected: &["unexplained"],
+        reference: 1.0,
+        unit: "1",
+        form: "a bearing defect: the Coulomb friction times 1 + b exp(−d²/2w²), d the output \
+               angle's distance to β₀, b = size, w = 15°, β₀ drawn uniformly (out of catalog)",
+    },
+    EffectSpec {
+        id: "torque_friction",
+        expected: &["unexplained"],
+        reference: 0.5,
+        unit: "1",
+        form: "dry friction growing with the transmitted magnetic torque: η(1 + k |B(α, β)|), B \
+               the coupling's shape −sin α cos β + Δ cos α sin β, k = size (out of catalog)",
+    },
+    EffectSpec {
+        id: "narrow_stribeck",
+        expected: &["static_friction"],
+        reference: 0.5,
+        unit: "1",
+        form: "a Stribeck peak far narrower than the family's widths: friction \
+               η + Δη_s/(1 + (β̇/w)²), Δη_s = size·η, w = 0.05 rad/s; headline: Δη_s/η",
+    },
+    EffectSpec {
+        id: "angle_reading",
+        expected: &["unexplained"],
+        reference: 1.0,
+        unit: "deg",
+        form: "a distortion of the angle reading: β recorded as β + m sin(β − φ), m = size, φ \
+               drawn uniformly (a measurement effect, out of catalog)",
+    },
+];
+
+/// The effects whose concealed form the diagnosis's catalog does not contain: the campaign's
+/// rate of honest verdicts is asserted on these ([`super::metrics::confident_wrong`]).
+pub const OUT_OF_CATALOG: &[&str] = &[
+    "angle_modulated_friction",
+    "direction_friction",
+    "relative_angle_damping",
+    "offcentre_coupling",
+    "bearing_bump",
+    "torque_friction",
+    "narrow_stribeck",
+    "angle_reading",
 ];
 
 /// Looks an effect up by id.
@@ -425,6 +478,26 @@ fn apply_effect(
         "relative_angle_damping" => d.truth.zeta_relative = s,
         "none_drive_ripple" => d.truth.drive_ripple = 0.15,
         "warming_friction" => warming_friction(s, d),
+        "offcentre_coupling" => {
+            d.truth.coupling_modulation = Some((s, rng.range(0.0, std::f64::consts::TAU)))
+        }
+        "bearing_bump" => {
+            let b0 = rng.range(0.0, std::f64::consts::TAU);
+            d.truth.friction_bump = Some((s, b0, 15f64.to_radians()));
+        }
+        "torque_friction" => d.truth.torque_friction = s,
+        "narrow_stribeck" => {
+            d.truth.stribeck = Some(Stribeck {
+                excess: s * d.truth.eta,
+                width: 0.05,
+                shape: StribeckShape::Lorentzian,
+            });
+            d.headline("static_friction", s, "1");
+        }
+        "angle_reading" => {
+            d.meas.reading_distortion =
+                Some((s.to_radians(), rng.range(0.0, std::f64::consts::TAU)))
+        }
         other => {
             return Err(Error::unknown_name(
                 "effect with a generator",

@@ -136,6 +136,9 @@ pub struct Measurement {
     pub latency_s: f64,
     /// Fraction of outlier frames (β off by 10–40°).
     pub outlier_fraction: f64,
+    /// A distortion of the angle reading, periodic in the output angle: β is recorded as
+    /// β + m sin(β − φ), (m in rad, φ) this value (an off-axis marker, a lens distortion).
+    pub reading_distortion: Option<(f64, f64)>,
 }
 
 impl Default for Measurement {
@@ -146,6 +149,7 @@ impl Default for Measurement {
             jitter_s: 0.0,
             latency_s: 0.0,
             outlier_fraction: 0.002,
+            reading_distortion: None,
         }
     }
 }
@@ -302,7 +306,10 @@ fn observe(
         if k > 0 {
             e = rho * e + (1.0 - rho * rho).sqrt() * sigma * rng.normal();
         }
-        let mut y = b + e;
+        let distortion = meas
+            .reading_distortion
+            .map_or(0.0, |(m, ph)| m * (b - ph).sin());
+        let mut y = b + distortion + e;
         if k > 0 && rng.uniform() < meas.outlier_fraction {
             let s = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
             y += s * (10.0 + 30.0 * rng.uniform()).to_radians();

@@ -53,6 +53,9 @@ pub struct CaseResult {
     pub findings: Vec<FoundEffect>,
     /// The verdict is right (see [`named_right`]).
     pub named_right: bool,
+    /// The verdict names a catalog effect the truth does not contain (see [`confident_wrong`]).
+    #[serde(default)]
+    pub confident_wrong: bool,
     /// Headline truths.
     pub truths: Vec<TruthSize>,
     /// σ coverage of the headline sizes of detected effects.
@@ -87,10 +90,24 @@ pub struct CaseResult {
     pub error: Option<String>,
 }
 
-/// Right when: `none` expected and the verdict is `none`; one effect expected and the verdict is
-/// it; several expected and all are among the findings with the verdict one of them.
+/// A confident wrong name: the verdict is a catalog effect (not `none`, `unexplained`,
+/// `partly_explained` or `error`) that is not among the `expected` ones. A control's verdict other
+/// than `none` is a false positive instead (counted there).
+pub fn confident_wrong(expected: &[String], verdict: &str) -> bool {
+    use crate::identification::verdict::{NONE, PARTLY_EXPLAINED, UNEXPLAINED};
+    expected != [NONE]
+        && ![NONE, UNEXPLAINED, PARTLY_EXPLAINED, "error"].contains(&verdict)
+        && !expected.iter().any(|e| e == verdict)
+}
+
+/// Right when: `none` expected and the verdict is `none`; `unexplained` expected (a form the catalog
+/// does not contain) and the verdict `unexplained` or `partly_explained`; one effect expected and
+/// the verdict is it; several expected and all are among the findings with the verdict one of them.
 pub fn named_right(expected: &[String], verdict: &str, findings: &[FoundEffect]) -> bool {
+    use crate::identification::verdict::{PARTLY_EXPLAINED, UNEXPLAINED};
     match expected {
+        // a form the catalog does not contain: part of it may be explained by catalog terms
+        [one] if one == UNEXPLAINED => verdict == UNEXPLAINED || verdict == PARTLY_EXPLAINED,
         [one] => verdict == one,
         many => {
             many.iter().any(|e| e == verdict)
@@ -288,6 +305,12 @@ pub struct Summary {
     pub confusion: Confusion,
     /// The σ coverage.
     pub coverage: CoverageSummary,
+    /// Verdicts that name a catalog effect the truth does not contain, over the cases that are not
+    /// controls ([`confident_wrong`]).
+    pub confident_wrong: Rate,
+    /// Honest verdicts on the out-of-catalog effects ([`super::cases::OUT_OF_CATALOG`]): neither
+    /// a confident wrong name nor an error.
+    pub out_of_catalog_honest: Rate,
     /// Diagnoses that failed with an error (counted as wrong).
     pub errors: usize,
     /// Median wall time of a diagnosis, s.
@@ -345,6 +368,16 @@ pub fn summarize(results: &[CaseResult]) -> Summary {
             size_90,
         });
     }
+    let effects = results.iter().filter(|r| r.expected != ["none"]);
+    let wrong = effects.clone().filter(|r| r.confident_wrong).count();
+    let ooc: Vec<&CaseResult> = results
+        .iter()
+        .filter(|r| super::cases::OUT_OF_CATALOG.contains(&r.effect.as_str()))
+        .collect();
+    let honest = ooc
+        .iter()
+        .filter(|r| !r.confident_wrong && r.error.is_none())
+        .count();
     let mut secs: Vec<f64> = results.iter().map(|r| r.seconds).collect();
     secs.sort_by(|a, b| a.total_cmp(b));
     Summary {
@@ -356,6 +389,8 @@ pub fn summarize(results: &[CaseResult]) -> Summary {
         power,
         confusion: confusion(results),
         coverage: coverage(results),
+        confident_wrong: Rate::new(wrong, effects.count()),
+        out_of_catalog_honest: Rate::new(honest, ooc.len()),
         errors: results.iter().filter(|r| r.error.is_some()).count(),
         median_seconds: secs.get(secs.len() / 2).copied().unwrap_or(0.0),
     }

@@ -89,6 +89,14 @@ pub fn markdown(doc: &CampaignDoc) -> String {
             p.size_90.map(num).unwrap_or_else(|| "not reached".into())
         ));
     }
+    o.push_str(&format!(
+        "\n## Honest verdicts\n\nA confident wrong name is a verdict that names a catalog effect \
+         the truth does not contain (`partly_explained` and `unexplained` say that a significant \
+         mismatch is left). Confident wrong names, over every case with an effect: {}. Honest \
+         verdicts on the effects whose form the catalog does not contain (goal ≥ 90 %): {}.\n",
+        pct(&s.confident_wrong),
+        pct(&s.out_of_catalog_honest)
+    ));
     o.push_str("\n## Confusion matrix (rows: truth, columns: verdict)\n\n| truth \\ verdict |");
     for c in &s.confusion.cols {
         o.push_str(&format!(" `{c}` |"));

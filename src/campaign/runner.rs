@@ -5,7 +5,9 @@
 
 use super::cases::{build_case, effect, EffectSpec};
 use super::generator::SetSize;
-use super::metrics::{coverage_entries, named_right, summarize, CaseResult, FoundEffect, Summary};
+use super::metrics::{
+    confident_wrong, coverage_entries, named_right, summarize, CaseResult, FoundEffect, Summary,
+};
 use super::rk4::Rk4Filippov;
 use crate::error::{Error, Result};
 use crate::identification::diagnose::{diagnose, DiagnoseOptions};
@@ -219,6 +221,7 @@ pub fn run_case(
         unit: case.effect.unit.to_string(),
         seed: case.seed,
         named_right: error.is_none() && named_right(&expected, &verdict, &findings),
+        confident_wrong: confident_wrong(&expected, &verdict),
         coverage: coverage_entries(&g.truths, &findings),
         expected,
         verdict,

@@ -117,6 +117,16 @@ pub struct TruthModel {
     /// has η(1 − a tanh(u/[`WARMING_WIDTH`])), a this value (applied per run by the generator,
     /// [`TruthModel::for_session`]).
     pub warming: f64,
+    /// The coupling modulated once per output turn (an output magnet mounted off-centre, so that
+    /// the distance to the input magnet changes with β): the coupling torque times
+    /// 1 + m cos(β − φ), (m, φ) this value.
+    pub coupling_modulation: Option<(f64, f64)>,
+    /// A bearing defect: the Coulomb friction times 1 + b exp(−d²/(2w²)) with d the output angle's
+    /// distance to β₀ (wrapped to (−π, π]); (b, β₀, w) this value.
+    pub friction_bump: Option<(f64, f64, f64)>,
+    /// Dry friction that grows with the transmitted magnetic torque: the Coulomb friction times
+    /// 1 + k |B(α_m, β)|, B the coupling's shape (−sin α cos β + Δ cos α sin β), k this value.
+    pub torque_friction: f64,
 }
 
 /// The session position by which the warm-up of [`TruthModel::warming`] is 76 % done (tanh 1).
@@ -170,6 +180,9 @@ impl TruthModel {
             zeta_relative: 0.0,
             drive_ripple: 0.0,
             warming: 0.0,
+            coupling_modulation: None,
+            friction_bump: None,
+            torque_friction: 0.0,
         }
     }
 
@@ -220,7 +233,10 @@ impl TruthModel {
     pub fn smooth(&self, alpha_m: f64, beta: f64, omega: f64) -> f64 {
         let (sa, ca) = alpha_m.sin_cos();
         let (sb, cb) = beta.sin_cos();
-        let mut a = self.g * (-sa * cb + self.delta() * ca * sb) - self.zeta * omega;
+        let modulation = self
+            .coupling_modulation
+            .map_or(1.0, |(m, ph)| 1.0 + m * (beta - ph).cos());
+        let mut a = self.g * modulation * (-sa * cb + self.delta() * ca * sb) - self.zeta * omega;
         a -= self.friction_asymmetry * self.eta;
         if self.zeta_relative != 0.0 {
             a -= self.zeta * self.zeta_relative * (alpha_m - beta).cos().powi(2) * omega;
@@ -246,6 +262,15 @@ impl TruthModel {
             coulomb *= (1.0 - l.fraction) + l.fraction * ratio;
         }
         coulomb *= 1.0 + self.angle_modulation * (2.0 * beta).cos();
+        if let Some((b, b0, w)) = self.friction_bump {
+            let d = (beta - b0 + PI).rem_euclid(2.0 * PI) - PI;
+            coulomb *= 1.0 + b * (-d * d / (2.0 * w * w)).exp();
+        }
+        if self.torque_friction != 0.0 {
+            let (sa, ca) = alpha_m.sin_cos();
+            let (sb, cb) = beta.sin_cos();
+            coulomb *= 1.0 + self.torque_friction * (-sa * cb + self.delta() * ca * sb).abs();
+        }
         if let Some(s) = self.stribeck {
             let x = (omega / s.width).powi(2);
             coulomb += s.excess

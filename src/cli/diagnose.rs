@@ -91,6 +91,9 @@ pub fn run(a: Args) -> Result<()> {
     )?;
     write_json_atomic(a.out.join("report.json"), &d.report)?;
     println!("verdict: {}", d.report.verdict);
+    if let Some(a) = &d.report.assessment {
+        println!("  {}", a.statement);
+    }
     for f in &d.report.findings {
         let ps: Vec<String> = f
             .params

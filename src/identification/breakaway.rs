@@ -145,6 +145,7 @@ pub fn judge(
         heldout_rms_after_rad: Some(cmp.rms_after),
         evidence: ev,
         size,
+        standing: None,
     };
     Some((f, cmp, stands, all.s * all.eta, held))
 }

@@ -402,6 +402,9 @@ pub fn diagnose(
     let mut final_state = base.state.clone();
     let mut excess = 0.0;
     let mut remains = None;
+    // the fraction of the base model's held-out excess each judged finding removed, in the
+    // findings' order (the nominal consistency's findings, appended last, have none)
+    let mut fractions: Vec<Option<(f64, f64)>> = Vec::new();
     if let (Some(b), false) = (&base.state, opts.base_only) {
         let pctx = propose_ctx(runs, &base, opts);
         let sctx = select_ctx(&pctx, &base, &folds, opts);
@@ -447,6 +450,8 @@ pub fn diagnose(
             None
         };
         let mut before = b;
+        // each finding's step: the held-out χ² of the model before it and of the model with it
+        let mut steps: Vec<Option<Step>> = Vec::new();
         // the chain of round models runs through the effects the backward check dropped too (each
         // finding's "before" is the model it was judged against: the round's model, or for a
         // close rival accepted together with the round's accepted effect the model with that
@@ -456,7 +461,9 @@ pub fn diagnose(
                 let rv = rivals(t, &tried);
                 judged_finding(t, before, &base.wins, runs, folds.k, &rv, &fin)
             });
+            let after = t.state.as_ref().expect("accepted state");
             if let Some(mut f) = found.flatten() {
+                steps.push(Some((before.held.chi2.clone(), after.held.chi2.clone())));
                 let e = &t.candidate.effect;
                 f.size = profiled_size(e, &fin, &profiles, f.size.take(), &mut f.params);
                 if let Some(sides) = excess_sides.as_ref().filter(|_| e.id == "static_friction") {
@@ -468,9 +475,12 @@ pub fn diagnose(
                 }
                 findings.push(f);
             }
-            before = t.state.as_ref().expect("accepted state");
+            before = after;
         }
-        findings.extend(sf.at_rest);
+        if let Some(f) = sf.at_rest {
+            steps.push(Some((fin.held.chi2.clone(), final_held.chi2.clone())));
+            findings.push(f);
+        }
         remaining(&mut mismatch, &fin, &base.wins, runs, &prep.files);
         // the floor's window geometry and stick phases under the final model (with the
         // breakaway excess when it stands)
@@ -478,14 +488,28 @@ pub fn diagnose(
         model.eta_static_excess = excess;
         let warm = fin.fit.warm_starts(base.wins.len());
         let geom = super::mismatch::window_geometry(&model, &fin.fit.theta, &base.wins, &warm);
-        remains = super::mismatch::remainder(
+        let measured = super::mismatch::remainder(
             runs,
             &base.wins,
-            &b.held.chi2,
-            &final_held.chi2,
+            (&b.held.chi2, &final_held.chi2),
             (opts.weak.rest_sigmas, opts.weak.rest_run),
             &geom,
+            // Δ = c_cs / g of the base refit
+            b.fit.theta[3] / -b.fit.theta[2],
         );
+        if let Some((rem, floors)) = measured {
+            // a step's share only where the base model's excess is above noise (as the total's)
+            if rem.fraction_removed.is_some() {
+                fractions = steps
+                    .iter()
+                    .map(|s| {
+                        let (x, y) = s.as_ref()?;
+                        super::mismatch::fraction_removed(&b.held.chi2, x, y, &floors)
+                    })
+                    .collect();
+            }
+            remains = Some(rem);
+        }
         final_state = Some(fin);
     }
     // nominal consistency of the base parameters
@@ -518,9 +542,16 @@ pub fn diagnose(
         (&tried, &decided),
         progress,
     )?;
+    super::verdict::set_standings(&mut d.report.findings, &fractions);
+    let (verdict, assessment) = super::verdict::decide(&mut d.report.findings, remains.as_ref());
+    d.report.verdict = verdict;
+    d.report.assessment = Some(assessment);
     d.report.remaining = remains;
     Ok(d)
 }
+
+/// The held-out χ² per judging window of the model before a finding and of the model with it.
+type Step = (Vec<Option<f64>>, Vec<Option<f64>>);
 
 /// What the accepted findings leave: the runs whose held-out prediction by the final model is
 /// still above 1.25 times the camera noise, by run kind.
@@ -789,10 +820,6 @@ fn report(
         (Some(s), true) => rms_per_run(&s.held.chi2, &base.wins, runs),
         _ => vec![None; nr],
     };
-    let verdict = findings
-        .first()
-        .map(|f| f.effect.clone())
-        .unwrap_or_else(|| "none".into());
     let baseline = Baseline {
         params,
         rms_rad: pooled(&base_pred),
@@ -821,9 +848,11 @@ fn report(
             baseline,
             mismatch,
             findings,
-            verdict,
+            // decided with the remainder ([`super::verdict::decide`])
+            verdict: super::verdict::NONE.into(),
             fits: Some(fits),
             remaining: None,
+            assessment: None,
         },
         runs: prep.runs,
         files: prep.files,

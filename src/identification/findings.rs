@@ -694,6 +694,7 @@ pub fn judged_finding(
         heldout_rms_after_rad: Some(cmp.rms_after),
         evidence: ev,
         size,
+        standing: None,
     })
 }
 

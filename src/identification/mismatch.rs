@@ -8,7 +8,7 @@ use super::preprocess::{
     rest_autocovariance, speed_noise, CleanRun, RestAutocov, RestPiece, SpeedPiece,
 };
 use super::regression::{delta_bic, fit, Design, LinFit, Term};
-use super::report::{Mismatch, NoiseFloor, Remainder, RemainderBin, SpeedNoiseFloor};
+use super::report::{Dependence, Mismatch, NoiseFloor, Remainder, RemainderBin, SpeedNoiseFloor};
 use super::ringdown::KappaFit;
 use super::shooting::{par_map, SimModel, Win};
 use crate::numerics::least_squares::{weighted, DEFAULT_RCOND};
@@ -348,16 +348,49 @@ pub const REMAINDER_Z: f64 = 3.0;
 /// E and σ_E of windows given as pairs (χ², floor), see [`Remainder`]: E = Σχ²/Σf − 1 with the
 /// ratio estimator's σ over the windows.
 fn ratio_excess(pairs: &[(f64, f64)]) -> (f64, f64) {
+    let (r, sr) = ratio(pairs);
+    (r - 1.0, sr)
+}
+
+/// The ratio estimator r = Σa/Σb over units (a, b) with σ_r² = n/(n−1) Σ(a − r b)²/(Σb)² (each
+/// unit, a judging window, carries its own correlation); NaN for fewer than two units or Σb ≤ 0.
+fn ratio(pairs: &[(f64, f64)]) -> (f64, f64) {
     let n = pairs.len();
-    let (sc, sd): (f64, f64) = pairs.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
-    if n < 2 || sd <= 0.0 {
+    let (sa, sb): (f64, f64) = pairs.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
+    if n < 2 || sb <= 0.0 {
         return (f64::NAN, f64::NAN);
     }
-    let r = sc / sd;
+    let r = sa / sb;
     let v: f64 = pairs.iter().map(|p| (p.0 - r * p.1).powi(2)).sum::<f64>() * n as f64
         / (n - 1) as f64
-        / (sd * sd);
-    (r - 1.0, v.sqrt())
+        / (sb * sb);
+    (r, v.sqrt())
+}
+
+/// The fraction of the base model's held-out excess that one step of the selection removed, from
+/// the model `before` it to the model `after` it: Σ_w (χ²_before − χ²_after) / Σ_w (χ²_base − d_w)
+/// over the windows all three predicted, d_w the window's noise floor (`floors`, from
+/// [`remainder`]), with the ratio σ ([`ratio`]). With `before` the base model and `after` the
+/// final one it is the report's `fraction_removed`. `None` with fewer than two such windows or a
+/// base excess that is not positive.
+pub fn fraction_removed(
+    base: &[Option<f64>],
+    before: &[Option<f64>],
+    after: &[Option<f64>],
+    floors: &[f64],
+) -> Option<(f64, f64)> {
+    let pairs: Vec<(f64, f64)> = (0..floors.len())
+        .filter_map(|k| {
+            let (b, x, y) = (
+                base.get(k)?.as_ref()?,
+                before.get(k)?.as_ref()?,
+                after.get(k)?.as_ref()?,
+            );
+            Some((x - y, b - floors[k]))
+        })
+        .collect();
+    let (r, sr) = ratio(&pairs);
+    (r.is_finite() && sr.is_finite()).then_some((r, sr))
 }
 
 /// What the noise floor of one judging window needs ([`window_geometry`]).
@@ -725,20 +758,53 @@ fn jack_rel_sigma(floors: &[f64], jack: &[Vec<f64>], idx: &[usize]) -> f64 {
 /// Bins of one grouping: (label, window indices).
 type Bins = Vec<(String, Vec<usize>)>;
 
+/// A label by quartile of `value` over the windows `used`: `i: [lo, hi]`.
+fn quartile_label<'a>(
+    used: &[usize],
+    value: impl Fn(usize) -> f64 + 'a,
+) -> impl Fn(usize) -> Option<String> + 'a {
+    let mut v: Vec<f64> = used.iter().map(|&k| value(k)).collect();
+    v.sort_by(f64::total_cmp);
+    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    let edges = [q(0.0), q(0.25), q(0.5), q(0.75), q(1.0)];
+    move |k| {
+        let s = value(k);
+        let b = (1..4).filter(|&i| s >= edges[i]).count();
+        Some(format!("{}: [{:.2}, {:.2}]", b + 1, edges[b], edges[b + 1]))
+    }
+}
+
 /// Per-window description used for binning: (run, middle β, mean |β̇|, contains a stick phase).
 #[derive(Debug, Clone, Copy)]
 struct WinInfo {
     run: usize,
     beta_mid: f64,
+    /// α − β at the window's middle, in [0, 2π).
+    relative_mid: f64,
     speed: f64,
+    /// Mean |coupling torque| over the window in units of g: |Δ cos α sin β − sin α cos β|.
+    torque: f64,
     stick: bool,
 }
 
-fn win_info(runs: &[CleanRun], w: &Win, rest_sigmas: f64, rest_run: usize) -> WinInfo {
+fn win_info(
+    runs: &[CleanRun],
+    w: &Win,
+    delta: f64,
+    (rest_sigmas, rest_run): (f64, usize),
+) -> WinInfo {
     let r = &runs[w.run];
     let mid = (w.lo + w.hi) / 2;
     let v = &r.v[w.lo..w.hi];
     let speed = v.iter().map(|x| x.abs()).sum::<f64>() / v.len().max(1) as f64;
+    let torque = (w.lo..w.hi)
+        .map(|i| {
+            let (sa, ca) = r.alpha[i].sin_cos();
+            let (sb, cb) = r.beta[i].sin_cos();
+            (delta * ca * sb - sa * cb).abs()
+        })
+        .sum::<f64>()
+        / v.len().max(1) as f64;
     let thr = rest_sigmas * r.v_gain * r.sigma_beta;
     let (mut longest, mut cur) = (0usize, 0usize);
     for x in v {
@@ -748,7 +814,9 @@ fn win_info(runs: &[CleanRun], w: &Win, rest_sigmas: f64, rest_run: usize) -> Wi
     WinInfo {
         run: w.run,
         beta_mid: r.beta[mid].rem_euclid(std::f64::consts::TAU),
+        relative_mid: (r.alpha[mid] - r.beta[mid]).rem_euclid(std::f64::consts::TAU),
         speed,
+        torque,
         stick: longest >= rest_run.max(1),
     }
 }
@@ -796,19 +864,34 @@ fn remainder_groups(
             Some(format!("[{}, {})", 60 * b, 60 * (b + 1)))
         }),
     ));
-    // speed: quartiles of the windows' mean |β̇|
-    let mut speeds: Vec<f64> = used.iter().map(|&k| info[k].speed).collect();
-    speeds.sort_by(f64::total_cmp);
-    let q = |p: f64| speeds[((speeds.len() - 1) as f64 * p).round() as usize];
-    let edges = [q(0.0), q(0.25), q(0.5), q(0.75), q(1.0)];
     groups.push((
-        "speed_rad_s",
+        "alpha_minus_beta_deg",
         by(&|k| {
-            let s = info[k].speed;
-            let b = (1..4).filter(|&i| s >= edges[i]).count();
-            Some(format!("{}: [{:.2}, {:.2}]", b + 1, edges[b], edges[b + 1]))
+            let b = (info[k].relative_mid.to_degrees() / 60.0)
+                .floor()
+                .clamp(0.0, 5.0) as i32;
+            Some(format!("[{}, {})", 60 * b, 60 * (b + 1)))
         }),
     ));
+    groups.push(("speed_rad_s", by(&quartile_label(used, |k| info[k].speed))));
+    groups.push((
+        "torque_over_g",
+        by(&quartile_label(used, |k| info[k].torque)),
+    ));
+    // the session's order: the runs in the order of experiment.toml, in thirds
+    let nr = runs.len();
+    if nr >= 3 {
+        groups.push((
+            "run_order",
+            by(&|k| {
+                Some(
+                    ["1: first third", "2: middle third", "3: last third"]
+                        [(3 * info[k].run / nr).min(2)]
+                    .to_string(),
+                )
+            }),
+        ));
+    }
     groups.push((
         "stick_slip",
         by(&|k| {
@@ -832,11 +915,11 @@ fn remainder_groups(
 pub fn remainder(
     runs: &[CleanRun],
     wins: &[Win],
-    base: &[Option<f64>],
-    fin: &[Option<f64>],
+    (base, fin): (&[Option<f64>], &[Option<f64>]),
     rest: (f64, usize),
     geom: &[Option<WindowGeometry>],
-) -> Option<Remainder> {
+    delta: f64,
+) -> Option<(Remainder, Vec<f64>)> {
     let used: Vec<usize> = (0..wins.len()).filter(|&k| fin[k].is_some()).collect();
     if used.len() < 2 {
         return None;
@@ -862,23 +945,14 @@ pub fn remainder(
     // fraction removed: 1 − Σ(χ²_fin − d)/Σ(χ²_base − d), ratio σ over windows
     let (mut fraction, mut fraction_sigma) = (None, None);
     if eb.is_finite() && eb >= REMAINDER_Z * seb && both.len() >= 2 {
-        let ab: Vec<(f64, f64)> = both
-            .iter()
-            .filter_map(|&k| {
-                let d = dof(k);
-                Some((fin[k]? - d, base[k]? - d))
-            })
-            .collect();
-        let (sa, sb) = ab.iter().fold((0.0, 0.0), |a, p| (a.0 + p.0, a.1 + p.1));
-        let r = sa / sb;
-        let n = ab.len() as f64;
-        let v = ab.iter().map(|p| (p.0 - r * p.1).powi(2)).sum::<f64>() * n / (n - 1.0) / (sb * sb);
-        fraction = Some(1.0 - r);
-        fraction_sigma = Some(v.sqrt());
+        if let Some((r, sr)) = fraction_removed(base, base, fin, &floors) {
+            fraction = Some(r);
+            fraction_sigma = Some(sr);
+        }
     }
     let info: Vec<WinInfo> = wins
         .iter()
-        .map(|w| win_info(runs, w, rest.0, rest.1))
+        .map(|w| win_info(runs, w, delta, rest))
         .collect();
     let total_excess: f64 = used.iter().filter_map(|&k| Some(fin[k]? - dof(k))).sum();
     let groups = remainder_groups(runs, &info, &used);
@@ -913,7 +987,8 @@ pub fn remainder(
             .collect()
     };
     located.sort_by(|a, b| b.share.total_cmp(&a.share));
-    Some(Remainder {
+    let dependence = dependence(&bins);
+    let rem = Remainder {
         excess_chi2_per_dof: e,
         excess_sigma: se,
         base_excess_chi2_per_dof: eb,
@@ -925,5 +1000,150 @@ pub fn remainder(
         bins,
         located,
         noise: Some(noise),
+        dependence,
+    };
+    Some((rem, floors))
+}
+
+/// What the remainder depends on: for each grouping of `bins` with at least two bins with a σ,
+/// the heterogeneity Q = Σ_b (E_b − Ē)²/σ_b² (Ē the inverse-variance mean of the bins' excesses)
+/// against χ²(bins − 1), as a normal deviate by the Wilson–Hilferty transform
+/// z = ((Q/ν)^{1/3} − (1 − 2/9ν)) / √(2/9ν); significant at [`super::judge::z_threshold`] for the
+/// number of groupings tested. Largest z first.
+pub fn dependence(bins: &[RemainderBin]) -> Vec<Dependence> {
+    let mut groups: Vec<&str> = bins.iter().map(|b| b.group.as_str()).collect();
+    groups.dedup();
+    let tests: Vec<Dependence> = groups
+        .iter()
+        .filter_map(|g| {
+            let members: Vec<&RemainderBin> = bins
+                .iter()
+                .filter(|b| {
+                    b.group == *g && b.excess_sigma > 0.0 && b.excess_chi2_per_dof.is_finite()
+                })
+                .collect();
+            heterogeneity(g, &members)
+        })
+        .collect();
+    let crit = super::judge::z_threshold(tests.len());
+    let mut tests: Vec<Dependence> = tests
+        .into_iter()
+        .map(|d| Dependence {
+            significant: d.z >= crit,
+            ..d
+        })
+        .collect();
+    tests.sort_by(|a, b| b.z.total_cmp(&a.z));
+    tests
+}
+
+/// The heterogeneity test of one grouping's bins (see [`dependence`]); `None` with fewer than two.
+fn heterogeneity(group: &str, members: &[&RemainderBin]) -> Option<Dependence> {
+    if members.len() < 2 {
+        return None;
+    }
+    let w = |b: &RemainderBin| 1.0 / (b.excess_sigma * b.excess_sigma);
+    let sw: f64 = members.iter().map(|b| w(b)).sum();
+    let mean = members
+        .iter()
+        .map(|b| w(b) * b.excess_chi2_per_dof)
+        .sum::<f64>()
+        / sw;
+    let q: f64 = members
+        .iter()
+        .map(|b| w(b) * (b.excess_chi2_per_dof - mean).powi(2))
+        .sum();
+    let nu = (members.len() - 1) as f64;
+    let a = 2.0 / (9.0 * nu);
+    let z = ((q / nu).cbrt() - (1.0 - a)) / a.sqrt();
+    let peak = members
+        .iter()
+        .max_by(|a, b| a.excess_chi2_per_dof.total_cmp(&b.excess_chi2_per_dof))?;
+    Some(Dependence {
+        variable: group.to_string(),
+        bins: members.len(),
+        chi2: q,
+        dof: members.len() - 1,
+        z,
+        significant: false,
+        peak_bin: peak.bin.clone(),
+        peak_excess_chi2_per_dof: peak.excess_chi2_per_dof,
+        peak_excess_sigma: peak.excess_sigma,
+        experiment: dependence_experiment(group).to_string(),
     })
+}
+
+/// The experiment that tells apart the causes of a remainder that depends on `group`.
+fn dependence_experiment(group: &str) -> &'static str {
+    match group {
+        "run_kind" => "compare ring-downs and driven runs at equal speeds: a remainder only in driven runs points to the input side (drive, coupling), one in both to the output's bearing or the camera",
+        "drive_hz" => "repeat runs at the frequencies where it is largest and at their neighbours: an effect of the drive frequency (frame resonance, eddy currents) changes smoothly with f, an accident of one run does not repeat",
+        "beta_phase_deg" => "ring-downs with the input magnet removed, started at several output angles: a torque or friction fixed to the output angle stays; a distortion of the angle reading shows in stick phases too, as an offset that depends on β",
+        "alpha_minus_beta_deg" => "driven runs at several shaft angles: a modulation of the coupling follows the relative angle α − β and scales with g",
+        "speed_rad_s" => "ring-downs from several initial speeds: a drag or a Stribeck shape follows |β̇| in every kind of run",
+        "torque_over_g" => "runs at several shaft angles transmit different torques at equal speeds: a friction that grows with the transmitted torque follows it",
+        "stick_slip" => "long stick phases at several input angles: a breakaway or angle-dependent static friction moves the release angle",
+        "run_order" => "repeat the first run at the end of the session: a drift (warming, wear) changes it, a fixed effect does not",
+        _ => "",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bin(group: &str, label: &str, excess: f64, sigma: f64) -> RemainderBin {
+        RemainderBin {
+            group: group.into(),
+            bin: label.into(),
+            windows: 10,
+            excess_chi2_per_dof: excess,
+            excess_sigma: sigma,
+            share: f64::NAN,
+        }
+    }
+
+    /// Bins equal within their σ give Q near its degrees of freedom (z small); one bin far above
+    /// the others makes the grouping significant and names that bin; the tests are ordered by z.
+    #[test]
+    fn the_dependence_test_finds_the_variable_whose_bins_differ() {
+        let flat = [0.11, 0.09, 0.10, 0.12, 0.08, 0.10];
+        let peaked = [0.02, 0.03, 1.50, 0.01, 0.02, 0.04];
+        let mut bins = Vec::new();
+        for (i, (&a, &b)) in flat.iter().zip(&peaked).enumerate() {
+            bins.push(bin("speed_rad_s", &format!("s{i}"), a, 0.05));
+            bins.push(bin("beta_phase_deg", &format!("b{i}"), b, 0.05));
+        }
+        let d = dependence(&bins);
+        assert_eq!(d.len(), 2);
+        assert_eq!(d[0].variable, "beta_phase_deg");
+        assert!(d[0].significant && d[0].z > 10.0, "{:?}", d[0]);
+        assert_eq!(d[0].peak_bin, "b2");
+        assert_eq!(d[0].dof, 5);
+        assert!(!d[1].significant && d[1].z < 1.0, "{:?}", d[1]);
+        // Q of the flat bins: Σ (x − 0.1)²/0.05² = 0.001/0.0025
+        assert!((d[1].chi2 - 0.4).abs() < 1e-12, "{}", d[1].chi2);
+    }
+
+    /// The fraction a step removed is the ratio of the χ² it removed to the base excess over the
+    /// floor, on the windows all three models predicted; the whole chain adds up to the total.
+    #[test]
+    fn the_fraction_removed_is_the_share_of_the_base_excess() {
+        let floors = vec![10.0; 4];
+        let base = vec![Some(30.0), Some(20.0), Some(40.0), Some(30.0)];
+        let mid = vec![Some(20.0), Some(15.0), Some(25.0), None];
+        let fin = vec![Some(12.0), Some(11.0), Some(14.0), Some(12.0)];
+        let (a, _) = fraction_removed(&base, &base, &mid, &floors).unwrap();
+        // windows 0–2: removed 10 + 5 + 15 of 20 + 10 + 30
+        assert!((a - 0.5).abs() < 1e-12, "{a}");
+        let (b, _) = fraction_removed(&base, &mid, &fin, &floors).unwrap();
+        assert!((b - 23.0 / 60.0).abs() < 1e-12, "{b}");
+        let (all, s) = fraction_removed(&base, &base, &fin, &floors).unwrap();
+        assert!(
+            (all - (18.0 + 9.0 + 26.0 + 18.0) / 80.0).abs() < 1e-12,
+            "{all}"
+        );
+        assert!(s > 0.0 && s < 0.1, "{s}");
+        assert!(fraction_removed(&base, &mid, &fin, &floors[..1]).is_none());
+    }
 }

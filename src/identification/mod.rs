@@ -34,3 +34,4 @@ pub mod select;
 pub mod shooting;
 pub mod spec;
 pub mod synth;
+pub mod verdict;

@@ -100,6 +100,7 @@ fn finding(
         heldout_rms_after_rad: None,
         evidence: BTreeMap::new(),
         size: Some(size),
+        standing: None,
     }
 }
 

@@ -1,6 +1,7 @@
 //! The diagnosis report, schema `gearbif.diagnosis/1` (docs/formats.md), and its
 //! Markdown rendering.
 
+use super::verdict::{Assessment, Standing, Status};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -18,7 +19,10 @@ pub struct Report {
     pub mismatch: Vec<Mismatch>,
     /// Findings, most supported first.
     pub findings: Vec<Finding>,
-    /// `effect` of the first finding, or `none`.
+    /// The first standing finding's `effect` when nothing significant is left; `partly_explained`
+    /// when findings stand but a significant remainder is left; `unexplained` when no standing
+    /// finding explains a significant mismatch; `none` when there is nothing to explain
+    /// ([`super::verdict`]).
     pub verdict: String,
     /// Optional (added key): the fits behind the report.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -26,6 +30,10 @@ pub struct Report {
     /// Optional (added key): what the final model leaves of the held-out mismatch, and where.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub remaining: Option<Remainder>,
+    /// Optional (added key): why the verdict is what it is: the standing findings, what is left
+    /// ([`super::verdict::decide`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub assessment: Option<Assessment>,
 }
 
 /// What the final model leaves of the held-out mismatch (report key `remaining`): the held-out
@@ -68,6 +76,38 @@ pub struct Remainder {
     /// whose floor was white noise at the cleaning's σ).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise: Option<NoiseFloor>,
+    /// What the remainder depends on: one test per grouping of the windows, largest z first
+    /// ([`super::mismatch::dependence`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub dependence: Vec<Dependence>,
+}
+
+/// Whether the remainder depends on one variable: the heterogeneity of its bins' excesses,
+/// Q = Σ_b (E_b − Ē)²/σ_b² with Ē the inverse-variance mean, against χ² with bins − 1 degrees of
+/// freedom (z by the Wilson–Hilferty transform).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Dependence {
+    /// The grouping (as [`RemainderBin::group`]).
+    pub variable: String,
+    /// Bins with a σ (the test's units).
+    pub bins: usize,
+    /// Q.
+    pub chi2: f64,
+    /// bins − 1.
+    pub dof: usize,
+    /// Normal deviate of Q.
+    pub z: f64,
+    /// Whether z reaches the threshold for this many variables tested
+    /// ([`super::judge::z_threshold`]).
+    pub significant: bool,
+    /// The bin with the largest excess.
+    pub peak_bin: String,
+    /// Its excess χ²/dof.
+    pub peak_excess_chi2_per_dof: f64,
+    /// Its 1σ.
+    pub peak_excess_sigma: f64,
+    /// The experiment that tells the candidates of such a dependence apart.
+    pub experiment: String,
 }
 
 /// The camera noise behind the remainder's floor (`identification::mismatch::noise_floor`): its
@@ -214,6 +254,10 @@ pub struct Finding {
     /// compares with the truth (e.g. the static torque's first-harmonic amplitude).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub size: Option<EffectSize>,
+    /// Optional (added key): whether the finding stands, and the fraction of the base model's
+    /// held-out excess it removed ([`super::verdict::standing`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub standing: Option<Standing>,
 }
 
 /// The headline size of a finding: one physical number with its standard error.
@@ -242,6 +286,9 @@ pub fn markdown(r: &Report, title: &str) -> String {
         "# Diagnosis of `{title}`\n\n**Verdict: `{}`**\n\n",
         r.verdict
     );
+    if let Some(a) = &r.assessment {
+        s.push_str(&format!("{}\n\n", a.statement));
+    }
     s.push_str("## Base model, refitted\n\n| parameter | value |\n|---|---|\n");
     for (k, v) in &r.baseline.params {
         s.push_str(&format!("| {k} | {v:.6} |\n"));
@@ -284,6 +331,9 @@ pub fn markdown(r: &Report, title: &str) -> String {
             fi.class,
             fi.explanation
         ));
+        if let Some(st) = &fi.standing {
+            s.push_str(&standing_markdown(st));
+        }
         s.push_str("| parameter | value |\n|---|---|\n");
         for (k, v) in &fi.params {
             s.push_str(&format!("| {k} | {v:.6} |\n"));
@@ -403,6 +453,55 @@ fn forks_markdown(forks: &[super::beam::Fork], joints: &[super::beam::Joint]) ->
     s
 }
 
+/// A finding's standing as one line of report.md.
+fn standing_markdown(st: &Standing) -> String {
+    let status = match st.status {
+        Status::Stands => "Stands",
+        Status::ConsistentWithZero => "Does not stand (consistent with zero)",
+        Status::Unphysical => "Does not stand (unphysical)",
+        Status::Unsized => "Does not stand (no size to test)",
+    };
+    let removed = match (st.fraction_removed, st.fraction_removed_sigma) {
+        (Some(v), Some(e)) => format!(
+            "; it removed {:.0} ± {:.0} % of the base model's held-out excess",
+            100.0 * v,
+            100.0 * e
+        ),
+        _ => String::new(),
+    };
+    format!("**{status}**: {}{removed}.\n\n", st.reason)
+}
+
+/// The remainder's dependence tests as a table of report.md (largest z first).
+fn dependence_markdown(deps: &[Dependence]) -> String {
+    if deps.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "What the remainder depends on (heterogeneity of its bins; significant at the \
+         threshold for this many variables):\n\n| variable | z | significant | largest in | \
+         χ²/dof − 1 there | experiment |\n|---|---|---|---|---|---|\n",
+    );
+    for d in deps {
+        s.push_str(&format!(
+            "| {} | {:.1} | {} | {} | {:.3} ± {:.3} | {} |\n",
+            d.variable,
+            d.z,
+            if d.significant { "yes" } else { "no" },
+            d.peak_bin,
+            d.peak_excess_chi2_per_dof,
+            d.peak_excess_sigma,
+            if d.significant {
+                d.experiment.as_str()
+            } else {
+                ""
+            }
+        ));
+    }
+    s.push('\n');
+    s
+}
+
 /// The camera-noise floor's paragraph of report.md, with the speed-dependent noise's line.
 fn noise_markdown(n: &NoiseFloor) -> String {
     let mut s = rest_noise_markdown(n);
@@ -489,8 +588,9 @@ fn remainder_markdown(rem: &Remainder) -> String {
     s.push_str(&format!(
         "The final model leaves a mismatch above the camera-noise floor: {numbers}.\n\n"
     ));
+    s.push_str(&dependence_markdown(&rem.dependence));
     if rem.located.is_empty() {
-        s.push_str("No single bin (run kind, drive frequency, β phase, speed, stick/slip) stands out: the remainder is spread.\n\n");
+        s.push_str("No single bin (run kind, drive frequency, β phase, α − β, speed, torque, stick/slip, run order) stands out: the remainder is spread.\n\n");
         return s;
     }
     s.push_str("| where | bin | windows | χ²/dof − 1 | share of the remaining excess |\n|---|---|---|---|---|\n");
@@ -526,6 +626,7 @@ mod tests {
             verdict: "none".into(),
             fits,
             remaining: None,
+            assessment: None,
         }
     }
 
