@@ -14,8 +14,8 @@ fn check(page: &Path) -> (bool, String) {
         .arg(page)
         .output()
         .expect("python3 runs scripts/check_tutorial.py");
-    let text = String::from_utf8_lossy(&out.stdout).into_owned()
-        + &String::from_utf8_lossy(&out.stderr);
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
     (out.status.success(), text)
 }
 
@@ -33,7 +33,10 @@ fn a_number_changed_on_the_page_fails_the_check() {
     let good = std::fs::read_to_string(&page).unwrap();
     // the located flip of the continuation block, moved by 5e-8 relative (the block's tolerance is 1e-9)
     let line = "[3] flip               f = 1.854934870";
-    assert!(good.contains(line), "the tutorial's continuation block has moved: update this test");
+    assert!(
+        good.contains(line),
+        "the tutorial's continuation block has moved: update this test"
+    );
     let bad = good.replacen(line, "[3] flip               f = 1.854934970", 1);
     let dir = std::env::temp_dir().join(format!("gearbif-tutorial-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
