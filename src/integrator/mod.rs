@@ -28,15 +28,16 @@ mod tableau;
 pub use dop853::EventDriven853;
 pub use dopri5::EventDriven;
 
-/// The method of the library's entry points that take none where it wins (`maps::stroboscopic`,
-/// `maps::half_period`, `two_param::locate_augmented` and `follow`, the lock-loss curves, the
-/// classification of `sweep::hysteresis`) and of the CLI's `--method` default: the event-driven
-/// Dormand–Prince 8(5,3). It is faster than the DP5 at every tolerance of the work-precision table
-/// in docs/performance.md (P_T with the state Jacobian at tol 1e-10: 18.9 µs against 46.7 µs, errors
-/// 4.9e-11 against 9.6e-11). Single shooting (`orbits::shoot`, …) and one-parameter continuation
-/// (`Continuation::new`, `switch_branch`, `diagram`) keep [`EventDriven`]: with the DOP853 there,
-/// the event-edge curve of tests/nonsmooth_curves.rs finds no arrival to track from the located
-/// nonsmooth point (docs/performance.md, "Which method is the default where"). The `_with`
+/// The method of the library's entry points that take none (`maps::stroboscopic`,
+/// `maps::half_period`, single shooting `orbits::shoot` and its relatives, one-parameter
+/// continuation `Continuation::new`, `switch_branch`, `diagram`, multiple shooting,
+/// `two_param::locate_augmented` and `follow`, the lock-loss curves, the classification of
+/// `sweep::hysteresis`) and of the CLI's `--method` default: the event-driven Dormand–Prince
+/// 8(5,3). It is faster than the DP5 at every tolerance of the work-precision table in
+/// docs/performance.md (P_T with the state Jacobian at tol 1e-10: 20.6 µs against 52.2 µs, errors
+/// 4.9e-11 against 9.6e-11). The global events (`analysis::global_events`) and the
+/// identification's ring-down fits, stick windows and synthesis use [`EventDriven`] (the DP5);
+/// docs/performance.md, "Which method is the default where", has the full table. The `_with`
 /// variants take any [`FlowMethod`].
 pub type DefaultMethod = EventDriven853;
 
