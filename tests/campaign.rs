@@ -264,6 +264,31 @@ fn ci_campaign_remainder_rate_on_white_noise() {
     assert_remainder_rate(&ci_campaign().cases, &["none"]);
 }
 
+/// The remainder's dependence test on the 20 white-noise controls of the CI campaign: its
+/// threshold keeps the family-wise rate of a significant dependence at 1 % (eight variables
+/// tested, [`gearbif::identification::judge::z_threshold`]); more than
+/// `max_consistent_failures(20, 0.01, 0.01)` controls with one refute that at the 1 % level.
+#[test]
+fn ci_campaign_dependence_rate_on_white_noise() {
+    let ctl: Vec<_> = ci_campaign()
+        .cases
+        .iter()
+        .filter(|c| c.effect == "none")
+        .collect();
+    assert_eq!(ctl.len(), 20);
+    let found: Vec<String> = ctl
+        .iter()
+        .filter_map(|c| Some(format!("seed {}: {}", c.seed, c.remaining_depends_on.as_ref()?)))
+        .collect();
+    let bound = max_consistent_failures(ctl.len(), 0.01, 0.01);
+    assert!(
+        found.len() <= bound,
+        "a significant dependence on {} of {} controls (bound {bound}): {found:?}",
+        found.len(),
+        ctl.len()
+    );
+}
+
 /// The remainder's noise floor under coloured camera noise (docs/diagnosis.md, "What remains and
 /// where"): AR(1) between frames with ρ = 0.7 and 0.9 (controls `none_ar1`, `none_ar1_strong`; 5
 /// seeds each on the CI campaign's tiny sets). The floor of an earlier version (white noise at the

@@ -66,6 +66,10 @@ pub struct CaseResult {
     /// findings (report key `remaining`; `None` when it has none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub remaining_above_noise: Option<bool>,
+    /// The variable the remainder depends on significantly, the largest z first (report key
+    /// `remaining.dependence`; `None` when none does).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub remaining_depends_on: Option<String>,
     /// z = E/σ_E of that remainder.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub remaining_z: Option<f64>,

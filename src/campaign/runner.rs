@@ -187,6 +187,12 @@ pub fn run_case(
         .map(|r| !r.within_noise);
     let rem = diag.as_ref().ok().and_then(|d| d.report.remaining.as_ref());
     let remaining_z = rem.map(|r| r.excess_chi2_per_dof / r.excess_sigma);
+    let remaining_depends_on = rem.and_then(|r| {
+        r.dependence
+            .iter()
+            .find(|d| d.significant)
+            .map(|d| d.variable.clone())
+    });
     let noise_at_rest = rem
         .and_then(|r| r.noise.as_ref())
         .filter(|n| n.method == "rest" && !n.correlation.is_empty())
@@ -230,6 +236,7 @@ pub fn run_case(
         seconds,
         remaining_above_noise,
         remaining_z,
+        remaining_depends_on,
         noise_at_rest,
         timing_jitter,
         forks,
