@@ -1011,8 +1011,12 @@ pub fn remainder(
 /// z = ((Q/ν)^{1/3} − (1 − 2/9ν)) / √(2/9ν); significant at [`super::judge::z_threshold`] for the
 /// number of groupings tested. Largest z first.
 pub fn dependence(bins: &[RemainderBin]) -> Vec<Dependence> {
-    let mut groups: Vec<&str> = bins.iter().map(|b| b.group.as_str()).collect();
-    groups.dedup();
+    let mut groups: Vec<&str> = Vec::new();
+    for b in bins {
+        if !groups.contains(&b.group.as_str()) {
+            groups.push(&b.group);
+        }
+    }
     let tests: Vec<Dependence> = groups
         .iter()
         .filter_map(|g| {
