@@ -14,6 +14,7 @@
 //! figures; every bifurcation frequency is the same in both conventions, angles differ by 180°.
 
 use super::params::{Column, Parameter, Parametrised};
+use super::taylor::{TaylorOscillator, TaylorSeries, INV, TAYLOR_LEN};
 use super::{DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry};
 use crate::error::{finite, non_negative, positive, Error, Result};
 use crate::numerics::trig::sin_cos;
@@ -574,6 +575,71 @@ impl DrivenOscillator for Gear {
             1.0
         } else {
             -1.0
+        }
+    }
+}
+
+/// The gear's Taylor coefficients (`model/taylor.rs`). With u = β + α and v = β − α the torque
+/// bracket is τ = ((Δ − 1)/2) sin u + ((Δ + 1)/2) sin v and ∂τ/∂β = ((Δ − 1)/2) cos u +
+/// ((Δ + 1)/2) cos v, so F = −ζω − sη + σ g τ (σ the convention's sign) needs only the sin/cos
+/// recurrences of u and v (u̇ = ω + 2πf, v̇ = ω − 2πf): four Cauchy sums per order, and ∂F/∂β comes
+/// with them at no cost; ∂F/∂ω = −ζ.
+impl TaylorOscillator for Gear {
+    fn taylor_expand(
+        &self,
+        t0: f64,
+        side: f64,
+        order: usize,
+        x: &mut TaylorSeries,
+        linearised: bool,
+    ) {
+        let nu = TAU * self.f;
+        let half_g = 0.5 * self.convention.sign() * self.g;
+        let (ku, kv) = (half_g * (self.delta - 1.0), half_g * (self.delta + 1.0));
+        let alpha = self.alpha(t0);
+        let mut su = [0.0; TAYLOR_LEN];
+        let mut cu = [0.0; TAYLOR_LEN];
+        let mut sv = [0.0; TAYLOR_LEN];
+        let mut cv = [0.0; TAYLOR_LEN];
+        (su[0], cu[0]) = sin_cos(x.beta[0] + alpha);
+        (sv[0], cv[0]) = sin_cos(x.beta[0] - alpha);
+        for k in 0..order {
+            if k > 0 {
+                // (sin u)ₖ = (1/k) Σⱼ j uⱼ (cos u)ₖ₋ⱼ with j uⱼ = ωⱼ₋₁, plus ν at j = 1 (−ν for v)
+                let mut acc = [
+                    nu * cu[k - 1],
+                    -nu * su[k - 1],
+                    -nu * cv[k - 1],
+                    nu * sv[k - 1],
+                ];
+                let prev = cu[..k]
+                    .iter()
+                    .rev()
+                    .zip(su[..k].iter().rev())
+                    .zip(cv[..k].iter().rev().zip(sv[..k].iter().rev()));
+                for (&w, ((&c_u, &s_u), (&c_v, &s_v))) in x.omega[..k].iter().zip(prev) {
+                    acc[0] += w * c_u;
+                    acc[1] -= w * s_u;
+                    acc[2] += w * c_v;
+                    acc[3] -= w * s_v;
+                }
+                let inv = INV[k];
+                (su[k], cu[k], sv[k], cv[k]) =
+                    (acc[0] * inv, acc[1] * inv, acc[2] * inv, acc[3] * inv);
+            }
+            let mut f = -self.zeta * x.omega[k] + ku * su[k] + kv * sv[k];
+            if k == 0 {
+                f -= side * self.eta;
+            }
+            x.omega[k + 1] = f * INV[k + 1];
+            x.beta[k + 1] = x.omega[k] * INV[k + 1];
+            if linearised {
+                x.d_beta[k] = ku * cu[k] + kv * cv[k];
+            }
+        }
+        if linearised {
+            x.d_omega[0] = -self.zeta;
+            x.d_omega_constant = true;
         }
     }
 }
