@@ -597,44 +597,33 @@ impl TaylorOscillator for Gear {
         let half_g = 0.5 * self.convention.sign() * self.g;
         let (ku, kv) = (half_g * (self.delta - 1.0), half_g * (self.delta + 1.0));
         let alpha = self.alpha(t0);
-        let mut su = [0.0; TAYLOR_LEN];
-        let mut cu = [0.0; TAYLOR_LEN];
-        let mut sv = [0.0; TAYLOR_LEN];
-        let mut cv = [0.0; TAYLOR_LEN];
-        (su[0], cu[0]) = sin_cos(x.beta[0] + alpha);
-        (sv[0], cv[0]) = sin_cos(x.beta[0] - alpha);
+        // q[m] = ((cos u)ₘ, (sin u)ₘ, (cos v)ₘ, (sin v)ₘ): one 4-lane Cauchy sum per order;
+        // j uⱼ = ωⱼ₋₁ except 1·u₁ = ω₀ + ν (v: ω₀ − ν)
+        let mut q = [[0.0; 4]; TAYLOR_LEN];
+        let (su, cu) = sin_cos(x.beta[0] + alpha);
+        let (sv, cv) = sin_cos(x.beta[0] - alpha);
+        q[0] = [cu, su, cv, sv];
+        let (du, dv) = (x.omega[0] + nu, x.omega[0] - nu);
+        let d1 = [du, du, dv, dv];
         for k in 0..order {
             if k > 0 {
-                // (sin u)ₖ = (1/k) Σⱼ j uⱼ (cos u)ₖ₋ⱼ with j uⱼ = ωⱼ₋₁, plus ν at j = 1 (−ν for v)
-                let mut acc = [
-                    nu * cu[k - 1],
-                    -nu * su[k - 1],
-                    -nu * cv[k - 1],
-                    nu * sv[k - 1],
-                ];
-                let prev = cu[..k]
-                    .iter()
-                    .rev()
-                    .zip(su[..k].iter().rev())
-                    .zip(cv[..k].iter().rev().zip(sv[..k].iter().rev()));
-                for (&w, ((&c_u, &s_u), (&c_v, &s_v))) in x.omega[..k].iter().zip(prev) {
-                    acc[0] += w * c_u;
-                    acc[1] -= w * s_u;
-                    acc[2] += w * c_v;
-                    acc[3] -= w * s_v;
+                // (sin u)ₖ = (1/k) Σⱼ j uⱼ (cos u)ₖ₋ⱼ, (cos u)ₖ = −(1/k) Σⱼ j uⱼ (sin u)ₖ₋ⱼ;
+                // the newest term (j = 1, q[k − 1]) is added last: it ends the chain of orders
+                let mut acc = older_terms(&x.omega, &q, k);
+                for (a, (&d, &qn)) in acc.iter_mut().zip(d1.iter().zip(&q[k - 1])) {
+                    *a += d * qn;
                 }
                 let inv = INV[k];
-                (su[k], cu[k], sv[k], cv[k]) =
-                    (acc[0] * inv, acc[1] * inv, acc[2] * inv, acc[3] * inv);
+                q[k] = [-acc[1] * inv, acc[0] * inv, -acc[3] * inv, acc[2] * inv];
             }
-            let mut f = -self.zeta * x.omega[k] + ku * su[k] + kv * sv[k];
+            let mut f = -self.zeta * x.omega[k] + ku * q[k][1] + kv * q[k][3];
             if k == 0 {
                 f -= side * self.eta;
             }
             x.omega[k + 1] = f * INV[k + 1];
             x.beta[k + 1] = x.omega[k] * INV[k + 1];
             if linearised {
-                x.d_beta[k] = ku * cu[k] + kv * cv[k];
+                x.d_beta[k] = ku * q[k][0] + kv * q[k][2];
             }
         }
         if linearised {
@@ -642,6 +631,31 @@ impl TaylorOscillator for Gear {
             x.d_omega_constant = true;
         }
     }
+}
+
+/// Σⱼ ωⱼ₋₁ q[k − j] over j = 2 … k lane by lane (the terms of the Cauchy sum of order k that
+/// are known before q[k − 1]), in two partial sums so that consecutive additions do not wait for
+/// each other.
+#[inline(always)]
+fn older_terms(omega: &[f64; TAYLOR_LEN], q: &[[f64; 4]; TAYLOR_LEN], k: usize) -> [f64; 4] {
+    let mut a = [[0.0; 4]; 2];
+    let mut j = 2;
+    while j < k {
+        let (w0, w1) = (omega[j - 1], omega[j]);
+        let (q0, q1) = (q[k - j], q[k - j - 1]);
+        for l in 0..4 {
+            a[0][l] += w0 * q0[l];
+            a[1][l] += w1 * q1[l];
+        }
+        j += 2;
+    }
+    if j == k {
+        let w = omega[k - 1];
+        for l in 0..4 {
+            a[0][l] += w * q[0][l];
+        }
+    }
+    std::array::from_fn(|l| a[0][l] + a[1][l])
 }
 
 /// One point of the analytic lock branch at Δ = ±1 (numerics.md, "Validation oracles").

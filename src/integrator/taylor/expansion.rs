@@ -95,9 +95,9 @@ impl<const N: usize> Expansion<N> {
     /// The step size: the largest h with |cᵢ,ₖ| hᵏ ≤ scaleᵢ for the two highest orders
     /// k = p − 1, p and every component i (the last terms kept are at most the tolerance; with
     /// coefficients that decay like ρ⁻ᵏ, the first term left out is smaller by the factor
-    /// h/ρ = tol^(1/p)), times `safety`. `scale[i]` is atol + rtol·|yᵢ| (β: atol + rtol, an
+    /// h/ρ = tol^(1/p)). `scale[i]` is atol + rtol·|yᵢ| (β: atol + rtol, an
     /// angle on the lift). Infinite when both orders vanish (a polynomial solution).
-    pub fn step_size(&self, scale: &[f64; N], safety: f64) -> f64 {
+    pub fn step_size(&self, scale: &[f64; N]) -> f64 {
         let p = self.order;
         let mut ln_h = f64::INFINITY;
         for k in [p - 1, p] {
@@ -109,7 +109,7 @@ impl<const N: usize> Expansion<N> {
                 ln_h = ln_h.min(-norm.ln() / k as f64);
             }
         }
-        safety * ln_h.exp()
+        ln_h.exp()
     }
 
     /// Component i at t₀ + τ (Horner).

@@ -4,11 +4,13 @@
 //! Each step expands the slip solution about its start to order p (`expansion.rs`): the state by
 //! the system's recurrences, the columns of the state Jacobian Z by the variational recurrence in
 //! the same arithmetic. The step size follows from the two highest coefficients: the largest h
-//! with |cᵢ,ₖ| hᵏ ≤ atol + rtol·|yᵢ| for k = p − 1, p and every component (the error of the
-//! truncated series is then about tol·h/ρ, ρ the coefficients' decay radius), times a safety
-//! factor; no step is rejected. The order is p = ⌈−ln(rtol)/2⌉ + 1 (Jorba & Zou 2005, the order
-//! that minimises the work per unit time for coefficients decaying geometrically; 11 at tol
-//! 1e-8, 13 at 1e-10).
+//! with |cᵢ,ₖ| hᵏ ≤ atol + rtol·|yᵢ| for k = p − 1, p and every component (β: atol + rtol, an
+//! angle on the lift); with coefficients decaying like ρ⁻ᵏ the truncation error is then about
+//! tol·h/ρ = tol^(1 + 1/p). No step is rejected. The order is p = ⌈−ln(rtol)/2⌉ + 5 (15 at tol
+//! 1e-8, 17 at 1e-10): four above the order that minimises the cost of the recurrences alone
+//! (Jorba & Zou 2005), because each step also pays a fixed cost (two sin/cos, the step-size
+//! logarithms, the event test); on the gear this gave the fewest steps and the least time at
+//! equal error (docs/performance.md, "Event-driven Taylor method").
 //!
 //! Events: in each step the polynomial ω(t₀ + τ) is tested for a zero of s·ω in (0, h]
 //! (`crossing.rs`: a bound on the tail first, then the Bernstein form and de Casteljau
@@ -47,17 +49,11 @@ use crate::model::{TaylorOscillator, TAYLOR_ORDER_MAX};
 pub struct Taylor;
 
 impl Taylor {
-    /// The order p for relative tolerance `rtol`: ⌈−ln(rtol)/2⌉ + 1, within 4 …
-    /// [`TAYLOR_ORDER_MAX`].
+    /// The order p for relative tolerance `rtol`: ⌈−ln(rtol)/2⌉ + 5, at most
+    /// [`TAYLOR_ORDER_MAX`] (15 at tol 1e-8, 17 at 1e-10).
     pub fn order_for(&self, rtol: f64) -> usize {
-        let p = (-rtol.ln() / 2.0).ceil() + 1.0;
-        (p.max(4.0) as usize).min(TAYLOR_ORDER_MAX)
-    }
-
-    /// The safety factor on the step size at order p: exp(−0.7/(p − 1)) (as in Jorba & Zou's
-    /// rule).
-    fn safety(&self, order: usize) -> f64 {
-        (-0.7 / (order as f64 - 1.0)).exp()
+        let p = (-rtol.ln() / 2.0).ceil().max(0.0) + 5.0;
+        (p as usize).min(TAYLOR_ORDER_MAX)
     }
 }
 

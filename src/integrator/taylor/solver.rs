@@ -32,7 +32,6 @@ struct Solver<'a, S: ?Sized, const N: usize> {
     opts: &'a FlowOptions,
     layout: Layout,
     ex: Expansion<N>,
-    safety: f64,
     stats: Stats,
     events: Vec<Event>,
     samples: Vec<Sample>,
@@ -51,7 +50,6 @@ impl<'a, S: TaylorOscillator + ?Sized, const N: usize> Solver<'a, S, N> {
                 with_params: false,
             },
             ex: Expansion::new(order),
-            safety: method.safety(order),
             stats: Stats::default(),
             events: Vec::new(),
             samples: Vec::with_capacity(opts.sample_times.len()),
@@ -129,7 +127,7 @@ impl<'a, S: TaylorOscillator + ?Sized, const N: usize> Solver<'a, S, N> {
                 atol + rtol * y[i].abs()
             }
         });
-        let h = self.ex.step_size(&scale, self.safety).min(hmax).min(t1 - t);
+        let h = self.ex.step_size(&scale).min(hmax).min(t1 - t);
         if h > 0.0 && h.is_finite() && t + h > t {
             Ok(h)
         } else {
