@@ -255,7 +255,8 @@ def write(a, rows, notes):
         "",
         f"- machine: {os.cpu_count()} cores, {cpu}, {platform.system()} {platform.release()}; "
         f"Python {platform.python_version()}, heyoka {hy.__version__}",
-        f"- date: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; gearbif commit {a.commit}",
+        f"- date: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; gearbif commit {a.commit}; "
+        f"load average at the end {os.getloadavg()[0]:.1f}",
         f"- workload: gear of the paper at Θ = 25°, {PERIODS} drive periods in one integration, "
         "a strobe sample at every period; best-of wall time per period; error = max(|Δβ|, |Δω|) "
         "at the end against gearbif's DOP853 at tol 1e-14",
