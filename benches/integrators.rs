@@ -3,7 +3,7 @@
 //! method at rtol 1e-6, 1e-9, 1e-12 (fixed step: 50, 800, 12800 steps per period), and the cost of
 //! the right-hand side alone (as many `forces_jet` calls as the event-driven run makes).
 //!
-//! `per_period_1e-8`: DP5 and DOP853 at tol 1e-8 with friction, P_T from (0.5, 2) with and without
+//! `per_period_1e-8`: DP5, DOP853 and the Taylor method at tol 1e-8 with friction, P_T from (0.5, 2) with and without
 //! the state Jacobian, and the workload of the per-period cost goals (docs/performance.md): 1000
 //! periods from rest with a strobe sample at every period, without (`1000_periods_strobe`) and with
 //! the state Jacobian (`1000_periods_strobe_jac`); the time divided by 1000 is the cost per period.
@@ -13,7 +13,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use gearbif::integrator::{
-    EventDriven, EventDriven853, FixedStep, FlowMethod, FlowOptions, Sensitivity,
+    EventDriven, EventDriven853, FixedStep, FlowMethod, FlowOptions, Sensitivity, Taylor,
 };
 use gearbif::model::{DrivenOscillator, Gear};
 use std::hint::black_box;
@@ -83,8 +83,11 @@ fn bench_per_period(c: &mut Criterion) {
     let gear = Gear::paper(25.0, 2.7).unwrap();
     let t1 = gear.period();
     let mut group = c.benchmark_group("per_period_1e-8");
-    let methods: [(&str, &dyn FlowMethod<Gear>); 2] =
-        [("dp5", &EventDriven), ("dop853", &EventDriven853)];
+    let methods: [(&str, &dyn FlowMethod<Gear>); 3] = [
+        ("dp5", &EventDriven),
+        ("dop853", &EventDriven853),
+        ("taylor", &Taylor),
+    ];
     for (name, m) in methods {
         for (label, sens) in [("pt", Sensitivity::None), ("pt_jac", Sensitivity::State)] {
             let o = FlowOptions::with_tol(1e-8).sensitivity(sens);

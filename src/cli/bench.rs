@@ -4,7 +4,7 @@ use super::common::{count, limits, output_file, tolerance, within, GearArgs, Out
 use super::methods::{parse_x0, DriveArgs};
 use crate::bench::{rhs_only_time, to_csv, work_precision, Candidate, WorkPrecisionSetup};
 use crate::error::{positive, Result};
-use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod, Sensitivity};
+use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod, Sensitivity, Taylor};
 use crate::model::Gear;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -36,10 +36,12 @@ pub struct Args {
     /// `--periods 1000 --x0-deg 180,0`: the per-period cost goals of docs/performance.md).
     #[arg(long)]
     strobe: bool,
-    /// Tolerances of the event-driven DP5 [dimensionless], each in (0, 1), comma-separated.
+    /// Tolerances of the event-driven DP5 [dimensionless], each in (0, 1), comma-separated (the
+    /// option without a value: none, also for the other lists).
     #[arg(
         long,
         value_delimiter = ',',
+        num_args = 0..,
         default_value = "1e-4,1e-6,1e-8,1e-10,1e-12"
     )]
     event_tols: Vec<f64>,
@@ -47,20 +49,31 @@ pub struct Args {
     #[arg(
         long,
         value_delimiter = ',',
+        num_args = 0..,
         default_value = "1e-4,1e-6,1e-8,1e-10,1e-12"
     )]
     dop853_tols: Vec<f64>,
+    /// Tolerances of the event-driven Taylor method [dimensionless], comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        num_args = 0..,
+        default_value = "1e-4,1e-6,1e-8,1e-10,1e-12"
+    )]
+    taylor_tols: Vec<f64>,
     /// Steps per period of the fixed-step RK4 [1], each 1 to 1000000, comma-separated (the paper
     /// uses 50).
     #[arg(
         long,
         value_delimiter = ',',
+        num_args = 0..,
         default_value = "25,50,100,200,400,800,1600,3200,12800"
     )]
     fixed_steps: Vec<usize>,
     /// Tolerances of the regularised diffsol method [dimensionless], comma-separated (each is run
     /// with every --reg-eps).
-    #[arg(long, value_delimiter = ',', default_value = "1e-6,1e-8,1e-10")]
+    #[arg(long, value_delimiter = ',',
+        num_args = 0.., default_value = "1e-6,1e-8,1e-10")]
     reg_tols: Vec<f64>,
     /// Regularisation velocities ε of the regularised method [rad/s], each in (0, 1],
     /// comma-separated.
@@ -93,6 +106,8 @@ struct Report {
     strobe: bool,
     jacobian: bool,
     reference_tol: f64,
+    /// The reference's final state (β, ω), for comparisons with other programs.
+    reference_x: [f64; 2],
     points: Vec<crate::bench::WorkPrecisionPoint>,
     /// Time of the reference's number of RHS evaluations alone (jets if with Jacobian), s.
     rhs_only_time_s: f64,
@@ -140,6 +155,7 @@ pub fn run(a: Args) -> Result<()> {
         strobe: a.strobe,
         jacobian: !a.no_jacobian,
         reference_tol: a.reference_tol,
+        reference_x: refflow.x,
         points,
         rhs_only_time_s: rhs_t,
         rhs_only_evals: n_rhs,
@@ -166,7 +182,13 @@ fn check_args(a: &Args) -> Result<()> {
     }
     tolerance("reference-tol", a.reference_tol)?;
     within("min-time", a.min_time, 0.0, 60.0, "must be in [0, 60] s")?;
-    for &t in a.event_tols.iter().chain(&a.reg_tols).chain(&a.dop853_tols) {
+    for &t in a
+        .event_tols
+        .iter()
+        .chain(&a.reg_tols)
+        .chain(&a.dop853_tols)
+        .chain(&a.taylor_tols)
+    {
         tolerance("tol", t)?;
     }
     for &n in &a.fixed_steps {
@@ -213,8 +235,8 @@ impl Methods {
         }
     }
 
-    /// The candidates in the order of the diagram: the event-driven DP5 and DOP853 at their
-    /// tolerances, the fixed-step RK4, the regularised method (a note on stderr if it was
+    /// The candidates in the order of the diagram: the event-driven DP5, DOP853 and Taylor at
+    /// their tolerances, the fixed-step RK4, the regularised method (a note on stderr if it was
     /// asked for but not built).
     fn candidates(&self, a: &Args) -> Vec<Candidate<'_, Gear>> {
         let mut cands: Vec<Candidate<'_, Gear>> = Vec::new();
@@ -223,6 +245,9 @@ impl Methods {
         }
         for &t in &a.dop853_tols {
             cands.push(Candidate::new(&EventDriven853, t, "event-driven DOP853"));
+        }
+        for &t in &a.taylor_tols {
+            cands.push(Candidate::new(&Taylor, t, "event-driven Taylor"));
         }
         for m in &self.fixed {
             cands.push(Candidate::new(

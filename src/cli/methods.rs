@@ -3,7 +3,7 @@
 
 use super::common::{check_frequency, count, limits, start_state, tolerance, within, GearArgs};
 use crate::error::{finite, Error, Result};
-use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod};
+use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod, Taylor};
 use crate::model::Gear;
 use clap::Args;
 
@@ -17,6 +17,10 @@ pub enum MethodArg {
     /// at every tolerance (the default).
     #[default]
     Dop853,
+    /// The same event-driven integration by Taylor's method of adaptive order and step (the gear
+    /// provides its Taylor coefficients); fewer, cheaper steps than the DOP853 (docs/performance.md,
+    /// "Event-driven Taylor method"). With parameter Jacobians the DOP853 is used.
+    Taylor,
     /// The paper's fixed-step RK4 with a naive sgn(ω) (`--steps` per period).
     Fixed,
     /// Friction η tanh(ω/ε) as a stiff ODE solved by diffsol ESDIRK3(4) (feature `diffsol-check`).
@@ -49,6 +53,7 @@ impl MethodArgs {
         match self.method {
             MethodArg::Event => Ok(Box::new(EventDriven)),
             MethodArg::Dop853 => Ok(Box::new(EventDriven853)),
+            MethodArg::Taylor => Ok(Box::new(Taylor)),
             MethodArg::Fixed => {
                 count("steps", self.steps, 1, limits::TURNS_MAX)?;
                 Ok(Box::new(FixedStep {

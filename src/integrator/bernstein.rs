@@ -55,14 +55,15 @@ pub(super) fn from_nested(r: &[f64], s: f64) -> ([f64; BMAX], usize) {
 pub(super) const START_GUARD: f64 = 1.0 / 16.0;
 
 /// A bracket (lo, hi) ⊂ [0, 1] of the first zero in (0, 1] of the polynomial with Bernstein
-/// coefficients `b[..=d]`: p(lo) > 0 (or lo = 0) and p(hi) ≤ 0; `None` if p > 0 on (0, 1].
+/// coefficients `b[..=d]` (any array length M > d: the continuous extensions of the Runge–Kutta
+/// pairs and the Taylor polynomials of `taylor/`): p(lo) > 0 (or lo = 0) and p(hi) ≤ 0; `None` if p > 0 on (0, 1].
 ///
 /// A step that starts on the zero set (b₀ ≤ 0, just after an event) is searched exactly only
 /// from θ = [`START_GUARD`] on; before it only the sign at the guard counts. Right after a release
 /// s·ω grows like (a − s·r)·t, which is 0 at a tangential release, so near the start the sign of
 /// the continuous extension is that of its interpolation error, not of ω: an exact search there
 /// finds spurious returns to Σ (a release followed at once by a new stick, repeated).
-pub(super) fn first_zero(b: &[f64; BMAX], d: usize) -> Option<(f64, f64)> {
+pub(super) fn first_zero<const M: usize>(b: &[f64; M], d: usize) -> Option<(f64, f64)> {
     if b[0] > 0.0 {
         return search(b, d, 0.0, 1.0, 0);
     }
@@ -74,7 +75,13 @@ pub(super) fn first_zero(b: &[f64; BMAX], d: usize) -> Option<(f64, f64)> {
 }
 
 /// [`first_zero`] on [a, a + w] given p(a) = b₀ > 0.
-fn search(b: &[f64; BMAX], d: usize, a: f64, w: f64, depth: u32) -> Option<(f64, f64)> {
+fn search<const M: usize>(
+    b: &[f64; M],
+    d: usize,
+    a: f64,
+    w: f64,
+    depth: u32,
+) -> Option<(f64, f64)> {
     let mut changes = 0;
     for k in 1..=d {
         if (b[k] > 0.0) != (b[k - 1] > 0.0) {
@@ -95,15 +102,15 @@ fn search(b: &[f64; BMAX], d: usize, a: f64, w: f64, depth: u32) -> Option<(f64,
 }
 
 /// De Casteljau subdivision at θ = ½: the Bernstein coefficients on [0, ½] and on [½, 1].
-fn split(b: &[f64; BMAX], d: usize) -> ([f64; BMAX], [f64; BMAX]) {
+fn split<const M: usize>(b: &[f64; M], d: usize) -> ([f64; M], [f64; M]) {
     split_at(b, d, 0.5)
 }
 
 /// De Casteljau subdivision at θ = τ: the Bernstein coefficients on [0, τ] and on [τ, 1].
-fn split_at(b: &[f64; BMAX], d: usize, tau: f64) -> ([f64; BMAX], [f64; BMAX]) {
+fn split_at<const M: usize>(b: &[f64; M], d: usize, tau: f64) -> ([f64; M], [f64; M]) {
     let mut t = *b;
-    let mut left = [0.0; BMAX];
-    let mut right = [0.0; BMAX];
+    let mut left = [0.0; M];
+    let mut right = [0.0; M];
     left[0] = t[0];
     right[d] = t[d];
     for j in 1..=d {

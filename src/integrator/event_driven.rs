@@ -964,7 +964,7 @@ fn step_end(t: f64, h: f64, hmax: f64, t1: f64) -> Result<f64> {
 /// The bracket `root` of a root of `e` on a step's continuous extension (θ ∈ [0, 1]) refined by
 /// Illinois regula falsi to the last bits of θ, or until its high end is at most `at_start`;
 /// returns the high end (the first point past the root).
-fn refine(mut root: Illinois, e: impl Fn(f64) -> f64, at_start: f64) -> f64 {
+pub(super) fn refine(mut root: Illinois, e: impl Fn(f64) -> f64, at_start: f64) -> f64 {
     for _ in 0..200 {
         if root.hi() - root.lo() <= 4.0 * f64::EPSILON * root.hi().max(1e-300)
             || root.hi() <= at_start
@@ -1010,14 +1010,14 @@ struct StepInfo {
 /// Guard against Zeno-like repetition of events without progress: events closer than
 /// 10⁻¹³ T to the previous one count as a stall; more than 8 in a row mark the point degenerate
 /// (the event handlers then take the degenerate branch), more than 16 are an error.
-struct ZenoGuard {
+pub(super) struct ZenoGuard {
     stalled: usize,
     last_event_t: f64,
     tiny: f64,
 }
 
 impl ZenoGuard {
-    fn new(period: f64) -> Self {
+    pub(super) fn new(period: f64) -> Self {
         Self {
             stalled: 0,
             last_event_t: f64::NEG_INFINITY,
@@ -1026,7 +1026,7 @@ impl ZenoGuard {
     }
 
     /// Records an event at `t`; an error with `reason` after more than 16 stalls in a row.
-    fn record(&mut self, t: f64, reason: &str) -> Result<()> {
+    pub(super) fn record(&mut self, t: f64, reason: &str) -> Result<()> {
         if t - self.last_event_t <= self.tiny {
             self.stalled += 1;
         } else {
@@ -1043,7 +1043,7 @@ impl ZenoGuard {
     }
 
     /// Whether the current point is degenerate (more than 8 stalls in a row).
-    fn degenerate(&self) -> bool {
+    pub(super) fn degenerate(&self) -> bool {
         self.stalled > 8
     }
 }

@@ -10,6 +10,9 @@
 //!   one integration (numerics.md, "Monodromy with saltation matrices").
 //! - [`EventDriven853`]: the same event handling with Dormand–Prince 8(5,3) and its continuous
 //!   extension of order 7 (fewer, longer steps; the Runge–Kutta pairs are data, `tableau.rs`).
+//! - [`Taylor`]: the same event handling with Taylor's method of adaptive step, for systems that
+//!   provide their Taylor coefficients ([`TaylorOscillator`](crate::model::TaylorOscillator): the
+//!   gear, the Coulomb oscillator); crossings of Σ are roots of each step's polynomial.
 //! - [`FixedStep`]: the paper's scheme — classical RK4 with a fixed step Δt = T/n (n = 50 in the paper)
 //!   and a naive sgn(ω); kept as a comparison method (it chatters around Σ).
 //! - `Regularised` (feature `diffsol-check`): friction η tanh(ω/ε) integrated as a stiff ODE by
@@ -24,9 +27,11 @@ mod fixed_step;
 #[cfg(feature = "diffsol-check")]
 mod regularised;
 mod tableau;
+mod taylor;
 
 pub use dop853::EventDriven853;
 pub use dopri5::EventDriven;
+pub use taylor::Taylor;
 
 /// The method of the library's entry points that take none (`maps::stroboscopic`,
 /// `maps::half_period`, single shooting `orbits::shoot` and its relatives, one-parameter

@@ -14,6 +14,7 @@
 //! figures; every bifurcation frequency is the same in both conventions, angles differ by 180°.
 
 use super::params::{Column, Parameter, Parametrised};
+use super::taylor::{TaylorOscillator, TaylorSeries, INV, TAYLOR_LEN};
 use super::{DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry};
 use crate::error::{finite, non_negative, positive, Error, Result};
 use crate::numerics::trig::sin_cos;
@@ -576,6 +577,85 @@ impl DrivenOscillator for Gear {
             -1.0
         }
     }
+}
+
+/// The gear's Taylor coefficients (`model/taylor.rs`). With u = β + α and v = β − α the torque
+/// bracket is τ = ((Δ − 1)/2) sin u + ((Δ + 1)/2) sin v and ∂τ/∂β = ((Δ − 1)/2) cos u +
+/// ((Δ + 1)/2) cos v, so F = −ζω − sη + σ g τ (σ the convention's sign) needs only the sin/cos
+/// recurrences of u and v (u̇ = ω + 2πf, v̇ = ω − 2πf): four Cauchy sums per order, and ∂F/∂β comes
+/// with them at no cost; ∂F/∂ω = −ζ.
+impl TaylorOscillator for Gear {
+    fn taylor_expand(
+        &self,
+        t0: f64,
+        side: f64,
+        order: usize,
+        x: &mut TaylorSeries,
+        linearised: bool,
+    ) {
+        let nu = TAU * self.f;
+        let half_g = 0.5 * self.convention.sign() * self.g;
+        let (ku, kv) = (half_g * (self.delta - 1.0), half_g * (self.delta + 1.0));
+        let alpha = self.alpha(t0);
+        // q[m] = ((cos u)ₘ, (sin u)ₘ, (cos v)ₘ, (sin v)ₘ): one 4-lane Cauchy sum per order;
+        // j uⱼ = ωⱼ₋₁ except 1·u₁ = ω₀ + ν (v: ω₀ − ν)
+        let mut q = [[0.0; 4]; TAYLOR_LEN];
+        let (su, cu) = sin_cos(x.beta[0] + alpha);
+        let (sv, cv) = sin_cos(x.beta[0] - alpha);
+        q[0] = [cu, su, cv, sv];
+        let (du, dv) = (x.omega[0] + nu, x.omega[0] - nu);
+        let d1 = [du, du, dv, dv];
+        for k in 0..order {
+            if k > 0 {
+                // (sin u)ₖ = (1/k) Σⱼ j uⱼ (cos u)ₖ₋ⱼ, (cos u)ₖ = −(1/k) Σⱼ j uⱼ (sin u)ₖ₋ⱼ;
+                // the newest term (j = 1, q[k − 1]) is added last: it ends the chain of orders
+                let mut acc = older_terms(&x.omega, &q, k);
+                for (a, (&d, &qn)) in acc.iter_mut().zip(d1.iter().zip(&q[k - 1])) {
+                    *a += d * qn;
+                }
+                let inv = INV[k];
+                q[k] = [-acc[1] * inv, acc[0] * inv, -acc[3] * inv, acc[2] * inv];
+            }
+            let mut f = -self.zeta * x.omega[k] + ku * q[k][1] + kv * q[k][3];
+            if k == 0 {
+                f -= side * self.eta;
+            }
+            x.omega[k + 1] = f * INV[k + 1];
+            x.beta[k + 1] = x.omega[k] * INV[k + 1];
+            if linearised {
+                x.d_beta[k] = ku * q[k][0] + kv * q[k][2];
+            }
+        }
+        if linearised {
+            x.d_omega[0] = -self.zeta;
+            x.d_omega_constant = true;
+        }
+    }
+}
+
+/// Σⱼ ωⱼ₋₁ q[k − j] over j = 2 … k lane by lane (the terms of the Cauchy sum of order k that
+/// are known before q[k − 1]), in two partial sums so that consecutive additions do not wait for
+/// each other.
+#[inline(always)]
+fn older_terms(omega: &[f64; TAYLOR_LEN], q: &[[f64; 4]; TAYLOR_LEN], k: usize) -> [f64; 4] {
+    let mut a = [[0.0; 4]; 2];
+    let mut j = 2;
+    while j < k {
+        let (w0, w1) = (omega[j - 1], omega[j]);
+        let (q0, q1) = (q[k - j], q[k - j - 1]);
+        for l in 0..4 {
+            a[0][l] += w0 * q0[l];
+            a[1][l] += w1 * q1[l];
+        }
+        j += 2;
+    }
+    if j == k {
+        let w = omega[k - 1];
+        for l in 0..4 {
+            a[0][l] += w * q[0][l];
+        }
+    }
+    std::array::from_fn(|l| a[0][l] + a[1][l])
 }
 
 /// One point of the analytic lock branch at Δ = ±1 (numerics.md, "Validation oracles").

@@ -22,12 +22,14 @@ pub mod one_sided;
 pub mod oscillators;
 pub mod params;
 pub mod ramped;
+pub mod taylor;
 
 pub use gear::{Convention, Gear, GearParam, GearParams, LockBranch, LockPoint};
 pub use one_sided::OneSided;
 pub use oscillators::{CoulombOscillator, CoulombParam, ForcedPendulum, PendulumParam};
 pub use params::{param_derivative, Column, Parameter, Parametrised};
 pub use ramped::Ramped;
+pub use taylor::{TaylorOscillator, TaylorSeries, TAYLOR_ORDER_MAX};
 
 /// Maximum number of parameters whose derivative columns a system can expose.
 pub const MAX_PARAMS: usize = 8;

@@ -2,6 +2,7 @@
 //! same integrator, maps and orbit solvers as the gear and serve as test problems.
 
 use super::params::{Column, Parameter, Parametrised};
+use super::taylor::{TaylorOscillator, TaylorSeries, INV};
 use super::{DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry};
 use crate::error::{finite, non_negative, positive, Result};
 use serde::{Deserialize, Serialize};
@@ -91,6 +92,42 @@ impl Parametrised for CoulombOscillator {
     }
     fn column(&self, p: CoulombParam) -> Option<Column> {
         Some(Column::primary(p as usize))
+    }
+}
+
+/// Taylor coefficients of the slip solution (`model/taylor.rs`): with φ = 2πf t, the forcing's
+/// coefficients follow (cos φ)ₖ = −(ν/k)(sin φ)ₖ₋₁, (sin φ)ₖ = (ν/k)(cos φ)ₖ₋₁ (ν = 2πf), and
+/// Fₖ = F (cos φ)ₖ − 2ξω₀ ẋₖ − ω₀² xₖ − sμ [k = 0]; ∂F/∂x = −ω₀², ∂F/∂ẋ = −2ξω₀.
+impl TaylorOscillator for CoulombOscillator {
+    fn taylor_expand(
+        &self,
+        t0: f64,
+        side: f64,
+        order: usize,
+        x: &mut TaylorSeries,
+        linearised: bool,
+    ) {
+        let nu = TAU * self.f;
+        let w0 = self.omega0;
+        let (mut sn, mut cs) = (TAU * self.f * t0).sin_cos();
+        for k in 0..order {
+            if k > 0 {
+                let inv = nu * INV[k];
+                (sn, cs) = (inv * cs, -inv * sn);
+            }
+            let mut f = self.force * cs - 2.0 * self.xi * w0 * x.omega[k] - w0 * w0 * x.beta[k];
+            if k == 0 {
+                f -= side * self.mu;
+            }
+            x.omega[k + 1] = f * INV[k + 1];
+            x.beta[k + 1] = x.omega[k] * INV[k + 1];
+        }
+        if linearised {
+            x.d_beta[..order].fill(0.0);
+            x.d_beta[0] = -w0 * w0;
+            x.d_omega[0] = -2.0 * self.xi * w0;
+            x.d_omega_constant = true;
+        }
     }
 }
 
