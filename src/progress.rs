@@ -65,6 +65,23 @@ pub enum Event<'a> {
 pub trait Observer: Sync {
     /// Called for each event, possibly from several threads.
     fn observe(&self, event: &Event<'_>);
+    /// True once the computation should stop (e.g. the user pressed Ctrl-C): sweeps check it
+    /// before each point and end with [`crate::Error::Stopped`]. Never, by default.
+    fn stopped(&self) -> bool {
+        false
+    }
+}
+
+/// An observer that ignores the events and stops the computation once its flag is set (by a
+/// signal handler or another thread).
+#[derive(Debug, Clone, Copy)]
+pub struct StopFlag<'a>(pub &'a std::sync::atomic::AtomicBool);
+
+impl Observer for StopFlag<'_> {
+    fn observe(&self, _: &Event<'_>) {}
+    fn stopped(&self) -> bool {
+        self.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
 }
 
 impl<F: Fn(&Event<'_>) + Sync> Observer for F {

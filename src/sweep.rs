@@ -144,6 +144,14 @@ impl SweepSpec {
         if self.is_empty() {
             return Err(Error::shape("points of the sweep", ">= 1", 0));
         }
+        let (nr, nc) = (self.rows.values.len(), self.cols.values.len());
+        if nr.checked_mul(nc).is_none_or(|n| n > axis::GRID_POINTS_MAX) {
+            return Err(Error::shape(
+                format!("points of the sweep ({nr} rows × {nc} columns)"),
+                "at most 1e7",
+                nr.saturating_mul(nc),
+            ));
+        }
         for ax in [&self.rows, &self.cols] {
             for &v in &ax.values {
                 crate::error::finite("axis value", v)?;
@@ -299,6 +307,9 @@ where
     let mut x = x_start;
     let mut out: Vec<(S, PointResult)> = Vec::with_capacity(cols.len());
     for (col, &cv) in cols.iter().enumerate() {
+        if observer.stopped() {
+            return Err(Error::Stopped { what: "the sweep" });
+        }
         let sys = system_at(cv)?;
         let quick = match protocol {
             Protocol::Fresh => {

@@ -519,3 +519,34 @@ fn every_json_output_carries_its_schema_id() {
     );
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// Not on a terminal (a log file, a batch job), a sweep reports each finished row with the points
+/// done and an estimate of the time left.
+#[test]
+fn sweep_logs_its_progress_and_time_left_when_not_on_a_terminal() {
+    let dir = tmpdir("sweep-log");
+    let out = dir.join("out");
+    let o = gearbif(&[
+        "sweep",
+        "--rows",
+        "theta:0:10:10",
+        "--cols",
+        "f:1:2:1",
+        "--settle",
+        "2",
+        "--record",
+        "1",
+        "--analysis",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("sweep: 4 points"), "{err}");
+    assert!(
+        err.contains("4/4 points") && err.contains("s left"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

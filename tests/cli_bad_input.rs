@@ -48,6 +48,66 @@ impl Fixtures {
         w("set-nofile/experiment.toml", &format!("{gear}{run}"));
         w("set-empty/experiment.toml", &format!("{gear}{run}"));
         w("set-empty/a.csv", "");
+        // a run file reached through a symbolic link to a folder outside the set
+        w(
+            "set-link/experiment.toml",
+            &format!("{gear}{}", run.replace("a.csv", "d/file")),
+        );
+        #[cfg(unix)]
+        std::os::unix::fs::symlink(&root, root.join("set-link/d")).unwrap();
+        // a Latin-1 byte on line 3
+        w("set-latin1/experiment.toml", &format!("{gear}{run}"));
+        std::fs::write(
+            root.join("set-latin1/a.csv"),
+            b"t,alpha,beta\n0,0,0\n# caf\xe9\n0.1,0,0\n",
+        )
+        .unwrap();
+        // a drive frequency no double period can hold, on line 10
+        w(
+            "set-fhz/experiment.toml",
+            &format!("{gear}{}", run.replace("1.0", "1e300")),
+        );
+        w("set-fhz/a.csv", "t,alpha,beta\n0,0,0\n0.1,0,0\n");
+        // 0.5 Hz data declared as 50 Hz, and 0.5 Hz data with angles in degrees
+        let ramp = |scale: f64| {
+            let mut c = String::from("t,alpha,beta\n");
+            for k in 0..100 {
+                let t = 0.04 * k as f64;
+                c += &format!("{t},{},0.1\n", scale * std::f64::consts::PI * t);
+            }
+            c
+        };
+        w(
+            "set-f50/experiment.toml",
+            &format!("{gear}{}", run.replace("1.0", "50.0")),
+        );
+        w("set-f50/a.csv", &ramp(1.0));
+        w(
+            "set-deg/experiment.toml",
+            &format!("{gear}{}", run.replace("1.0", "0.5")),
+        );
+        w("set-deg/a.csv", &ramp(180.0 / std::f64::consts::PI));
+        // a valid set, and output folders holding what a result would not
+        w(
+            "set-ok/experiment.toml",
+            &format!("{gear}\n[[run]]\nkind = \"ringdown\"\nalpha0_deg = 30.0\nfile = \"a.csv\"\n"),
+        );
+        let mut ring = String::from("t,alpha,beta\n");
+        for k in 0..50 {
+            ring += &format!(
+                "{},0.5235987755982988,{}\n",
+                0.01 * k as f64,
+                0.1 * (k as f64 * 0.3).cos()
+            );
+        }
+        w("set-ok/a.csv", &ring);
+        w("out-json/report.json/inside", "");
+        w("out-foreign/data.csv", "mine\n");
+        // r = -1 on line 4 of experiment.toml
+        w(
+            "set-r/experiment.toml",
+            &format!("{}{run}", gear.replace("r = 0.04", "r = -1")),
+        );
         Self { root }
     }
 
@@ -74,7 +134,8 @@ fn listing(dir: &Path) -> Vec<PathBuf> {
     if let Ok(rd) = std::fs::read_dir(dir) {
         for e in rd.flatten() {
             out.push(e.path());
-            if e.path().is_dir() {
+            // not through symbolic links (a fixture links back to the root)
+            if e.file_type().is_ok_and(|t| t.is_dir()) {
                 out.extend(listing(&e.path()));
             }
         }
@@ -113,6 +174,12 @@ const CASES: &[(&str, &str)] = &[
     ("simulate --f 1e5", "[1e-3, 1e4]"),
     ("simulate --tol 1", "tol"),
     ("simulate --tol 0", "tol"),
+    ("simulate --tol 1e-300", "`tol` = 1e-300"),
+    ("simulate --inertia 1e-300", "`g`"),
+    ("simulate --zeta 1e300", "`zeta` = 1e300"),
+    ("classify --f 1.3 --zeta 1e12", "`zeta` = 1e12"),
+    ("simulate --eta 1e300", "`eta` = 1e300"),
+    ("sweep --quiet --cols zeta:0:1e6:1e5", "`zeta`"),
     ("simulate --periods 1e12", "periods"),
     ("simulate --periods 0", "periods"),
     ("simulate --samples-per-period 0", "samples-per-period"),
@@ -138,40 +205,53 @@ const CASES: &[(&str, &str)] = &[
     ("continue --f 1.3 --range 0:x", "not a number"),
     ("continue --f 1.3 --range 0:inf", "lo < hi"),
     ("continue --f 0 --range 0:2", "`f`"),
-    ("continue --f 1.3 --range 0:2 --ds 0", "--ds"),
-    ("continue --f 1.3 --range 0:2 --ds 1 --ds-max 0.1", "--ds"),
-    ("continue --f 1.3 --range 0:2 --ds-max=-1", "ds-max"),
-    ("continue --f 1.3 --range 0:2 --max-steps 0", "max-steps"),
-    ("continue --f 1.3 --range 0:2 --tol 0", "tol"),
+    ("continue --f 1.3 --range -1:2 --direction down", "`f` = -1"),
+    ("continue --f 1.3 --range 0:2", "`f` = 0"),
     (
-        "continue --f 1.3 --range 0:2 --max-multiplier 0.5",
+        "continue --f 1.3 --range 1e-5:2 --max-steps 30",
+        "`f` = 1e-5",
+    ),
+    ("continue --f 1.3 --range 1:2e4", "[1e-3, 1e4]"),
+    ("continue --f 1.3 --range 0:400 --param theta", "theta_deg"),
+    ("continue --f 1.3 --range -1:2 --param zeta", "zeta"),
+    ("diagram --range -5:3 --param eta", "eta"),
+    ("continue --f 1.3 --range 0.5:2 --ds 0", "--ds"),
+    ("continue --f 1.3 --range 0.5:2 --ds 1 --ds-max 0.1", "--ds"),
+    ("continue --f 1.3 --range 0.5:2 --ds-max=-1", "ds-max"),
+    ("continue --f 1.3 --range 0.5:2 --max-steps 0", "max-steps"),
+    ("continue --f 1.3 --range 0.5:2 --tol 0", "tol"),
+    (
+        "continue --f 1.3 --range 0.5:2 --max-multiplier 0.5",
         "max-multiplier",
     ),
     (
-        "continue --f 1.3 --range 0:2 --lock sideways",
+        "continue --f 1.3 --range 0.5:2 --lock sideways",
         "stable or unstable",
     ),
     (
-        "continue --f 1.3 --range 0:2 --state-rad 1e9,0 --winding 1",
+        "continue --f 1.3 --range 0.5:2 --state-rad 1e9,0 --winding 1",
         "beta",
     ),
-    ("continue --f 1.3 --range 0:2 --winding 5000", "winding"),
-    ("continue --f 1.3 --range 0:2 --period 0", "period"),
+    ("continue --f 1.3 --range 0.5:2 --winding 5000", "winding"),
+    ("continue --f 1.3 --range 0.5:2 --period 0", "period"),
     (
-        "continue --f 1.3 --range 0:2 --direction left",
+        "continue --f 1.3 --range 0.5:2 --direction left",
         "up or down",
     ),
-    ("continue --f 1.3 --range 0:2 --param mass", "mass"),
+    ("continue --f 1.3 --range 0.5:2 --param mass", "mass"),
     (
-        "continue --f 1.3 --range 0:2 --section twisted",
+        "continue --f 1.3 --range 0.5:2 --section twisted",
         "sym or strob",
     ),
     (
-        "continue --f 1.3 --range 0:2 --plot branch.jpg",
+        "continue --f 1.3 --range 0.5:2 --plot branch.jpg",
         ".svg or .png",
     ),
-    ("continue --f 1.3 --range 0:2 --out {dir}", "is a folder"),
-    ("continue --f 1.3 --range 0:2 --theta-deg 400", "theta_deg"),
+    ("continue --f 1.3 --range 0.5:2 --out {dir}", "is a folder"),
+    (
+        "continue --f 1.3 --range 0.5:2 --theta-deg 400",
+        "theta_deg",
+    ),
     // diagram
     ("diagram", "--range"),
     ("diagram --range 3:1", "lo < hi"),
@@ -233,6 +313,13 @@ const CASES: &[(&str, &str)] = &[
     ("sweep --quiet --cols f:1:1e5:1e4", "`f`"),
     ("sweep --quiet --rows theta:0:50:-10", "step"),
     ("sweep --quiet --rows theta:0:50:0", "step"),
+    ("sweep --quiet --cols f:1:2:1e13:log", "at most 1e7"),
+    ("sweep --quiet --cols f:1:2:1e20:log", "at most 1e7"),
+    ("sweep --quiet --cols f:1:2:1e9:log", "at most 1e7"),
+    (
+        "sweep --quiet --rows theta:0:10:0.001 --cols f:1:2:0.0001",
+        "at most 1e7",
+    ),
     ("sweep --quiet --rows mass:0:1:1", "mass"),
     (
         "sweep --quiet --rows theta:0:10:5 --cols theta:0:10:5",
@@ -267,6 +354,7 @@ const CASES: &[(&str, &str)] = &[
     ("report --quiet --eta -1", "eta"),
     ("report --quiet --r 0", "`r`"),
     ("report --quiet --out {file}", "not a folder"),
+    ("report --quiet --out {out-foreign}", "file `data.csv`"),
     // synth
     ("synth --effect nope --out o", "unknown effect"),
     ("synth --effect none", "--out"),
@@ -287,8 +375,25 @@ const CASES: &[(&str, &str)] = &[
         "samples-per-turn",
     ),
     ("synth --effect none --out o --latency nan", "latency"),
+    (
+        "synth --effect none --out o --turns 0.01 --ringdowns 0 --driven 1",
+        "0 samples per driven run",
+    ),
+    ("synth --effect none --out o --fps 0.1", "--fps"),
+    (
+        "synth --effect none --out o --turns 1e5 --samples-per-turn 10000",
+        "samples per driven run",
+    ),
+    (
+        "synth --effect none --out o --driven 1000 --turns 1000",
+        "at most 2000000",
+    ),
     ("synth --effect none --out o --size inf", "size"),
     ("synth --effect none --out {file}", "not a folder"),
+    (
+        "synth --effect none --out {out-json}",
+        "folder `report.json`",
+    ),
     // fit
     ("fit {missing}", "experiment.toml"),
     ("fit {set-nan}", "a.csv:3"),
@@ -299,6 +404,13 @@ const CASES: &[(&str, &str)] = &[
     ("fit {set-nofile}", "a.csv"),
     ("fit {set-empty}", "empty file"),
     ("fit {file}", "experiment.toml"),
+    ("fit {set-link}", "outside the set's folder"),
+    ("fit {set-latin1}", "a.csv:3: byte 0xE9 is not UTF-8"),
+    ("fit {set-fhz}", "experiment.toml:10: `f_hz` = 1e300"),
+    ("fit {set-f50}", "turns at 0.5 Hz"),
+    ("fit {set-deg}", "look like degrees"),
+    ("fit {set-r}", "experiment.toml:4"),
+    ("diagnose {set-link} --out o", "outside the set's folder"),
     ("fit {set-nan} --tol 0", "`tol` = 0"),
     ("fit {set-nan} --tol 1", "`tol` = 1"),
     // diagnose
@@ -308,6 +420,8 @@ const CASES: &[(&str, &str)] = &[
     ("diagnose {set-nan} --out {file}", "not a folder"),
     ("diagnose {set-nan}", "--out"),
     ("diagnose {set-nan} --out o --tol nan", "`tol` = NaN"),
+    ("diagnose {set-ok} --out {out-json}", "folder `report.json`"),
+    ("diagnose {set-ok} --out {out-foreign}", "file `data.csv`"),
     // campaign
     ("campaign", "--out"),
     ("campaign --out o --seeds 0", "seeds"),
@@ -326,6 +440,20 @@ const CASES: &[(&str, &str)] = &[
         "at least one run",
     ),
     ("campaign --out {file}", "not a folder"),
+    (
+        "campaign --out o --first-seed 18446744073709551614 --null-seeds 3",
+        "largest seed",
+    ),
+    (
+        "campaign --out o --first-seed 18446744073709551615 --seeds 2",
+        "largest seed",
+    ),
+    (
+        "campaign --out o --ringdowns 18446744073709551615",
+        "ringdowns",
+    ),
+    ("campaign --out o --turns 1e9", "samples per driven run"),
+    ("campaign --out o --turns 0.01", "samples per driven run"),
     // bench-integrators
     ("bench-integrators --event-tols 0", "tol"),
     ("bench-integrators --event-tols 1.5", "tol"),
@@ -369,6 +497,9 @@ fn every_command_refuses_bad_input_with_exit_2_and_no_output() {
         }
         if err.contains("panicked") {
             why.push("panic".into());
+        }
+        if err.contains("an ordinary file") {
+            why.push("quotes a file's content".into());
         }
         if !left.is_empty() {
             why.push(format!("left behind {left:?}"));
@@ -423,4 +554,87 @@ fn every_command_has_a_bad_input_case() {
             "no bad-input case for `{c}`"
         );
     }
+}
+
+/// Numeric flags of fast commands set to extreme values, one at a time (a structure-aware fuzz
+/// of the command line): each run ends with exit 0 (a valid result) or 2 (a refusal naming the
+/// flag), never a panic or a hang. The values span 1e-300 … 1e300 of both signs and the
+/// non-finite ones; the hang guard is generous, the runs take well under a second each.
+#[test]
+fn extreme_numeric_flags_give_a_result_or_exit_2() {
+    const VALUES: &[&str] = &[
+        "1e-300", "-1e-300", "1e-30", "1e-5", "0", "-1", "7", "1e5", "1e30", "1e300", "-1e300",
+        "nan", "inf",
+    ];
+    // (command with a `{}` slot for the value, the flag's name as errors give it)
+    const TEMPLATES: &[(&str, &str)] = &[
+        ("info --m1 {}", "m1"),
+        ("info --r {}", "`r`|`g`"),
+        ("info --inertia {}", "inertia|`g`"),
+        ("info --zeta {}", "zeta"),
+        ("info --eta {}", "eta"),
+        ("info --theta-deg {}", "theta_deg"),
+        ("info --f {}", "f"),
+        ("map --iterations 3 --f {}", "f"),
+        ("map --iterations 3 --zeta {}", "zeta"),
+        ("map --iterations 3 --inertia {}", "inertia|`g`"),
+        ("simulate --periods 1 --tol {}", "tol"),
+        ("simulate --periods {} --samples-per-period 1", "periods"),
+        ("simulate --periods 1 --eta {}", "eta"),
+        ("classify --settle 2 --record 1 --analysis 2 --f {}", "f"),
+        ("classify --settle 2 --record 1 --analysis 2 --beta0-deg {}", "beta0_deg"),
+        ("sweep --quiet --settle 1 --record 1 --analysis 0 --rows theta:0:10:10 --cols zeta:0:{}:1", "zeta"),
+    ];
+    let root = std::env::temp_dir().join(format!("gearbif-fuzzcli-{}", std::process::id()));
+    let mut failures = Vec::new();
+    let mut outcomes = [0usize; 2];
+    for (template, name) in TEMPLATES {
+        for v in VALUES {
+            let cmd = template.replace("{}", v);
+            let cwd = root.join("cwd");
+            let _ = std::fs::remove_dir_all(&cwd);
+            std::fs::create_dir_all(&cwd).unwrap();
+            let mut child = Command::new(env!("CARGO_BIN_EXE_gearbif"))
+                .args(cmd.split_whitespace())
+                .current_dir(&cwd)
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap();
+            // a hang guard only (the runs take well under a second)
+            let t = std::time::Instant::now();
+            let status = loop {
+                if let Some(s) = child.try_wait().unwrap() {
+                    break Some(s);
+                }
+                if t.elapsed().as_secs() > 60 {
+                    let _ = child.kill();
+                    child.wait().unwrap();
+                    break None;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(10));
+            };
+            let mut err = String::new();
+            use std::io::Read;
+            child.stderr.take().unwrap().read_to_string(&mut err).ok();
+            match status.and_then(|s| s.code()) {
+                Some(0) => outcomes[0] += 1,
+                Some(2) if name.split('|').any(|n| err.contains(n)) || err.contains("Usage") => {
+                    outcomes[1] += 1
+                }
+                Some(2) => failures.push(format!(
+                    "`{cmd}`: exit 2 without naming `{name}`: {}",
+                    err.trim()
+                )),
+                None => failures.push(format!("`{cmd}`: did not end (killed by the hang guard)")),
+                Some(c) => failures.push(format!("`{cmd}`: exit {c}: {}", err.trim())),
+            }
+            if err.contains("panicked") {
+                failures.push(format!("`{cmd}`: panic: {}", err.trim()));
+            }
+        }
+    }
+    std::fs::remove_dir_all(&root).ok();
+    eprintln!("{} results, {} refusals", outcomes[0], outcomes[1]);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }

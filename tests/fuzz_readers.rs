@@ -15,7 +15,7 @@
 
 use gearbif::analysis::ClassifyOptions;
 use gearbif::cli::{parse_config, GearConfig};
-use gearbif::io::recordings::{parse_csv, parse_experiment, read_set};
+use gearbif::io::recordings::{parse_csv, parse_experiment, read_set, RunKind};
 use gearbif::sweep::{merge_shards, Axis, Shard, SweepOutcome, SweepParam, SweepRunner, SweepSpec};
 use gearbif::Error;
 use proptest::prelude::*;
@@ -301,6 +301,12 @@ fn check_experiment(text: &str) -> Result<(), TestCaseError> {
             for r in &runs {
                 prop_assert!(!r.file.is_empty() && !Path::new(&r.file).is_absolute());
                 prop_assert!(!r.file.split(['/', '\\']).any(|c| c == ".."));
+                match r.kind {
+                    RunKind::Driven { f_hz } => prop_assert!((1e-3..=1e4).contains(&f_hz)),
+                    RunKind::Ringdown { alpha0 } => {
+                        prop_assert!(alpha0.abs() <= 360f64.to_radians() + 1e-12)
+                    }
+                }
             }
             Ok(())
         }
@@ -367,6 +373,22 @@ proptest! {
     fn experiment_mutated(m in mutations()) {
         let b = apply(EXPERIMENT.as_bytes().to_vec(), &m);
         check_experiment(&String::from_utf8_lossy(&b))?;
+    }
+
+    /// One number of experiment.toml replaced by ±m·10^e, e in -300..=300: a set in the
+    /// documented domains or an error naming the file and the line.
+    #[test]
+    fn experiment_numbers_across_the_exponent_range(
+        which in 0..64usize,
+        m in 1.0..10.0f64,
+        e in -300..=300i32,
+        negative in any::<bool>(),
+    ) {
+        let nums = numbers(EXPERIMENT.as_bytes());
+        let (a, b) = nums[which % nums.len()];
+        let v = format!("{}{m}e{e}", if negative { "-" } else { "" });
+        let text = format!("{}{v}{}", &EXPERIMENT[..a], &EXPERIMENT[b..]);
+        check_experiment(&text)?;
     }
 
     #[test]

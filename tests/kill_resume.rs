@@ -180,3 +180,195 @@ fn damaged_checkpoint_rows_are_recomputed_and_a_damaged_spec_is_refused() {
     );
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// Every file under `dir` (relative path → bytes; in text outputs the lines stating computing
+/// times, which differ from run to run, are left out).
+fn snapshot(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    files(dir, true)
+}
+
+/// Every file under `dir` as it is (`normalise`: as [`snapshot`]).
+fn files(dir: &Path, normalise: bool) -> std::collections::BTreeMap<String, Vec<u8>> {
+    fn walk(
+        base: &Path,
+        d: &Path,
+        normalise: bool,
+        out: &mut std::collections::BTreeMap<String, Vec<u8>>,
+    ) {
+        if let Ok(rd) = std::fs::read_dir(d) {
+            for e in rd.flatten() {
+                let p = e.path();
+                if p.is_dir() {
+                    walk(base, &p, normalise, out);
+                } else {
+                    let rel = p.strip_prefix(base).unwrap().display().to_string();
+                    let mut bytes = std::fs::read(&p).unwrap();
+                    if normalise && (rel.ends_with(".md") || rel.ends_with(".json")) {
+                        let text = String::from_utf8(bytes).unwrap();
+                        bytes = text
+                            .lines()
+                            .filter(|l| !l.contains("Computing time") && !l.contains("seconds"))
+                            .collect::<Vec<_>>()
+                            .join("\n")
+                            .into_bytes();
+                    }
+                    out.insert(rel, bytes);
+                }
+            }
+        }
+    }
+    let mut out = std::collections::BTreeMap::new();
+    walk(dir, dir, normalise, &mut out);
+    out
+}
+
+fn gearbif(args: &[&str], out: &Path) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_gearbif"));
+    c.args(args)
+        .arg("--out")
+        .arg(out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
+    c
+}
+
+fn run_ok(args: &[&str], out: &Path) {
+    let o = gearbif(args, out).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// Writes the files of `snap` as the folder `dir` (replacing it).
+fn restore(dir: &Path, snap: &std::collections::BTreeMap<String, Vec<u8>>) {
+    let _ = std::fs::remove_dir_all(dir);
+    for (rel, bytes) in snap {
+        let p = dir.join(rel);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, bytes).unwrap();
+    }
+}
+
+/// `args_b` run into a folder holding the result of `args_a`, killed at random moments: after
+/// every kill the folder holds the earlier result or the new one, whole, and beside it nothing
+/// but hidden temporaries of the killed runs, which the next complete run removes.
+fn killed_writer_leaves_one_whole_result(name: &str, args_a: &[&str], args_b: &[&str]) {
+    let root = tmpdir(name);
+    let (out, b) = (root.join("out"), root.join("b"));
+    run_ok(args_a, &out);
+    let snap_a = snapshot(&out);
+    let files_a = files(&out, false);
+    let t = Instant::now();
+    run_ok(args_b, &b);
+    let t_b = t.elapsed();
+    let snap_b = snapshot(&b);
+    assert_ne!(snap_a, snap_b, "the two results must differ");
+    let seed = std::env::var("GEARBIF_KILL_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0x5eed_u64);
+    let kills: usize = std::env::var("GEARBIF_KILLS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(4);
+    let mut rng = Rng(seed | 1);
+    let (mut old, mut new) = (0, 0);
+    for _ in 0..kills {
+        let mut child = gearbif(args_b, &out).spawn().unwrap();
+        // late moments weigh more: the final writes are what this test is about
+        let u = rng.uniform().sqrt();
+        std::thread::sleep(t_b.mul_f64(0.3 + 0.9 * u));
+        let _ = child.kill();
+        child.wait().unwrap();
+        let now = snapshot(&out);
+        if now == snap_a {
+            old += 1;
+        } else if now == snap_b {
+            new += 1;
+            restore(&out, &files_a);
+        } else if !out.exists() {
+            // killed between moving the earlier result aside and the new one into place: the
+            // next run puts the earlier one back; here it is restored by hand
+            old += 1;
+            restore(&out, &files_a);
+        } else {
+            let differ = |snap: &std::collections::BTreeMap<String, Vec<u8>>| {
+                let mut d: Vec<String> = now
+                    .keys()
+                    .filter(|k| snap.get(*k) != now.get(*k))
+                    .cloned()
+                    .collect();
+                d.extend(snap.keys().filter(|k| !now.contains_key(*k)).cloned());
+                d
+            };
+            panic!(
+                "{name}: after a kill the folder is neither result: it differs from the earlier \
+                 one in {:?}, from the new one in {:?}",
+                differ(&snap_a),
+                differ(&snap_b)
+            );
+        }
+        for e in std::fs::read_dir(&root).unwrap().flatten() {
+            let n = e.file_name().to_string_lossy().to_string();
+            assert!(
+                n == "out" || n == "b" || n.starts_with(".out.tmp-") || n.starts_with(".out.old-"),
+                "{name}: a kill left {n} beside the folder"
+            );
+        }
+    }
+    run_ok(args_b, &out);
+    assert!(snapshot(&out) == snap_b, "{name}: the complete run differs");
+    let left: Vec<String> = std::fs::read_dir(&root)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| n != "out" && n != "b")
+        .collect();
+    assert!(left.is_empty(), "{name}: temporaries left: {left:?}");
+    eprintln!(
+        "{name}: seed {seed:#x}, {kills} kills (run {:.2} s): earlier result {old} times, new {new}",
+        t_b.as_secs_f64()
+    );
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// `diagnose` killed while it replaces an earlier diagnosis of another set (tiny sets, a few
+/// seconds each): the folder holds one whole result after every kill.
+#[test]
+fn killed_diagnose_leaves_one_whole_result() {
+    let root = tmpdir("diagnose-sets");
+    let set = |name: &str, seed: &str| {
+        let p = root.join(name);
+        let o = Command::new(env!("CARGO_BIN_EXE_gearbif"))
+            .args([
+                "synth",
+                "--effect",
+                "none",
+                "--ringdowns",
+                "2",
+                "--driven",
+                "1",
+            ])
+            .args(["--turns", "10", "--seed", seed, "--out"])
+            .arg(&p)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        p.display().to_string()
+    };
+    let (a, b) = (set("a", "1"), set("b", "2"));
+    killed_writer_leaves_one_whole_result(
+        "diagnose",
+        &["diagnose", &a, "--no-heldout"],
+        &["diagnose", &b, "--no-heldout"],
+    );
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// `report` killed while it replaces the report of another gear.
+#[test]
+fn killed_report_leaves_one_whole_result() {
+    killed_writer_leaves_one_whole_result(
+        "report",
+        &["report", "--quiet", "--eta", "20"],
+        &["report", "--quiet"],
+    );
+}

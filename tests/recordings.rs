@@ -246,3 +246,38 @@ fn diagnosis_of_degenerate_sets_errs_without_panicking() {
         assert!(r.is_err(), "a set without motion cannot be diagnosed");
     }
 }
+
+/// A byte-order mark (as spreadsheet programs write) is not part of the header or the TOML.
+#[test]
+fn a_byte_order_mark_is_skipped() {
+    let c = parse_csv("\u{feff}t,alpha,beta\n0,0,0\n0.1,0,1\n", "bom.csv").unwrap();
+    assert_eq!(c.t, [0.0, 0.1]);
+    let exp = format!("\u{feff}{GEAR}\n[[run]]\nkind = \"driven\"\nf_hz = 1.0\nfile = \"a.csv\"\n");
+    parse_experiment(&exp, "experiment.toml").unwrap();
+}
+
+/// The keys experiment.toml may hold but the reader does not know are named with their lines.
+#[test]
+fn ignored_keys_are_named_with_their_lines() {
+    let exp = "[gear]\nm1 = 3.51\nzetta = 1.1\n\n[[run]]\nkind = \"driven\"\nf_hz = 1.0\nfreq = 2\nfile = \"a.csv\"\n";
+    let keys = gearbif::io::recordings::ignored_keys(exp);
+    assert_eq!(
+        keys,
+        ["`zetta` in [gear] (line 3)", "`freq` in [[run]] 1 (line 8)"]
+    );
+    assert!(gearbif::io::recordings::ignored_keys(&format!("{GEAR}\n")).is_empty());
+}
+
+/// A run has at most `RUN_SAMPLES_MAX` samples: the next is refused with its line.
+#[test]
+fn a_run_beyond_the_sample_limit_is_refused_with_its_line() {
+    use gearbif::io::recordings::limits::RUN_SAMPLES_MAX;
+    let mut text = String::from("t,alpha,beta\n");
+    for k in 0..=RUN_SAMPLES_MAX {
+        text += &format!("{k},0,0\n");
+    }
+    match parse_csv(&text, "big.csv").unwrap_err() {
+        Error::Recording { line, .. } => assert_eq!(line, Some(RUN_SAMPLES_MAX + 2)),
+        e => panic!("{e}"),
+    }
+}

@@ -13,7 +13,7 @@ use gearbif::io::with_schema;
 use gearbif::model::gear::GearParam;
 use gearbif::model::params::Parametrised;
 use gearbif::model::GearParams;
-use gearbif::progress::Silent;
+use gearbif::progress::StopFlag;
 use gearbif::sweep::{sweep_grid, Axis, Method, Protocol, SweepOutcome, SweepRunner, SweepSpec};
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -139,6 +139,49 @@ fn classify<'py>(
     to_python(py, &doc)
 }
 
+/// Runs `work` on a worker thread without the GIL while this thread checks for Python signals
+/// every 50 ms: on Ctrl-C (or any signal whose handler raises) the work's [`StopFlag`] is set, the
+/// work ends at its next point ([`gearbif::Error::Stopped`]) and the handler's exception
+/// (`KeyboardInterrupt`) is raised; nothing else touches Python (or numpy) after the signal.
+pub(crate) fn interruptible<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce(&StopFlag<'_>) -> T + Send,
+) -> PyResult<T> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::mpsc;
+    use std::time::Duration;
+    let flag = AtomicBool::new(false);
+    let stop = StopFlag(&flag);
+    std::thread::scope(|scope| {
+        let (tx, rx) = mpsc::channel();
+        let stop = &stop;
+        scope.spawn(move || {
+            // the receiver may be gone after an interrupt: the result is dropped then
+            let _ = tx.send(work(stop));
+        });
+        let mut rx = rx;
+        loop {
+            let (got, back) = py.detach(move || (rx.recv_timeout(Duration::from_millis(50)), rx));
+            rx = back;
+            match got {
+                Ok(v) => return Ok(v),
+                Err(mpsc::RecvTimeoutError::Disconnected) => {
+                    return Err(pyo3::exceptions::PyRuntimeError::new_err(
+                        "the computation's thread ended without a result",
+                    ))
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
+            }
+            if let Err(e) = py.check_signals() {
+                flag.store(true, Ordering::Relaxed);
+                // wait (without the GIL) for the work to notice the flag and end
+                py.detach(move || drop(rx.recv()));
+                return Err(e);
+            }
+        }
+    })
+}
+
 /// {name: value} of a system's parameters as JSON.
 fn params_json<S: PySystem>(s: &S) -> serde_json::Value {
     s.param_values()
@@ -158,12 +201,13 @@ fn sweep_system<S: PySystem>(
     protocol: Protocol,
     opts: &ClassifyOptions,
     method: Method,
+    stop: &StopFlag<'_>,
 ) -> gearbif::Result<Vec<Vec<PointResult>>> {
     let r = (base.param_by_name(rows.0)?, rows.1);
     let c = (base.param_by_name(cols.0)?, cols.1);
     let grid = match method {
-        Method::EventDriven => sweep_grid(&EventDriven, base, r, c, x0, protocol, opts, &Silent)?,
-        _ => sweep_grid(&EventDriven853, base, r, c, x0, protocol, opts, &Silent)?,
+        Method::EventDriven => sweep_grid(&EventDriven, base, r, c, x0, protocol, opts, stop)?,
+        _ => sweep_grid(&EventDriven853, base, r, c, x0, protocol, opts, stop)?,
     };
     Ok(grid
         .into_iter()
@@ -242,9 +286,11 @@ fn sweep_grid_py<'py>(
         ..ClassifyArgs::default()
     }
     .options()?;
-    let r = py.detach(|| {
-        dispatch!(&sys, s => sweep_system(s, (&rname, &rvals), (&cname, &cvals), x0, protocol, &opts, method))
-    });
+    // Ctrl-C stops the sweep at its next point and raises KeyboardInterrupt
+    let r = interruptible(
+        py,
+        |stop| dispatch!(&sys, s => sweep_system(s, (&rname, &rvals), (&cname, &cvals), x0, protocol, &opts, method, stop)),
+    )?;
     let grid = sys.finish(r)?;
     let (n, m) = (rvals.len(), cvals.len());
     let field = |f: &dyn Fn(&PointResult) -> Option<f64>| {
@@ -365,8 +411,8 @@ fn sweep<'py>(
         classify,
     };
     spec.validate().py()?;
-    let res = py
-        .detach(|| match SweepRunner::new(spec).run()? {
+    let res = interruptible(py, |stop| {
+        match SweepRunner::new(spec).observer(stop).run()? {
             SweepOutcome::Complete(r) => {
                 if let Some(d) = &out_dir {
                     r.write(d)?;
@@ -374,8 +420,9 @@ fn sweep<'py>(
                 Ok(*r)
             }
             SweepOutcome::Stopped { .. } => Err(gearbif::Error::Stopped { what: "the sweep" }),
-        })
-        .py()?;
+        }
+    })?
+    .py()?;
     to_python(py, &with_schema("gearbif.sweep/1", &res))
 }
 

@@ -85,6 +85,11 @@ impl SetSize {
     }
     /// Checks the numbers.
     pub fn validate(&self) -> Result<()> {
+        for (n, v) in [("ringdowns", self.ringdowns), ("driven", self.driven)] {
+            if v > 1000 {
+                return Err(Error::option(n, format!("{v} runs: at most 1000")));
+            }
+        }
         if self.ringdowns + self.driven == 0 {
             return Err(Error::inconsistent(
                 "ringdowns, driven",
@@ -116,6 +121,50 @@ impl SetSize {
             return Err(Error::inconsistent(
                 "f_min, f_max",
                 format!("f_max = {} < f_min = {}", self.f_max, self.f_min),
+            ));
+        }
+        self.check_samples()
+    }
+
+    /// Each run between 10 and [`RUN_SAMPLES_MAX`] samples, the set at most [`SET_SAMPLES_MAX`]
+    /// (the limits of a recording set, docs/errors.md).
+    fn check_samples(&self) -> Result<()> {
+        use crate::io::recordings::limits::{RUN_SAMPLES_MAX, SET_SAMPLES_MAX};
+        let min = crate::identification::synth::RUN_SAMPLES_MIN;
+        let n = |x: f64| {
+            if x.is_finite() && x > 0.0 {
+                x.floor() as usize
+            } else {
+                0
+            }
+        };
+        let (nr, nd) = (
+            n(self.ringdown_s * self.fps),
+            n(self.turns * self.samples_per_turn as f64),
+        );
+        for (what, runs, k) in [
+            ("ring-down", self.ringdowns, nr),
+            ("driven run", self.driven, nd),
+        ] {
+            if runs > 0 && !(min..=RUN_SAMPLES_MAX).contains(&k) {
+                return Err(Error::option(
+                    "turns",
+                    format!(
+                        "{k} samples per {what} ({} turns at {} samples per turn, ring-downs \
+                         {} s at {} frames/s): must be in {min}..={RUN_SAMPLES_MAX}",
+                        crate::error::show(self.turns),
+                        self.samples_per_turn,
+                        crate::error::show(self.ringdown_s),
+                        crate::error::show(self.fps)
+                    ),
+                ));
+            }
+        }
+        let total = self.ringdowns as u128 * nr as u128 + self.driven as u128 * nd as u128;
+        if total > SET_SAMPLES_MAX as u128 {
+            return Err(Error::option(
+                "turns",
+                format!("a set of {total} samples: at most {SET_SAMPLES_MAX}"),
             ));
         }
         Ok(())

@@ -36,7 +36,7 @@ pub struct Args {
     /// 1 to 100000.
     #[arg(long, default_value_t = 20)]
     null_seeds: u64,
-    /// First seed.
+    /// First seed; the last seed used (first + seeds − 1) must not pass 2^64 − 1.
     #[arg(long, default_value_t = 1)]
     first_seed: u64,
     /// Effect sizes as multiples of each effect's reference size (dimensionless), comma-separated.
@@ -51,13 +51,13 @@ pub struct Args {
     /// (12, 8 × 80); 50 samples per turn, ring-downs 3 s at 100 frames/s, 0.5–2.5 Hz.
     #[arg(long, default_value = "medium")]
     set: String,
-    /// Override: ring-downs per set.
+    /// Override: ring-downs per set, 0 to 1000.
     #[arg(long)]
     ringdowns: Option<usize>,
-    /// Override: driven runs per set.
+    /// Override: driven runs per set, 0 to 1000.
     #[arg(long)]
     driven: Option<usize>,
-    /// Override: input turns per driven run.
+    /// Override: input turns per driven run (each run 10 to 1e6 samples, the set at most 2e6).
     #[arg(long)]
     turns: Option<f64>,
     /// Step of the generator's RK4 integrator, s.
@@ -90,7 +90,17 @@ fn spec_of(a: &Args) -> Result<CampaignSpec> {
     set.driven = a.driven.unwrap_or(set.driven);
     set.turns = a.turns.unwrap_or(set.turns);
     for (flag, n) in [("seeds", a.seeds), ("null-seeds", a.null_seeds)] {
-        super::common::count(flag, n as usize, 1, 100_000)?;
+        super::common::count(flag, usize::try_from(n).unwrap_or(usize::MAX), 1, 100_000)?;
+        if a.first_seed.checked_add(n - 1).is_none() {
+            return Err(Error::inconsistent(
+                format!("--first-seed, --{flag}"),
+                format!(
+                    "{n} seeds from {} pass the largest seed {}",
+                    a.first_seed,
+                    u64::MAX
+                ),
+            ));
+        }
     }
     let effects = if a.effects.iter().any(|e| e == "all") {
         EFFECTS.iter().map(|e| e.id.to_string()).collect()
@@ -100,8 +110,8 @@ fn spec_of(a: &Args) -> Result<CampaignSpec> {
     let spec = CampaignSpec {
         effects,
         levels: a.sizes.clone(),
-        seeds: (a.first_seed..a.first_seed.saturating_add(a.seeds)).collect(),
-        null_seeds: (a.first_seed..a.first_seed.saturating_add(a.null_seeds)).collect(),
+        seeds: (0..a.seeds).map(|k| a.first_seed + k).collect(),
+        null_seeds: (0..a.null_seeds).map(|k| a.first_seed + k).collect(),
         set,
         rk4_step_s: a.step,
         keep_sets: a.keep_sets,

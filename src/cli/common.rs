@@ -24,7 +24,8 @@ pub struct GearArgs {
     /// Centre distance r [m], > 0 (paper: 0.040).
     #[arg(long, allow_hyphen_values = true)]
     pub r: Option<f64>,
-    /// Output moment of inertia I [kg m²], > 0 (paper: 6.45e-5).
+    /// Output moment of inertia I [kg m²], > 0 (paper: 6.45e-5); with m1, m2, r it sets the
+    /// coupling g = μ0 m1 m2 / (4π r³ I), which must be in (0, 1e8] 1/s².
     #[arg(long, allow_hyphen_values = true)]
     pub inertia: Option<f64>,
     /// Input shaft angle Θ [deg], in [-360, 360] (paper figures: 0 to 54.74; default 0).
@@ -33,10 +34,10 @@ pub struct GearArgs {
     /// Output shaft angle Φ [deg], in [-360, 360] (default: equal to Θ, parallel shafts).
     #[arg(long, allow_hyphen_values = true)]
     pub phi_deg: Option<f64>,
-    /// Viscous damping ζ [1/s], >= 0 (paper: 1.1).
+    /// Viscous damping ζ [1/s], in [0, 1e4] (paper: 1.1).
     #[arg(long, allow_hyphen_values = true)]
     pub zeta: Option<f64>,
-    /// Dry friction η [1/s²], >= 0 (paper: 23.1).
+    /// Dry friction η [1/s²], in [0, 1e8] (paper: 23.1).
     #[arg(long, allow_hyphen_values = true)]
     pub eta: Option<f64>,
     /// Sign convention of outputs: physical (default) or paper (β shifted by 180°, model.md).
@@ -114,6 +115,7 @@ type KeyCheck = (&'static str, Option<f64>, fn(f64) -> bool, &'static str);
 /// value checked (m1, m2, r, inertia > 0; ζ, η ≥ 0; Θ, Φ within ±360°). Errors are
 /// [`Error::Recording`] with the file and, where one line is at fault, its number.
 pub fn parse_config(text: &str, file: &str) -> Result<GearConfig> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let err = |line: Option<usize>, what: String| Error::Recording {
         file: file.to_string(),
         line,
@@ -202,13 +204,28 @@ impl GearArgs {
         p.phi = phi_deg.to_radians();
         p.validate()?;
         let g = p.g();
-        if !(g.is_finite() && g > 0.0) {
+        if !(g.is_finite() && g > 0.0 && g <= limits::G_MAX) {
             return Err(Error::InvalidParameter {
                 name: "g",
                 value: g,
-                reason: "the coupling g = μ0 m1 m2 / (4π r³ I) must be finite and > 0",
+                reason: "the coupling g = μ0 m1 m2 / (4π r³ I) must be finite and in (0, 1e8] \
+                         1/s² (set by m1, m2, r and inertia)",
             });
         }
+        within(
+            "zeta",
+            p.zeta,
+            0.0,
+            limits::ZETA_MAX,
+            "must be in [0, 1e4] 1/s",
+        )?;
+        within(
+            "eta",
+            p.eta,
+            0.0,
+            limits::ETA_MAX,
+            "must be in [0, 1e8] 1/s²",
+        )?;
         Ok(p)
     }
 
@@ -267,6 +284,14 @@ pub mod limits {
     pub const TURNS_MAX: usize = 1_000_000;
     /// Largest number of points of a parameter grid (boundary curves).
     pub const GRID_MAX: usize = 100_000;
+    /// Smallest relative tolerance.
+    pub const TOL_MIN: f64 = 1e-14;
+    /// Largest coupling g [1/s²] (a natural frequency of 1e4 rad/s).
+    pub const G_MAX: f64 = 1e8;
+    /// Largest viscous damping ζ [1/s].
+    pub const ZETA_MAX: f64 = 1e4;
+    /// Largest dry friction η [1/s²].
+    pub const ETA_MAX: f64 = 1e8;
 }
 
 /// Checks `value` is finite and in `[lo, hi]`; `reason` states that range for the message.
@@ -313,9 +338,17 @@ pub fn frequency(name: &'static str, value: f64) -> Result<f64> {
     )
 }
 
-/// Checks a relative tolerance: finite and in the open interval (0, 1).
+/// Checks a relative tolerance: finite and in [1e-14, 1) ([`limits::TOL_MIN`]).
 pub fn tolerance(name: &'static str, value: f64) -> Result<f64> {
-    crate::error::relative_tolerance(name, value)
+    crate::error::relative_tolerance(name, value)?;
+    if value < limits::TOL_MIN {
+        return Err(Error::InvalidParameter {
+            name,
+            value,
+            reason: "must be in [1e-14, 1): a double cannot resolve a smaller relative step",
+        });
+    }
+    Ok(value)
 }
 
 /// Checks a count given by flag `--flag`: `lo ≤ value ≤ hi`.
@@ -424,6 +457,30 @@ fn writable_parent(flag: &str, path: &Path) -> Result<()> {
         p = q.parent();
     }
     Ok(())
+}
+
+/// Checks one value of a gear parameter against its domain: f in [1e-3, 1e4] Hz, Θ within ±360°,
+/// g, ζ, η ≥ 0, Δ finite (the values of a `--range` or a sweep axis).
+pub fn param_value(p: crate::model::GearParam, v: f64) -> Result<f64> {
+    use crate::model::GearParam;
+    match p {
+        GearParam::ThetaDeg => angle_deg("theta_deg", v),
+        GearParam::F => frequency("f", v),
+        GearParam::G => within("g", v, 0.0, limits::G_MAX, "must be in [0, 1e8] 1/s²"),
+        GearParam::Zeta => within("zeta", v, 0.0, limits::ZETA_MAX, "must be in [0, 1e4] 1/s"),
+        GearParam::Eta => within("eta", v, 0.0, limits::ETA_MAX, "must be in [0, 1e8] 1/s²"),
+        GearParam::Delta => crate::error::finite("delta", v),
+    }
+}
+
+/// Warns (on stderr) about the keys of `set`/experiment.toml the reader ignores.
+pub fn warn_ignored_keys(set: &Path) {
+    let exp = set.join("experiment.toml");
+    if let Ok(text) = std::fs::read_to_string(&exp) {
+        for k in crate::io::recordings::ignored_keys(&text) {
+            eprintln!("warning: {}: ignored unknown key {k}", exp.display());
+        }
+    }
 }
 
 /// Checks a frequency given on the command line (see [`frequency`]).

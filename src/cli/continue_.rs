@@ -21,8 +21,9 @@ pub struct BranchArgs {
     /// eta [1/s²] or g [1/s²].
     #[arg(long, default_value = "f")]
     pub param: String,
-    /// Parameter range `lo:hi` in the parameter's unit (finite, lo < hi); the continuation stops
-    /// on its bounds.
+    /// Parameter range `lo:hi` in the parameter's unit (finite, lo < hi, both in the parameter's
+    /// domain: f in [1e-3, 1e4] Hz, theta within ±360°, zeta, eta, g >= 0); the continuation
+    /// stops on its bounds.
     #[arg(long, allow_hyphen_values = true)]
     pub range: String,
     /// Integrator tolerance, in (0, 1).
@@ -44,6 +45,8 @@ impl BranchArgs {
     pub fn parse(&self) -> Result<(GearParam, (f64, f64))> {
         let param = GearParam::from_name(&self.param)?;
         let range = parse_range(&self.range)?;
+        super::common::param_value(param, range.0)?;
+        super::common::param_value(param, range.1)?;
         tolerance("tol", self.tol)?;
         if let Some(p) = &self.out {
             output_file("--out", p, false)?;

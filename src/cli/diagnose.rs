@@ -46,6 +46,14 @@ fn cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
+/// The names of a diagnosis folder: report.md, report.json and the figures.
+fn owned(name: &str, is_dir: bool) -> bool {
+    !is_dir
+        && (matches!(name, "report.md" | "report.json")
+            || name.ends_with(".svg")
+            || name.ends_with(".png"))
+}
+
 /// Runs `gearbif diagnose`.
 pub fn run(a: Args) -> Result<()> {
     let t0 = Instant::now();
@@ -57,6 +65,9 @@ pub fn run(a: Args) -> Result<()> {
         ..DiagnoseOptions::default()
     };
     let set = read_set(&a.set)?;
+    super::common::warn_ignored_keys(&a.set);
+    // the whole output plan before the work; the result is written beside it and moved into place
+    let staged = crate::io::StagedDir::begin("--out", &a.out, owned)?;
     let d = diagnose(
         &set,
         &opts,
@@ -82,14 +93,16 @@ pub fn run(a: Args) -> Result<()> {
         .map(|s| s.to_string_lossy().to_string())
         .unwrap_or_default();
     // figures first, then the report (so a report never points at missing figures)
+    let dir = staged.path();
     if !a.no_figures {
-        crate::plotting::diagnosis::write_figures(&d, &a.out)?;
+        crate::plotting::diagnosis::write_figures(&d, dir)?;
     }
     write_atomic(
-        a.out.join("report.md"),
+        dir.join("report.md"),
         markdown(&d.report, &title).as_bytes(),
     )?;
-    write_json_atomic(a.out.join("report.json"), &d.report)?;
+    write_json_atomic(dir.join("report.json"), &d.report)?;
+    staged.commit()?;
     println!("verdict: {}", d.report.verdict);
     if let Some(a) = &d.report.assessment {
         println!("  {}", a.statement);

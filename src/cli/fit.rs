@@ -30,6 +30,7 @@ pub fn run(a: Args) -> Result<()> {
         ..DiagnoseOptions::default()
     };
     let set = read_set(&a.set)?;
+    super::common::warn_ignored_keys(&a.set);
     let d = diagnose(
         &set,
         &opts,

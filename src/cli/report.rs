@@ -22,6 +22,15 @@ pub struct Args {
     quiet: bool,
 }
 
+/// The names of a report folder: report.md, report.json, map.csv and the folder figures.
+fn owned(name: &str, is_dir: bool) -> bool {
+    if is_dir {
+        name == "figures"
+    } else {
+        matches!(name, "report.md" | "report.json" | "map.csv")
+    }
+}
+
 /// Runs `gearbif report`.
 pub fn run(a: Args) -> Result<()> {
     let gear = a.gear.params()?;
@@ -33,9 +42,12 @@ pub fn run(a: Args) -> Result<()> {
     };
     let t = std::time::Instant::now();
     let progress = Progress::new(a.quiet);
-    let rep = build_report(&gear, &opts, &a.out, &progress)?;
+    // the whole output plan before the work; the result is written beside it and moved into place
+    let staged = crate::io::StagedDir::begin("--out", &a.out, owned)?;
+    let rep = build_report(&gear, &opts, staged.path(), &progress)?;
     progress.finish();
-    rep.write(&a.out)?;
+    rep.write(staged.path())?;
+    staged.commit()?;
     eprintln!(
         "wrote {}/report.md and report.json in {:.1} s",
         a.out.display(),

@@ -4,7 +4,6 @@
 
 use super::common::{angle_deg, count, frequency, limits, output_dir, tolerance, GearArgs};
 use crate::analysis::ClassifyOptions;
-use crate::model::{GearParam, Parameter};
 use crate::sweep::{
     merge_shards, spec_hash, Axis, Method, Protocol, Shard, SweepOutcome, SweepParam, SweepResult,
     SweepRunner, SweepSpec,
@@ -23,10 +22,10 @@ pub struct Args {
     gear: GearArgs,
     /// Row axis (parallel): param:start:stop:step or param:start:stop:n:log
     /// (param: a name of the gear's lens — theta [deg, within ±360], f [Hz, in [1e-3, 1e4]], zeta,
-    /// eta, g [>= 0], delta — or inertia [> 0]).
+    /// eta, g [>= 0], delta — or inertia [> 0]). At most 1e7 points per axis and in the whole grid.
     #[arg(long, default_value = "theta:0:50:10")]
     rows: String,
-    /// Column axis (sequential; the semi-static protocol carries the state along it).
+    /// Column axis (sequential; the semi-static protocol carries the state along it), as --rows.
     #[arg(long, default_value = "f:0.5:3:0.25")]
     cols: String,
     /// Start every point afresh (Fig. 7b) or carry the state along a row (Fig. 8).
@@ -114,9 +113,12 @@ pub enum ProtocolArg {
     SemiStatic,
 }
 
-/// A progress bar with an ETA, as a sweep observer.
+/// A progress bar with an ETA, as a sweep observer; when stderr is not a terminal (a log file, a
+/// batch job), one line per finished row with the points done and the estimated time left.
 pub struct Progress {
     bar: ProgressBar,
+    /// Log lines instead of a bar: (start, points done before, points done now, points in all).
+    lines: Option<std::sync::Mutex<(std::time::Instant, usize, usize, usize)>>,
 }
 
 impl Progress {
@@ -134,7 +136,37 @@ impl Progress {
             );
             b
         };
-        Self { bar }
+        let lines = (!quiet && !std::io::IsTerminal::is_terminal(&std::io::stderr()))
+            .then(|| std::sync::Mutex::new((std::time::Instant::now(), 0, 0, 0)));
+        Self { bar, lines }
+    }
+
+    /// A log line (no terminal): the points done, the elapsed time and the time left.
+    fn log(&self, event: &crate::progress::Event<'_>) {
+        use crate::progress::Event;
+        let Some(m) = &self.lines else {
+            return;
+        };
+        let Ok(mut st) = m.lock() else {
+            return;
+        };
+        match *event {
+            Event::Started { total, done } => {
+                *st = (std::time::Instant::now(), done, done, total.unwrap_or(0));
+                eprintln!("sweep: {} points, {done} done before", st.3);
+            }
+            Event::SweepPoint { .. } => st.2 += 1,
+            Event::RowDone { row, .. } => {
+                let (t0, before, now, total) = *st;
+                let secs = t0.elapsed().as_secs_f64();
+                let rate = (now - before) as f64 / secs.max(1e-9);
+                let left = total.saturating_sub(now) as f64 / rate.max(1e-9);
+                eprintln!(
+                    "sweep: row {row} done, {now}/{total} points in {secs:.0} s, about {left:.0} s left"
+                );
+            }
+            _ => {}
+        }
     }
     /// Finishes the bar.
     pub fn finish(&self) {
@@ -145,6 +177,7 @@ impl Progress {
 impl crate::progress::Observer for Progress {
     fn observe(&self, event: &crate::progress::Event<'_>) {
         use crate::progress::Event;
+        self.log(event);
         match *event {
             Event::Started { total, done } => {
                 if let Some(total) = total {
@@ -337,12 +370,7 @@ fn check_args(a: &Args) -> Result<()> {
 fn check_axis(axis: &Axis) -> Result<()> {
     for &v in &axis.values {
         match axis.param {
-            SweepParam::Lens(GearParam::ThetaDeg) => angle_deg("theta_deg", v).map(drop)?,
-            SweepParam::Lens(GearParam::F) => frequency("f", v).map(drop)?,
-            SweepParam::Lens(p @ (GearParam::G | GearParam::Zeta | GearParam::Eta)) => {
-                crate::error::non_negative(p.name(), v).map(drop)?
-            }
-            SweepParam::Lens(GearParam::Delta) => crate::error::finite("delta", v).map(drop)?,
+            SweepParam::Lens(p) => super::common::param_value(p, v).map(drop)?,
             SweepParam::Inertia => crate::error::positive("inertia", v).map(drop)?,
         }
     }

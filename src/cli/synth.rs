@@ -28,7 +28,8 @@ pub struct Args {
     /// Number of driven runs, 0 to 1000.
     #[arg(long, default_value_t = 8)]
     driven: usize,
-    /// Input turns per driven run, in (0, 1e5].
+    /// Input turns per driven run, in (0, 1e5]; with --samples-per-turn it must give 10 to 1e6
+    /// samples per run (the whole set at most 2e6 samples).
     #[arg(long, default_value_t = 80.0)]
     turns: f64,
     /// Lowest drive frequency, Hz, in [1e-3, 1e4].
@@ -40,7 +41,8 @@ pub struct Args {
     /// Samples per input turn of driven runs, 8 to 10000.
     #[arg(long, default_value_t = 50)]
     samples_per_turn: usize,
-    /// Camera frame rate of ring-downs, 1/s, in (0, 1e5].
+    /// Camera frame rate of ring-downs, 1/s, in (0, 1e5]; a ring-down lasts 3 s and must have 10
+    /// to 1e6 samples (so at least 3.34 frames/s).
     #[arg(long, default_value_t = 100.0)]
     fps: f64,
     /// Camera noise on β, deg, in [0, 180].
@@ -64,6 +66,11 @@ pub struct Args {
     /// Also write the truth (truth.json) beside the set.
     #[arg(long)]
     truth: bool,
+}
+
+/// The names of a recording set written by `synth`: experiment.toml, truth.json and the CSVs.
+fn owned(name: &str, is_dir: bool) -> bool {
+    !is_dir && (matches!(name, "experiment.toml" | "truth.json") || name.ends_with(".csv"))
 }
 
 /// Runs `gearbif synth`.
@@ -98,12 +105,15 @@ pub fn run(a: Args) -> Result<()> {
         seed: a.seed,
         ..SynthOptions::default()
     };
+    crate::identification::synth::check_options(&opts)?;
     eprintln!(
         "simulating {} ring-downs and {} driven runs ...",
         a.ringdowns, a.driven
     );
+    // the whole output plan before the work; the set is written beside it and moved into place
+    let staged = crate::io::StagedDir::begin("--out", &out, owned)?;
     let (set, truth) = synthesize(&opts)?;
-    write_set(&set, &out, opts.wrap)?;
+    write_set(&set, staged.path(), opts.wrap)?;
     if a.truth {
         let c = truth.coefficients;
         let v = serde_json::json!({
@@ -115,8 +125,9 @@ pub fn run(a: Args) -> Result<()> {
             "compliance_s2": c.compliance,
             "eta_per_run": truth.eta_per_run, "lost_steps_per_driven_run": truth.lost_steps,
         });
-        crate::io::write_json_atomic(out.join("truth.json"), &v)?;
+        crate::io::write_json_atomic(staged.path().join("truth.json"), &v)?;
     }
+    staged.commit()?;
     let known: Vec<&str> = SYNTH_EFFECTS.iter().map(|e| e.0).collect();
     eprintln!(
         "wrote {} (effects known: {})",

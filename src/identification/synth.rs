@@ -158,8 +158,67 @@ pub fn synthesize(opts: &SynthOptions) -> Result<(RecordingSet, SynthTruth)> {
     ))
 }
 
-/// Rejects unknown effects and out-of-range options.
-fn check_options(opts: &SynthOptions) -> Result<()> {
+/// Fewest samples a synthetic run may have.
+pub const RUN_SAMPLES_MIN: usize = 10;
+
+/// Samples of each ring-down (`ringdown_s · fps`) and of each driven run (`turns ·
+/// samples_per_turn`), rounded down; saturating for huge values.
+pub fn samples_per_run(opts: &SynthOptions) -> (usize, usize) {
+    let n = |x: f64| {
+        if x.is_finite() && x > 0.0 {
+            x.floor() as usize
+        } else {
+            0
+        }
+    };
+    (
+        n(opts.ringdown_s * opts.fps),
+        n(opts.turns * opts.samples_per_turn as f64),
+    )
+}
+
+/// Checks the sizes the generator allocates: each run between [`RUN_SAMPLES_MIN`] and
+/// [`RUN_SAMPLES_MAX`](crate::io::recordings::limits::RUN_SAMPLES_MAX) samples, the set at most
+/// [`SET_SAMPLES_MAX`](crate::io::recordings::limits::SET_SAMPLES_MAX).
+fn check_sizes(opts: &SynthOptions) -> Result<()> {
+    use crate::io::recordings::limits::{RUN_SAMPLES_MAX, SET_SAMPLES_MAX};
+    let (nr, nd) = samples_per_run(opts);
+    let range = format!("must be in {RUN_SAMPLES_MIN}..={RUN_SAMPLES_MAX}");
+    if opts.ringdowns > 0 && !(RUN_SAMPLES_MIN..=RUN_SAMPLES_MAX).contains(&nr) {
+        return Err(Error::option(
+            "--fps",
+            format!(
+                "{} frames/s over a {} s ring-down give {nr} samples per ring-down; the samples \
+                 per run {range}",
+                crate::error::show(opts.fps),
+                crate::error::show(opts.ringdown_s)
+            ),
+        ));
+    }
+    if opts.driven > 0 && !(RUN_SAMPLES_MIN..=RUN_SAMPLES_MAX).contains(&nd) {
+        return Err(Error::inconsistent(
+            "--turns, --samples-per-turn",
+            format!(
+                "{} turns × {} samples per turn give {nd} samples per driven run; the samples \
+                 per run {range}",
+                crate::error::show(opts.turns),
+                opts.samples_per_turn
+            ),
+        ));
+    }
+    let total = (opts.ringdowns as u128) * (nr as u128) + (opts.driven as u128) * (nd as u128);
+    if total > SET_SAMPLES_MAX as u128 {
+        return Err(Error::inconsistent(
+            "--ringdowns, --driven, --turns, --samples-per-turn, --fps",
+            format!("the set would hold {total} samples, at most {SET_SAMPLES_MAX}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Rejects unknown effects and out-of-range options, and sizes beyond the generator's limits
+/// ([`check_sizes`]).
+pub fn check_options(opts: &SynthOptions) -> Result<()> {
     if !SYNTH_EFFECTS.iter().any(|(e, _)| *e == opts.effect) {
         return Err(Error::unknown_name(
             "effect",
@@ -184,7 +243,8 @@ fn check_options(opts: &SynthOptions) -> Result<()> {
             reason: "the size of drive_steps is a probability per step, in [0, 1)",
         });
     }
-    Ok(())
+    crate::error::positive("ringdown_s", opts.ringdown_s)?;
+    check_sizes(opts)
 }
 
 /// The concealed truth: the set-up within its tolerances (shaft angle, inertia, ζ, η drawn from

@@ -1,7 +1,10 @@
 //! Input and output: atomic file writing (no half-written outputs), and readers/writers of the
 //! formats gearbif exchanges with other programs.
 
+pub mod outdir;
 pub mod recordings;
+
+pub use outdir::StagedDir;
 
 use crate::error::{Error, Result};
 use std::path::Path;

@@ -7,6 +7,19 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};
 use std::path::{Component, Path, PathBuf};
 
+/// The sizes a recording set may have (docs/errors.md states them): the readers refuse larger
+/// inputs before allocating them, the generator refuses to make them.
+pub mod limits {
+    /// Most samples of one run.
+    pub const RUN_SAMPLES_MAX: usize = 1_000_000;
+    /// Most samples of a whole set (all runs).
+    pub const SET_SAMPLES_MAX: usize = 2_000_000;
+    /// Largest run file, bytes (64 MiB).
+    pub const RUN_FILE_BYTES_MAX: u64 = 64 << 20;
+    /// Most runs of a set.
+    pub const RUNS_MAX: usize = 10_000;
+}
+
 /// The `[gear]` table: the set-up as measured (nominal values and tolerances).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GearSetup {
@@ -195,6 +208,27 @@ fn run_line(text: &str, k: usize) -> Option<usize> {
     None
 }
 
+/// Lowest drive frequency of a driven run, Hz (as the command line's `--f`).
+const F_HZ_MIN: f64 = 1e-3;
+/// Highest drive frequency of a driven run, Hz.
+const F_HZ_MAX: f64 = 1e4;
+
+/// 1-based line of `key = …` in the table whose header is on line `table` (up to the next table
+/// header); `None` if the key is not found there (e.g. an inline table).
+fn key_line(text: &str, table: Option<usize>, key: &str) -> Option<usize> {
+    let start = table?;
+    text.lines()
+        .enumerate()
+        .skip(start)
+        .take_while(|(_, l)| !l.trim_start().starts_with('['))
+        .find(|(_, l)| {
+            l.trim_start()
+                .strip_prefix(key)
+                .is_some_and(|r| r.trim_start().starts_with('='))
+        })
+        .map(|(i, _)| i + 1)
+}
+
 fn gear_line(text: &str) -> Option<usize> {
     text.lines()
         .position(|l| l.trim_start().starts_with("[gear]"))
@@ -214,6 +248,7 @@ pub struct RunSpec {
 
 /// Parses the text of an experiment.toml (`file` names it in errors).
 pub fn parse_experiment(text: &str, file: &str) -> Result<(GearSetup, Vec<RunSpec>)> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let raw: RawExperiment = toml::from_str(text).map_err(|e| {
         let line = e.span().map(|s| line_of_offset(text, s.start));
         rec_err(file, line, format!("invalid TOML: {}", e.message()))
@@ -235,7 +270,7 @@ pub fn parse_experiment(text: &str, file: &str) -> Result<(GearSetup, Vec<RunSpe
         if !v.is_finite() {
             return Err(rec_err(
                 file,
-                gl,
+                key_line(text, gl, name).or(gl),
                 format!("[gear]: {name} = {v} is not finite"),
             ));
         }
@@ -244,7 +279,7 @@ pub fn parse_experiment(text: &str, file: &str) -> Result<(GearSetup, Vec<RunSpe
         if v.abs() > 360.0 {
             return Err(rec_err(
                 file,
-                gl,
+                key_line(text, gl, name).or(gl),
                 format!(
                     "[gear]: {name} = {} must be an angle in [-360, 360] degrees",
                     crate::error::show(v)
@@ -256,7 +291,7 @@ pub fn parse_experiment(text: &str, file: &str) -> Result<(GearSetup, Vec<RunSpe
         if v <= 0.0 {
             return Err(rec_err(
                 file,
-                gl,
+                key_line(text, gl, name).or(gl),
                 format!("[gear]: {name} = {v} must be > 0"),
             ));
         }
@@ -278,7 +313,7 @@ pub fn parse_experiment(text: &str, file: &str) -> Result<(GearSetup, Vec<RunSpe
             if !v.is_finite() || v < 0.0 || (name == "inertia" && v == 0.0) {
                 return Err(rec_err(
                     file,
-                    gl,
+                    key_line(text, gl, name).or(gl),
                     format!("[gear]: {name} = {v} must be finite and non-negative (inertia > 0)"),
                 ));
             }
@@ -286,6 +321,17 @@ pub fn parse_experiment(text: &str, file: &str) -> Result<(GearSetup, Vec<RunSpe
     }
     if raw.run.is_empty() {
         return Err(rec_err(file, None, "no [[run]] declared"));
+    }
+    if raw.run.len() > limits::RUNS_MAX {
+        return Err(rec_err(
+            file,
+            run_line(text, limits::RUNS_MAX),
+            format!(
+                "{} runs declared: a set has at most {}",
+                raw.run.len(),
+                limits::RUNS_MAX
+            ),
+        ));
     }
     let mut specs = Vec::new();
     for (k, v) in raw.run.iter().enumerate() {
@@ -312,13 +358,33 @@ pub fn parse_experiment(text: &str, file: &str) -> Result<(GearSetup, Vec<RunSpe
             Ok(x)
         };
         let kind = match kind_s {
-            "ringdown" => RunKind::Ringdown {
-                alpha0: num("alpha0_deg")?.to_radians(),
-            },
+            "ringdown" => {
+                let a = num("alpha0_deg")?;
+                if a.abs() > 360.0 {
+                    return Err(rec_err(
+                        file,
+                        key_line(text, line, "alpha0_deg").or(line),
+                        format!(
+                            "`alpha0_deg` = {} must be an angle in [-360, 360] degrees",
+                            crate::error::show(a)
+                        ),
+                    ));
+                }
+                RunKind::Ringdown {
+                    alpha0: a.to_radians(),
+                }
+            }
             "driven" => {
                 let f = num("f_hz")?;
-                if f <= 0.0 {
-                    return Err(rec_err(file, line, format!("`f_hz` = {f} must be > 0")));
+                if !(F_HZ_MIN..=F_HZ_MAX).contains(&f) {
+                    return Err(rec_err(
+                        file,
+                        key_line(text, line, "f_hz").or(line),
+                        format!(
+                            "`f_hz` = {} must be a drive frequency in [1e-3, 1e4] Hz",
+                            crate::error::show(f)
+                        ),
+                    ));
                 }
                 RunKind::Driven { f_hz: f }
             }
@@ -357,6 +423,65 @@ pub fn parse_experiment(text: &str, file: &str) -> Result<(GearSetup, Vec<RunSpe
     Ok((gear, specs))
 }
 
+/// The keys of an experiment.toml that the reader does not know and ignores (a misspelt key, e.g.
+/// `zetta`), each as "`key` in [table] (line N)"; empty if the text is not TOML.
+pub fn ignored_keys(text: &str) -> Vec<String> {
+    const GEAR: &[&str] = &[
+        "m1",
+        "m2",
+        "r",
+        "theta_deg",
+        "phi_deg",
+        "inertia",
+        "zeta",
+        "eta",
+        "shaft_mass",
+        "bearing_bore",
+        "beta_noise_deg",
+        "theta_tol_deg",
+        "phi_tol_deg",
+        "m_tol",
+        "r_tol",
+        "inertia_tol",
+    ];
+    const RUN: &[&str] = &["kind", "file", "f_hz", "alpha0_deg"];
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let Ok(v) = text.parse::<toml::Table>() else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let at = |table: Option<usize>, key: &str| {
+        key_line(text, table, key)
+            .map(|l| format!(" (line {l})"))
+            .unwrap_or_default()
+    };
+    for (k, val) in &v {
+        match (k.as_str(), val) {
+            ("gear", toml::Value::Table(t)) => {
+                for key in t.keys().filter(|key| !GEAR.contains(&key.as_str())) {
+                    out.push(format!("`{key}` in [gear]{}", at(gear_line(text), key)));
+                }
+            }
+            ("run", toml::Value::Array(runs)) => {
+                for (i, r) in runs.iter().enumerate() {
+                    if let toml::Value::Table(t) = r {
+                        for key in t.keys().filter(|key| !RUN.contains(&key.as_str())) {
+                            out.push(format!(
+                                "`{key}` in [[run]] {}{}",
+                                i + 1,
+                                at(run_line(text, i), key)
+                            ));
+                        }
+                    }
+                }
+            }
+            ("gear" | "run", _) => {}
+            (other, _) => out.push(format!("`{other}` at the top level")),
+        }
+    }
+    out
+}
+
 /// Parsed CSV columns (angles as in the file, not yet unwrapped).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Columns {
@@ -371,6 +496,8 @@ pub struct Columns {
 /// Parses the text of a run's CSV (`file` names it in errors): header with columns `t`, `alpha`,
 /// `beta` (any order, extra columns ignored), `#` comments, finite values, strictly increasing t.
 pub fn parse_csv(text: &str, file: &str) -> Result<Columns> {
+    // a UTF-8 byte-order mark (as some spreadsheet programs write) is not part of the header
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut idx: Option<[usize; 3]> = None;
     let mut ncols = 0;
     let mut out = Columns::default();
@@ -391,7 +518,10 @@ pub fn parse_csv(text: &str, file: &str) -> Result<Columns> {
                             rec_err(
                                 file,
                                 Some(ln),
-                                format!("missing column `{name}` in header `{l}`"),
+                                format!(
+                                    "missing column `{name}` in the header (it must name the \
+                                     columns t, alpha and beta, comma-separated)"
+                                ),
                             )
                         })
                 };
@@ -410,20 +540,26 @@ pub fn parse_csv(text: &str, file: &str) -> Result<Columns> {
                 for (k, name) in ["t", "alpha", "beta"].iter().enumerate() {
                     let s = fields[ix[k]];
                     let x: f64 = s.parse().map_err(|_| {
-                        rec_err(
-                            file,
-                            Some(ln),
-                            format!("column `{name}`: `{s}` is not a number"),
-                        )
+                        rec_err(file, Some(ln), format!("column `{name}`: not a number"))
                     })?;
                     if !x.is_finite() {
                         return Err(rec_err(
                             file,
                             Some(ln),
-                            format!("column `{name}`: {s} is not finite"),
+                            format!("column `{name}`: {x} is not finite"),
                         ));
                     }
                     v[k] = x;
+                }
+                if out.t.len() == limits::RUN_SAMPLES_MAX {
+                    return Err(rec_err(
+                        file,
+                        Some(ln),
+                        format!(
+                            "more than {} samples: a run has at most that many",
+                            limits::RUN_SAMPLES_MAX
+                        ),
+                    ));
                 }
                 if let Some(&tp) = out.t.last() {
                     if v[0] <= tp {
@@ -470,33 +606,204 @@ pub fn unwrap(x: &[f64]) -> Vec<f64> {
     out
 }
 
-/// Reads a recording set from its folder.
+/// Reads a text file of at most `max` bytes: a regular file (not a device, FIFO or folder), valid
+/// UTF-8 (an invalid byte is reported with its line). Errors name `name` (and `at`, the line of
+/// the declaration in `decl`, when the file is declared there); the file's content is never
+/// quoted.
+fn read_text(
+    path: &Path,
+    name: &str,
+    max: u64,
+    decl: Option<(&str, Option<usize>)>,
+) -> Result<String> {
+    use std::io::Read;
+    let fail = |what: String| match decl {
+        Some((exp, line)) => rec_err(exp, line, what),
+        None => rec_err(name, None, what),
+    };
+    let meta = std::fs::metadata(path).map_err(|e| fail(format!("cannot read `{name}`: {e}")))?;
+    if !meta.is_file() {
+        return Err(fail(format!("`{name}` is not a regular file")));
+    }
+    if meta.len() > max {
+        return Err(fail(format!(
+            "`{name}` has {} bytes: at most {max} are read",
+            meta.len()
+        )));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(max + 1).read_to_end(&mut bytes))
+        .map_err(|e| fail(format!("cannot read `{name}`: {e}")))?;
+    if bytes.len() as u64 > max {
+        return Err(fail(format!("`{name}` has more than {max} bytes")));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let ok = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let line = bytes[..ok].iter().filter(|&&b| b == b'\n').count() + 1;
+        rec_err(
+            name,
+            Some(line),
+            format!(
+                "byte 0x{:02X} is not UTF-8 text (save the file as UTF-8; a Latin-1 or \
+                 Windows-1252 character?)",
+                bytes[ok]
+            ),
+        )
+    })
+}
+
+/// Least-squares slope of `y` over `t` (`None` for fewer than two distinct times).
+fn slope(t: &[f64], y: &[f64]) -> Option<f64> {
+    let n = t.len() as f64;
+    let (tm, ym) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let (mut sty, mut stt) = (0.0, 0.0);
+    for (&ti, &yi) in t.iter().zip(y) {
+        sty += (ti - tm) * (yi - ym);
+        stt += (ti - tm) * (ti - tm);
+    }
+    (stt > 0.0 && (sty / stt).is_finite()).then(|| sty / stt)
+}
+
+/// Refuses a run whose angles look like degrees (the CSV's are in radians), and a driven run whose
+/// α column advances at another rate than its `f_hz` (more than 5 % apart; a constant α column is
+/// not checked). `cols` as read (not unwrapped); errors name the CSV `file` or experiment.toml.
+fn check_units_and_drive(
+    cols: &Columns,
+    spec: &RunSpec,
+    file: &str,
+    exp: &str,
+    text: &str,
+) -> Result<()> {
+    let degrees = |why: String| {
+        Err(rec_err(
+            file,
+            None,
+            format!(
+                "the angles look like degrees ({why}); the CSV's alpha and beta are in radians \
+                 (multiply by π/180)"
+            ),
+        ))
+    };
+    // a wrapped angle in degrees jumps by about 360 between two samples
+    for (name, col) in [("alpha", &cols.alpha), ("beta", &cols.beta)] {
+        if col
+            .windows(2)
+            .any(|w| (300.0..=420.0).contains(&(w[1] - w[0]).abs()))
+        {
+            return degrees(format!("column `{name}` jumps by about 360"));
+        }
+    }
+    let moves = cols.alpha.iter().any(|&a| a != cols.alpha[0]);
+    match spec.kind {
+        RunKind::Ringdown { alpha0 } => {
+            let deg = alpha0.to_degrees();
+            if !moves && (deg - alpha0).abs() > 0.01 && (cols.alpha[0] - deg).abs() < 1e-3 {
+                return degrees(format!(
+                    "column `alpha` holds {}, which is `alpha0_deg`",
+                    crate::error::show(cols.alpha[0])
+                ));
+            }
+        }
+        RunKind::Driven { f_hz } => {
+            if !moves {
+                return Ok(());
+            }
+            let Some(raw) = slope(&cols.t, &cols.alpha) else {
+                return Ok(());
+            };
+            if ((raw / 360.0) - f_hz).abs() <= 0.05 * f_hz {
+                return degrees(format!(
+                    "column `alpha` advances by {} per second, 360 × f_hz",
+                    crate::error::show(raw)
+                ));
+            }
+            let Some(rate) = slope(&cols.t, &unwrap(&cols.alpha)) else {
+                return Ok(());
+            };
+            let f_alpha = (rate / TAU * 1e4).round() / 1e4;
+            if (f_alpha - f_hz).abs() > 0.05 * f_hz {
+                return Err(rec_err(
+                    exp,
+                    key_line(text, spec.line, "f_hz").or(spec.line),
+                    format!(
+                        "`f_hz` = {} but the alpha column of `{}` turns at {} Hz (more than 5 % \
+                         apart)",
+                        crate::error::show(f_hz),
+                        spec.file,
+                        crate::error::show(f_alpha)
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Largest experiment.toml read, bytes (1 MiB).
+const EXPERIMENT_BYTES_MAX: u64 = 1 << 20;
+
+/// Reads a recording set from its folder: experiment.toml, then each run file, which must resolve
+/// (symbolic links followed) to a regular file inside the set's folder, of at most
+/// [`limits::RUN_FILE_BYTES_MAX`] bytes and [`limits::RUN_SAMPLES_MAX`] samples; the set holds at
+/// most [`limits::SET_SAMPLES_MAX`] samples.
 pub fn read_set(dir: impl AsRef<Path>) -> Result<RecordingSet> {
     let dir = dir.as_ref();
     let exp = dir.join("experiment.toml");
     let exp_name = exp.display().to_string();
-    let text = std::fs::read_to_string(&exp)
-        .map_err(|e| rec_err(&exp_name, None, format!("cannot read: {e}")))?;
-    let (gear, specs) = parse_experiment(&text, &exp_name)?;
+    let text = read_text(&exp, &exp_name, EXPERIMENT_BYTES_MAX, None)?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let (gear, specs) = parse_experiment(text, &exp_name)?;
+    let root = dir.canonicalize().map_err(|e| {
+        rec_err(
+            &exp_name,
+            None,
+            format!("cannot resolve the set's folder: {e}"),
+        )
+    })?;
     let mut runs = Vec::new();
+    let mut total = 0usize;
     for s in specs {
         let p = dir.join(&s.file);
         let pn = p.display().to_string();
-        if p.exists() && !p.is_file() {
-            return Err(rec_err(
-                &exp_name,
-                s.line,
-                format!("run file `{}` is not a regular file", s.file),
-            ));
-        }
-        let ct = std::fs::read_to_string(&p).map_err(|e| {
+        let real = p.canonicalize().map_err(|e| {
             rec_err(
                 &exp_name,
                 s.line,
                 format!("run file `{}`: missing or unreadable ({e})", s.file),
             )
         })?;
+        if !real.starts_with(&root) {
+            return Err(rec_err(
+                &exp_name,
+                s.line,
+                format!(
+                    "run file `{}` resolves (through a symbolic link) to a file outside the \
+                     set's folder",
+                    s.file
+                ),
+            ));
+        }
+        let ct = read_text(
+            &real,
+            &pn,
+            limits::RUN_FILE_BYTES_MAX,
+            Some((&exp_name, s.line)),
+        )?;
         let c = parse_csv(&ct, &pn)?;
+        check_units_and_drive(&c, &s, &pn, &exp_name, text)?;
+        total += c.t.len();
+        if total > limits::SET_SAMPLES_MAX {
+            return Err(rec_err(
+                &pn,
+                None,
+                format!(
+                    "the set passes {} samples with this run: a set has at most that many",
+                    limits::SET_SAMPLES_MAX
+                ),
+            ));
+        }
         runs.push(Run {
             kind: s.kind,
             file: s.file,

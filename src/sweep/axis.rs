@@ -139,26 +139,43 @@ impl<'de> Deserialize<'de> for SweepParam {
     }
 }
 
+/// Largest number of points of one sweep axis, linear or log (and of a whole sweep grid, see
+/// [`GRID_POINTS_MAX`]).
+pub const AXIS_POINTS_MAX: usize = 10_000_000;
+
+/// Largest number of points of a whole sweep grid (rows × columns).
+pub const GRID_POINTS_MAX: usize = 10_000_000;
+
 /// The values `start, start + step, …` up to `stop` (inclusive within step/1000), computed as
 /// start + i·step (no accumulated rounding); `what` names the axis in errors.
 pub fn range_values(what: &str, start: f64, stop: f64, step: f64) -> Result<Vec<f64>> {
-    crate::error::finite("start", start)?;
-    crate::error::finite("stop", stop)?;
-    crate::error::finite("step", step)?;
+    if ![start, stop, step].iter().all(|v| v.is_finite()) {
+        return Err(Error::option(
+            format!("axis {what}"),
+            format!(
+                "start {}, stop {} and step {} must be finite",
+                crate::error::show(start),
+                crate::error::show(stop),
+                crate::error::show(step)
+            ),
+        ));
+    }
     if step == 0.0 || (stop - start) / step < 0.0 {
         return Err(Error::option(
             format!("axis {what}"),
             format!("step {step} does not lead from {start} to {stop}"),
         ));
     }
-    let n = ((stop - start) / step + 1e-3).floor() as usize + 1;
-    if n > 10_000_000 {
+    // counted as a float first: (stop − start)/step may pass every integer type
+    let nf = ((stop - start) / step + 1e-3).floor() + 1.0;
+    if nf.is_nan() || nf > AXIS_POINTS_MAX as f64 {
         return Err(Error::shape(
             format!("points of axis {what}"),
             "at most 1e7",
-            n,
+            nf.min(usize::MAX as f64) as usize,
         ));
     }
+    let n = nf as usize;
     Ok((0..n).map(|i| start + i as f64 * step).collect())
 }
 
@@ -170,6 +187,13 @@ pub fn log_values(what: &str, start: f64, stop: f64, n: usize) -> Result<Vec<f64
         return Err(Error::shape(
             format!("points of log axis {what}"),
             ">= 2",
+            n,
+        ));
+    }
+    if n > AXIS_POINTS_MAX {
+        return Err(Error::shape(
+            format!("points of log axis {what}"),
+            "at most 1e7",
             n,
         ));
     }
@@ -200,6 +224,15 @@ pub fn parse_axis<P: Parameter>(s: &str) -> Result<(P, Vec<f64>)> {
                 return Err(Error::option(
                     format!("axis `{s}`"),
                     "the count of a log axis must be an integer >= 2",
+                ));
+            }
+            if n > AXIS_POINTS_MAX as f64 {
+                return Err(Error::option(
+                    format!("axis `{s}`"),
+                    format!(
+                        "{} points: a log axis has at most 1e7",
+                        crate::error::show(n)
+                    ),
                 ));
             }
             let p = P::from_name(p)?;
@@ -328,6 +361,16 @@ mod tests {
         assert!(matches!(
             Axis::range(GearParam::F, 0.0, 1.0, 1e-9),
             Err(Error::Shape { got, .. }) if got > 10_000_000
+        ));
+        for big in ["f:1:2:1e13:log", "f:1:2:1e20:log", "f:1:2:10000001:log"] {
+            assert!(
+                matches!(Axis::parse(big), Err(Error::InvalidOption { .. })),
+                "{big}"
+            );
+        }
+        assert!(matches!(
+            Axis::log(GearParam::F, 1.0, 2.0, usize::MAX),
+            Err(Error::Shape { .. })
         ));
         let (p, v) = parse_axis::<GearParam>("g:10:30:10").unwrap();
         assert_eq!((p, v), (GearParam::G, vec![10.0, 20.0, 30.0]));

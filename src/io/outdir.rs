@@ -1,0 +1,310 @@
+//! One way to write an output folder as one result: the plan is checked before the work (the
+//! target is a folder or absent, it holds nothing but the names of the command's result, each of
+//! the right kind, and its parent is writable: a staging folder is created there at once); the
+//! work writes into the staging folder `.NAME.tmp-PID` beside the target; [`StagedDir::commit`]
+//! moves it into place (an earlier result is first moved aside to `.NAME.old-PID`, then removed).
+//! A run that fails removes its staging folder (and the folders it created); a killed one leaves
+//! only hidden temporaries, which the next run beside the same target removes. So the target
+//! always holds one whole result, the earlier one or the new one, never a mix.
+
+use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// What a command's result consists of: `true` for a name (directly under the folder) that belongs
+/// to it, with whether that name is a folder.
+pub type Owned = fn(name: &str, is_dir: bool) -> bool;
+
+/// An output folder being written (see the module documentation).
+#[derive(Debug)]
+pub struct StagedDir {
+    target: PathBuf,
+    staging: PathBuf,
+    /// The first ancestor of the target this run created (removed again on failure).
+    created: Option<PathBuf>,
+    committed: bool,
+}
+
+/// `.NAME.tmp-PID` / `.NAME.old-PID` beside `target`.
+fn sibling(target: &Path, kind: &str, pid: u32) -> Result<PathBuf> {
+    let name = target.file_name().ok_or_else(|| {
+        Error::option(
+            format!("output folder {}", target.display()),
+            "is not a folder name (it ends in `..` or is a root)",
+        )
+    })?;
+    Ok(parent_of(target).join(format!(".{}.{kind}-{pid}", name.to_string_lossy())))
+}
+
+fn parent_of(target: &Path) -> &Path {
+    target
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+}
+
+/// True if process `pid` is gone (Linux); elsewhere nothing is taken as gone.
+fn gone(pid: u32) -> bool {
+    cfg!(target_os = "linux")
+        && pid != std::process::id()
+        && !Path::new("/proc").join(pid.to_string()).exists()
+}
+
+/// Removes the staging and set-aside folders of killed runs beside `target`; if the target is
+/// missing and a killed run had set an earlier result aside, that result is put back.
+fn clean_killed(target: &Path) {
+    let (Some(name), Ok(entries)) = (
+        target.file_name().map(|n| n.to_string_lossy().to_string()),
+        std::fs::read_dir(parent_of(target)),
+    ) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let entry = e.file_name().to_string_lossy().to_string();
+        let Some(rest) = entry
+            .strip_prefix('.')
+            .and_then(|r| r.strip_prefix(name.as_str()))
+        else {
+            continue;
+        };
+        let (kind, pid) = match rest.split_once('-') {
+            Some((".tmp", pid)) => ("tmp", pid),
+            Some((".old", pid)) => ("old", pid),
+            _ => continue,
+        };
+        let Ok(pid) = pid.parse::<u32>() else {
+            continue;
+        };
+        if !gone(pid) {
+            continue;
+        }
+        if kind == "old" && !target.exists() && std::fs::rename(e.path(), target).is_ok() {
+            continue;
+        }
+        let _ = std::fs::remove_dir_all(e.path());
+    }
+}
+
+impl StagedDir {
+    /// Checks the plan of writing the folder `target` (given by `flag`) and creates its staging
+    /// folder. Refused: a target that is not a folder, the current folder, a folder holding a
+    /// name that is not part of the result (`owned`) or one of the wrong kind (a folder where a
+    /// file is meant), and a parent that cannot be written.
+    pub fn begin(flag: &str, target: &Path, owned: Owned) -> Result<Self> {
+        let what = || format!("{flag} {}", target.display());
+        if target.exists() && !target.is_dir() {
+            return Err(Error::option(what(), "exists and is not a folder"));
+        }
+        let mut up = target.parent();
+        while let Some(q) = up.filter(|q| !q.as_os_str().is_empty()) {
+            if q.exists() {
+                if !q.is_dir() {
+                    return Err(Error::option(
+                        what(),
+                        format!("{} is not a folder", q.display()),
+                    ));
+                }
+                break;
+            }
+            up = q.parent();
+        }
+        if target.exists() {
+            let cwd = std::env::current_dir().ok();
+            let real = target.canonicalize().ok();
+            if real.is_some() && real == cwd.and_then(|c| c.canonicalize().ok()) {
+                return Err(Error::option(
+                    what(),
+                    "is the current folder: the result replaces its folder as a whole, give a \
+                     new or result folder",
+                ));
+            }
+            let entries = std::fs::read_dir(target).map_err(|e| Error::file("read", target, e))?;
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().to_string();
+                if name.starts_with('.') && name.contains(".tmp-") {
+                    continue; // a killed atomic writer's temporary file
+                }
+                let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
+                if !owned(&name, is_dir) {
+                    let kind = if is_dir { "folder" } else { "file" };
+                    return Err(Error::option(
+                        what(),
+                        format!(
+                            "holds the {kind} `{name}`, which is not part of this command's \
+                             result (the folder is replaced as a whole): give a new folder or \
+                             one holding an earlier result"
+                        ),
+                    ));
+                }
+            }
+        }
+        clean_killed(target);
+        let parent = parent_of(target);
+        let mut created = None;
+        if !parent.exists() {
+            let mut first = parent;
+            while let Some(up) = first.parent().filter(|p| !p.as_os_str().is_empty()) {
+                if up.exists() {
+                    break;
+                }
+                first = up;
+            }
+            std::fs::create_dir_all(parent).map_err(|e| Error::file("create", parent, e))?;
+            created = Some(first.to_path_buf());
+        }
+        let staging = sibling(target, "tmp", std::process::id())?;
+        let _ = std::fs::remove_dir_all(&staging);
+        if let Err(e) = std::fs::create_dir(&staging) {
+            if let Some(c) = &created {
+                let _ = std::fs::remove_dir_all(c);
+            }
+            return Err(Error::file("create", &staging, e));
+        }
+        Ok(Self {
+            target: target.to_path_buf(),
+            staging,
+            created,
+            committed: false,
+        })
+    }
+
+    /// The folder to write the result into.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// The final folder.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Moves the result into place (an earlier result is replaced as a whole).
+    pub fn commit(mut self) -> Result<()> {
+        if self.target.exists() {
+            let old = sibling(&self.target, "old", std::process::id())?;
+            let _ = std::fs::remove_dir_all(&old);
+            std::fs::rename(&self.target, &old)
+                .map_err(|e| Error::file("move aside", &self.target, e))?;
+            if let Err(e) = std::fs::rename(&self.staging, &self.target) {
+                let _ = std::fs::rename(&old, &self.target);
+                return Err(Error::file("move into place", &self.target, e));
+            }
+            let _ = std::fs::remove_dir_all(&old);
+        } else {
+            std::fs::rename(&self.staging, &self.target)
+                .map_err(|e| Error::file("move into place", &self.target, e))?;
+        }
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for StagedDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.staging);
+            if let Some(c) = &self.created {
+                let _ = std::fs::remove_dir_all(c);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmp(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("gearbif-outdir-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn owned(name: &str, is_dir: bool) -> bool {
+        !is_dir && matches!(name, "a.txt" | "b.txt")
+    }
+
+    fn names(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().to_string())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_result_replaces_the_earlier_one_as_a_whole() {
+        let root = tmp("replace");
+        let out = root.join("deep/out");
+        let s = StagedDir::begin("--out", &out, owned).unwrap();
+        std::fs::write(s.path().join("a.txt"), "1").unwrap();
+        std::fs::write(s.path().join("b.txt"), "1").unwrap();
+        s.commit().unwrap();
+        assert_eq!(names(&out), ["a.txt", "b.txt"]);
+        let s = StagedDir::begin("--out", &out, owned).unwrap();
+        std::fs::write(s.path().join("a.txt"), "2").unwrap();
+        s.commit().unwrap();
+        assert_eq!(names(&out), ["a.txt"]);
+        assert_eq!(std::fs::read_to_string(out.join("a.txt")).unwrap(), "2");
+        assert_eq!(names(&root.join("deep")), ["out"]);
+        std::fs::remove_dir_all(root).ok();
+    }
+
+    #[test]
+    fn a_failed_run_leaves_the_earlier_result_and_nothing_else() {
+        let root = tmp("fail");
+        let out = root.join("out");
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join("a.txt"), "old").unwrap();
+        {
+            let s = StagedDir::begin("--out", &out, owned).unwrap();
+            std::fs::write(s.path().join("a.txt"), "new").unwrap();
+            // dropped without commit: the work failed
+        }
+        assert_eq!(names(&root), ["out"]);
+        assert_eq!(std::fs::read_to_string(out.join("a.txt")).unwrap(), "old");
+        // a new folder under missing parents: nothing is left of them
+        {
+            let _s = StagedDir::begin("--out", &root.join("x/y/out"), owned).unwrap();
+        }
+        assert_eq!(names(&root), ["out"]);
+        std::fs::remove_dir_all(root).ok();
+    }
+
+    #[test]
+    fn the_plan_is_refused_before_the_work() {
+        let root = tmp("plan");
+        let out = root.join("out");
+        std::fs::create_dir_all(out.join("a.txt")).unwrap();
+        let e = StagedDir::begin("--out", &out, owned).unwrap_err();
+        assert!(e.to_string().contains("folder `a.txt`"), "{e}");
+        std::fs::remove_dir_all(out.join("a.txt")).unwrap();
+        std::fs::write(out.join("data.csv"), "mine").unwrap();
+        let e = StagedDir::begin("--out", &out, owned).unwrap_err();
+        assert!(e.to_string().contains("file `data.csv`"), "{e}");
+        std::fs::write(root.join("file"), "").unwrap();
+        let e = StagedDir::begin("--out", &root.join("file"), owned).unwrap_err();
+        assert!(e.to_string().contains("not a folder"), "{e}");
+        assert_eq!(names(&root), ["file", "out"]);
+        std::fs::remove_dir_all(root).ok();
+    }
+
+    #[test]
+    fn temporaries_of_killed_runs_are_removed_and_a_set_aside_result_restored() {
+        let root = tmp("killed");
+        let out = root.join("out");
+        // a killed run: its staging folder, and an earlier result set aside with no target
+        std::fs::create_dir_all(root.join(".out.tmp-999999999")).unwrap();
+        std::fs::create_dir_all(root.join(".out.old-999999998")).unwrap();
+        std::fs::write(root.join(".out.old-999999998/a.txt"), "old").unwrap();
+        let s = StagedDir::begin("--out", &out, owned).unwrap();
+        if cfg!(target_os = "linux") {
+            assert_eq!(std::fs::read_to_string(out.join("a.txt")).unwrap(), "old");
+            assert!(!root.join(".out.tmp-999999999").exists());
+        }
+        drop(s);
+        std::fs::remove_dir_all(root).ok();
+    }
+}
