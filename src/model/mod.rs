@@ -22,6 +22,7 @@ pub mod one_sided;
 pub mod oscillators;
 pub mod params;
 pub mod ramped;
+pub mod recorded;
 
 pub use gear::{Convention, Gear, GearParam, GearParams, LockBranch, LockPoint};
 pub use one_sided::OneSided;
