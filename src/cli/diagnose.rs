@@ -1,4 +1,4 @@
-//! `gearbif diagnose`: report.json, report.md and figures for a recording set.
+//! `gearbif diagnose`: report.json, report.md, model.json and figures for a recording set.
 
 use crate::identification::diagnose::{diagnose, DiagnoseOptions};
 use crate::identification::report::markdown;
@@ -90,6 +90,9 @@ pub fn run(a: Args) -> Result<()> {
         markdown(&d.report, &title).as_bytes(),
     )?;
     write_json_atomic(a.out.join("report.json"), &d.report)?;
+    // the diagnosed gear, for the dynamics commands' --model
+    let model = crate::identification::export::model_file(&d, &set.gear)?;
+    write_json_atomic(a.out.join("model.json"), &model)?;
     println!("verdict: {}", d.report.verdict);
     for f in &d.report.findings {
         let ps: Vec<String> = f

@@ -1,10 +1,12 @@
 //! `gearbif simulate`: a trajectory of the driven gear as CSV (and its events on Σ).
 
 use super::common::{count, limits, output_file, within, GearArgs, Output};
-use super::methods::{DriveArgs, MethodArgs};
+use super::methods::{parse_x0, DriveArgs, MethodArgs};
+use super::model_arg::ModelArgs;
 use crate::error::{positive, Error, Result};
-use crate::integrator::{Event, EventKind, FlowOptions, Mode, Stats};
-use crate::model::Convention;
+use crate::integrator::{Event, EventKind, FlowMethod, FlowOptions, Mode, Stats};
+use crate::model::recorded::RecordedParam;
+use crate::model::{Convention, DrivenOscillator, Parametrised};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -14,6 +16,8 @@ use std::path::PathBuf;
 pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
+    #[command(flatten)]
+    model: ModelArgs,
     #[command(flatten)]
     drive: DriveArgs,
     #[command(flatten)]
@@ -70,6 +74,18 @@ struct Summary {
     wall_time_s: f64,
     out: Option<String>,
     events_file: Option<String>,
+    /// The model file (--model), if the gear is a recorded one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    model: Option<String>,
+}
+
+/// What the summary says of the system: its convention and base parameters, and the model file.
+struct SystemInfo {
+    convention: Convention,
+    f: f64,
+    /// g, Δ, ζ, η.
+    base: [f64; 4],
+    model: Option<String>,
 }
 
 fn kind_fields(k: &EventKind) -> (&'static str, i8) {
@@ -93,9 +109,50 @@ pub fn events_csv(events: &[Event]) -> String {
 
 /// Runs `gearbif simulate`.
 pub fn run(a: Args) -> Result<()> {
+    super::common::check_frequency(a.drive.f)?;
+    if let Some(m) = a.model.recorded(&a.gear, a.drive.f)? {
+        let x0 = match &a.drive.x0 {
+            Some(s) => parse_x0(s)?,
+            None => [
+                crate::model::gear::equilibrium_angle(m.param(RecordedParam::Delta), 0.0),
+                0.0,
+            ],
+        };
+        let method = super::model_arg::method(&a.method)?;
+        let p = |q| m.param(q);
+        let info = SystemInfo {
+            convention: Convention::Physical,
+            f: a.drive.f,
+            base: [
+                p(RecordedParam::G),
+                p(RecordedParam::Delta),
+                p(RecordedParam::Zeta),
+                p(RecordedParam::Eta),
+            ],
+            model: a.model.model.as_ref().map(|p| p.display().to_string()),
+        };
+        return simulate(&m, &*method, x0, &info, &a);
+    }
     let gear = a.drive.gear(&a.gear)?;
     let x0 = a.drive.x0(&gear)?;
     let method = a.method.method()?;
+    let info = SystemInfo {
+        convention: gear.convention,
+        f: gear.f,
+        base: [gear.g, gear.delta, gear.zeta, gear.eta],
+        model: None,
+    };
+    simulate(&gear, &*method, x0, &info, &a)
+}
+
+/// The trajectory of `sys` from `x0` with `method`, written and summarised as `a` asks.
+fn simulate<S: DrivenOscillator>(
+    sys: &S,
+    method: &dyn FlowMethod<S>,
+    x0: [f64; 2],
+    info: &SystemInfo,
+    a: &Args,
+) -> Result<()> {
     positive("periods", a.periods)?;
     within("periods", a.periods, 0.0, 1e6, "must be in (0, 1e6]")?;
     count(
@@ -109,7 +166,7 @@ pub fn run(a: Args) -> Result<()> {
             output_file(flag, p, false)?;
         }
     }
-    let period = 1.0 / gear.f;
+    let period = sys.period();
     let t_end = a.periods * period;
     let n = (a.periods * a.samples_per_period as f64).floor() as usize;
     if n > 50_000_000 {
@@ -124,13 +181,13 @@ pub fn run(a: Args) -> Result<()> {
         .record_events(true)
         .samples(times);
     let start = std::time::Instant::now();
-    let flow = method.flow(&gear, 0.0, x0, t_end, &opts)?;
+    let flow = method.flow(sys, 0.0, x0, t_end, &opts)?;
     let wall = start.elapsed().as_secs_f64();
 
     let mut csv = String::with_capacity(flow.samples.len() * 80);
     csv.push_str("t,alpha,beta,omega,delta\n");
     for s in &flow.samples {
-        let alpha = gear.alpha(s.t);
+        let alpha = sys.drive_phase(s.t);
         let _ = writeln!(
             csv,
             "{},{},{},{},{}",
@@ -158,12 +215,12 @@ pub fn run(a: Args) -> Result<()> {
     }
     let summary = Summary {
         method: method.name(),
-        convention: gear.convention,
-        f_hz: gear.f,
-        g: gear.g,
-        delta: gear.delta,
-        zeta: gear.zeta,
-        eta: gear.eta,
+        convention: info.convention,
+        f_hz: info.f,
+        g: info.base[0],
+        delta: info.base[1],
+        zeta: info.base[2],
+        eta: info.base[3],
         periods: a.periods,
         t_end_s: t_end,
         x0,
@@ -176,6 +233,7 @@ pub fn run(a: Args) -> Result<()> {
         wall_time_s: wall,
         out: a.out.as_ref().map(|p| p.display().to_string()),
         events_file: a.events.as_ref().map(|p| p.display().to_string()),
+        model: info.model.clone(),
     };
     if a.json {
         Output { json: true }.emit_tagged("gearbif.simulate/1", &summary, String::new)

@@ -494,10 +494,13 @@ mod tests {
         assert_eq!(a.param(RecordedParam::StaticA), 2.0);
     }
 
+    /// An edit of a valid file.
+    type Edit = dyn Fn(&mut ModelFile);
+
     /// Every malformed field is refused with the file and the field named.
     #[test]
     fn malformed_files_name_the_field() {
-        let cases: Vec<(Box<dyn Fn(&mut ModelFile)>, &str)> = vec![
+        let cases: Vec<(Box<Edit>, &str)> = vec![
             (Box::new(|m| m.schema = "gearbif.model/2".into()), "schema"),
             (
                 Box::new(|m| m.parameters[0].name = "gg".into()),
