@@ -75,6 +75,55 @@ fn simulate_on_the_papers_model_file_follows_the_papers_gear() {
     assert_eq!(b["model"].as_str().unwrap(), model.to_str().unwrap());
 }
 
+/// map --model on the base-only file: the same image, Jacobians and multipliers (columns by name).
+#[test]
+fn map_on_the_papers_model_file_is_the_papers_map() {
+    let model = asset("paper_gear.model.json");
+    let common = [
+        "map",
+        "--f",
+        "3",
+        "--x0-deg",
+        "170,18.85",
+        "--section",
+        "half",
+        "--json",
+    ];
+    let a = json(&gearbif(&common));
+    let mut with_model = common.to_vec();
+    with_model.extend(["--model", model.to_str().unwrap()]);
+    let b = json(&gearbif(&with_model));
+    let close = |u: f64, v: f64| assert!((u - v).abs() < 1e-8 * (1.0 + u.abs()), "{u} {v}");
+    for i in 0..2 {
+        close(
+            a["image"][i].as_f64().unwrap(),
+            b["image"][i].as_f64().unwrap(),
+        );
+        close(
+            a["multipliers"][i]["abs"].as_f64().unwrap(),
+            b["multipliers"][i]["abs"].as_f64().unwrap(),
+        );
+    }
+    let names = |v: &serde_json::Value| -> Vec<String> {
+        v["param_names"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| n.as_str().unwrap().to_string())
+            .collect()
+    };
+    let (na, nb) = (names(&a), names(&b));
+    for (ka, n) in na.iter().enumerate() {
+        let kb = nb.iter().position(|m| m == n).unwrap();
+        for row in 0..2 {
+            close(
+                a["jac_p"][row][ka].as_f64().unwrap(),
+                b["jac_p"][row][kb].as_f64().unwrap(),
+            );
+        }
+    }
+}
+
 /// Gear flags next to --model, and malformed files: exit 2, the option or the file and field named.
 #[test]
 fn conflicts_and_bad_model_files_exit_2() {

@@ -6,7 +6,8 @@ use super::methods::{MethodArg, MethodArgs};
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, EventDriven853, FixedStep, FlowMethod};
 use crate::model::recorded::file::ModelFile;
-use crate::model::recorded::RecordedModel;
+use crate::model::recorded::{RecordedModel, RecordedParam};
+use crate::model::{Convention, Gear, Parametrised};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -71,5 +72,58 @@ pub fn method(m: &MethodArgs) -> Result<Box<dyn FlowMethod<RecordedModel>>> {
             "--model, --method regularised",
             "the regularised method runs the paper's gear only",
         )),
+    }
+}
+
+/// What a command's summary says of the system: its convention and base parameters, and the
+/// model file it came from.
+pub struct SystemInfo {
+    /// The sign convention (physical for a model file).
+    pub convention: Convention,
+    /// Drive frequency, Hz.
+    pub f: f64,
+    /// g, Δ, ζ, η.
+    pub base: [f64; 4],
+    /// The model file (--model).
+    pub model: Option<String>,
+}
+
+impl SystemInfo {
+    /// Of the paper's gear.
+    pub fn of_gear(gear: &Gear) -> Self {
+        Self {
+            convention: gear.convention,
+            f: gear.f,
+            base: [gear.g, gear.delta, gear.zeta, gear.eta],
+            model: None,
+        }
+    }
+
+    /// Of a recorded gear read from the file of `args`.
+    pub fn of_model(m: &RecordedModel, args: &ModelArgs) -> Self {
+        let p = |q| m.param(q);
+        Self {
+            convention: Convention::Physical,
+            f: p(RecordedParam::F),
+            base: [
+                p(RecordedParam::G),
+                p(RecordedParam::Delta),
+                p(RecordedParam::Zeta),
+                p(RecordedParam::Eta),
+            ],
+            model: args.model.as_ref().map(|p| p.display().to_string()),
+        }
+    }
+}
+
+/// The initial state "BETA_DEG,OMEGA" of `x0`, or the recorded gear's locked-input equilibrium
+/// of its base coupling at α = 0, at rest.
+pub fn start(m: &RecordedModel, x0: &Option<String>) -> Result<[f64; 2]> {
+    match x0 {
+        Some(s) => super::methods::parse_x0(s),
+        None => Ok([
+            crate::model::gear::equilibrium_angle(m.param(RecordedParam::Delta), 0.0),
+            0.0,
+        ]),
     }
 }

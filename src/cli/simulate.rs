@@ -1,12 +1,11 @@
 //! `gearbif simulate`: a trajectory of the driven gear as CSV (and its events on Σ).
 
 use super::common::{count, limits, output_file, within, GearArgs, Output};
-use super::methods::{parse_x0, DriveArgs, MethodArgs};
-use super::model_arg::ModelArgs;
+use super::methods::{DriveArgs, MethodArgs};
+use super::model_arg::{start, ModelArgs, SystemInfo};
 use crate::error::{positive, Error, Result};
 use crate::integrator::{Event, EventKind, FlowMethod, FlowOptions, Mode, Stats};
-use crate::model::recorded::RecordedParam;
-use crate::model::{Convention, DrivenOscillator, Parametrised};
+use crate::model::{Convention, DrivenOscillator};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -79,15 +78,6 @@ struct Summary {
     model: Option<String>,
 }
 
-/// What the summary says of the system: its convention and base parameters, and the model file.
-struct SystemInfo {
-    convention: Convention,
-    f: f64,
-    /// g, Δ, ζ, η.
-    base: [f64; 4],
-    model: Option<String>,
-}
-
 fn kind_fields(k: &EventKind) -> (&'static str, i8) {
     match *k {
         EventKind::Crossing { to, .. } => ("crossing", to),
@@ -111,37 +101,15 @@ pub fn events_csv(events: &[Event]) -> String {
 pub fn run(a: Args) -> Result<()> {
     super::common::check_frequency(a.drive.f)?;
     if let Some(m) = a.model.recorded(&a.gear, a.drive.f)? {
-        let x0 = match &a.drive.x0 {
-            Some(s) => parse_x0(s)?,
-            None => [
-                crate::model::gear::equilibrium_angle(m.param(RecordedParam::Delta), 0.0),
-                0.0,
-            ],
-        };
+        let x0 = start(&m, &a.drive.x0)?;
         let method = super::model_arg::method(&a.method)?;
-        let p = |q| m.param(q);
-        let info = SystemInfo {
-            convention: Convention::Physical,
-            f: a.drive.f,
-            base: [
-                p(RecordedParam::G),
-                p(RecordedParam::Delta),
-                p(RecordedParam::Zeta),
-                p(RecordedParam::Eta),
-            ],
-            model: a.model.model.as_ref().map(|p| p.display().to_string()),
-        };
+        let info = SystemInfo::of_model(&m, &a.model);
         return simulate(&m, &*method, x0, &info, &a);
     }
     let gear = a.drive.gear(&a.gear)?;
     let x0 = a.drive.x0(&gear)?;
     let method = a.method.method()?;
-    let info = SystemInfo {
-        convention: gear.convention,
-        f: gear.f,
-        base: [gear.g, gear.delta, gear.zeta, gear.eta],
-        model: None,
-    };
+    let info = SystemInfo::of_gear(&gear);
     simulate(&gear, &*method, x0, &info, &a)
 }
 
