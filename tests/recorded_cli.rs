@@ -124,6 +124,29 @@ fn map_on_the_papers_model_file_is_the_papers_map() {
     }
 }
 
+/// classify --model: the paper's model file classifies as the paper's gear; a static torque
+/// makes the locked response T-periodic instead of T/2-periodic.
+#[test]
+fn classify_on_model_files() {
+    let common = ["classify", "--f", "3", "--json"];
+    let run = |file: Option<&str>| {
+        let mut args = common.to_vec();
+        let path = file.map(|f| asset(f).to_str().unwrap().to_string());
+        if let Some(p) = &path {
+            args.extend(["--model", p.as_str()]);
+        }
+        json(&gearbif(&args))["event_driven"]["rigorous"].clone()
+    };
+    let (a, b) = (run(None), run(Some("paper_gear.model.json")));
+    assert_eq!(a["label"], b["label"]);
+    let lyap = |v: &serde_json::Value| v["lyapunov"]["per_period"].as_f64().unwrap();
+    let (la, lb) = (lyap(&a), lyap(&b));
+    assert!((la - lb).abs() < 1e-6, "{la} {lb}");
+    let c = run(Some("static_torque.model.json"));
+    assert_eq!(a["label"], "T/2");
+    assert_eq!(c["label"], "T");
+}
+
 /// Gear flags next to --model, and malformed files: exit 2, the option or the file and field named.
 #[test]
 fn conflicts_and_bad_model_files_exit_2() {
