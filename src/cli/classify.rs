@@ -2,9 +2,11 @@
 //! one), optionally with the paper's fixed-step integrator beside the exact one.
 
 use super::common::{angle_deg, check_frequency, count, limits, tolerance, GearArgs, Output};
+use super::model_arg::ModelArgs;
 use crate::analysis::{classify_point, ClassifyOptions, PointResult, ThdDefinition};
+use crate::integrator::FlowMethod;
 use crate::integrator::{EventDriven, FixedStep, DEFAULT_METHOD};
-use crate::model::Gear;
+use crate::model::{DrivenOscillator, Gear};
 use crate::Result;
 use serde::Serialize;
 
@@ -13,6 +15,8 @@ use serde::Serialize;
 pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
+    #[command(flatten)]
+    model: ModelArgs,
     /// Drive frequency f [Hz], in [1e-3, 1e4].
     #[arg(long)]
     f: f64,
@@ -124,28 +128,54 @@ pub fn run(a: Args) -> Result<()> {
     count("settle", a.settle, 0, limits::TURNS_MAX)?;
     count("record", a.record, 1, 100_000)?;
     count("analysis", a.analysis, 2, limits::TURNS_MAX)?;
+    let x0 = [a.beta0_deg.to_radians(), 0.0];
+    let opts = options(&a);
+    if let Some(m) = a.model.recorded(&a.gear, a.f)? {
+        let m = m.with_alpha0(a.alpha0_deg.to_radians())?;
+        let (ev, rk) = both(&m, x0, &a, &opts)?;
+        let geo = *m.geometry();
+        return print(&a, [geo.theta(), geo.phi()], ev, rk);
+    }
     let p = a.gear.params()?;
     let gear = Gear::new(p.g(), p.delta(), p.zeta, p.eta, a.f)?
         .with_convention(a.gear.convention())
         .with_alpha0(a.alpha0_deg.to_radians())?;
-    let x0 = [a.beta0_deg.to_radians(), 0.0];
-    let opts = options(&a);
+    let (ev, rk) = both(&gear, x0, &a, &opts)?;
+    print(&a, [p.theta, p.phi], ev, rk)
+}
+
+/// The point classified with the event-driven method and, with --rk4, the paper's RK4.
+fn both<S: DrivenOscillator>(
+    sys: &S,
+    x0: [f64; 2],
+    a: &Args,
+    opts: &ClassifyOptions,
+) -> Result<(PointResult, Option<PointResult>)>
+where
+    EventDriven: FlowMethod<S>,
+    FixedStep: FlowMethod<S>,
+{
     let ev = if a.dp5 {
-        classify_point(&gear, x0, &EventDriven, &opts)?
+        classify_point(sys, x0, &EventDriven, opts)?
     } else {
-        classify_point(&gear, x0, &DEFAULT_METHOD, &opts)?
+        classify_point(sys, x0, &DEFAULT_METHOD, opts)?
     };
     let rk = if a.rk4 {
         let o = ClassifyOptions {
             rigorous: false,
             ..opts.clone()
         };
-        Some(classify_point(&gear, x0, &FixedStep::default(), &o)?)
+        Some(classify_point(sys, x0, &FixedStep::default(), &o)?)
     } else {
         None
     };
+    Ok((ev, rk))
+}
+
+/// Prints the classification of a gear with shaft angles `shafts` = (Θ, Φ) [rad].
+fn print(a: &Args, shafts: [f64; 2], ev: PointResult, rk: Option<PointResult>) -> Result<()> {
     let out = Out {
-        theta_deg: p.theta.to_degrees(),
+        theta_deg: shafts[0].to_degrees(),
         f_hz: a.f,
         event_driven: ev,
         rk4_t50: rk,
@@ -153,8 +183,8 @@ pub fn run(a: Args) -> Result<()> {
     Output { json: a.json }.emit_tagged("gearbif.classify/1", &out, || {
         let mut s = format!(
             "Θ = {:.3}°, Φ = {:.3}°, f = {} Hz, start α = {}°, β = {}° ({:?}), {} + {} turns\n",
-            p.theta.to_degrees(),
-            p.phi.to_degrees(),
+            shafts[0].to_degrees(),
+            shafts[1].to_degrees(),
             a.f,
             a.alpha0_deg,
             a.beta0_deg,

@@ -1,4 +1,4 @@
-//! `gearbif diagnose`: report.json, report.md and figures for a recording set.
+//! `gearbif diagnose`: report.json, report.md, model.json and figures for a recording set.
 
 use crate::identification::diagnose::{diagnose, DiagnoseOptions};
 use crate::identification::report::markdown;
@@ -46,10 +46,10 @@ fn cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
-/// The names of a diagnosis folder: report.md, report.json and the figures.
+/// The names of a diagnosis folder: report.md, report.json, model.json and the figures.
 fn owned(name: &str, is_dir: bool) -> bool {
     !is_dir
-        && (matches!(name, "report.md" | "report.json")
+        && (matches!(name, "report.md" | "report.json" | "model.json")
             || name.ends_with(".svg")
             || name.ends_with(".png"))
 }
@@ -102,6 +102,12 @@ pub fn run(a: Args) -> Result<()> {
         markdown(&d.report, &title).as_bytes(),
     )?;
     write_json_atomic(dir.join("report.json"), &d.report)?;
+    // the diagnosed gear, for the dynamics commands' --model; a fit the model's lens refuses
+    // (a parameter outside its range) leaves the report whole and says why the file is missing
+    match crate::identification::export::model_file(&d, &set.gear) {
+        Ok(model) => write_json_atomic(dir.join("model.json"), &model)?,
+        Err(e) => eprintln!("warning: model.json not written: {e}"),
+    }
     staged.commit()?;
     println!("verdict: {}", d.report.verdict);
     if let Some(a) = &d.report.assessment {

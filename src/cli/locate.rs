@@ -3,12 +3,14 @@
 
 use super::common::{check_frequency, count, tolerance, GearArgs, Output};
 use super::continue_::{check_winding, parse_section, parse_state};
+use super::model_arg::ModelArgs;
 use crate::continuation::two_param::{locate_augmented_with, CurvePoint};
 use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, FlowMethod, DEFAULT_METHOD};
 use crate::maps::Section;
-use crate::model::{Gear, GearParam, Parameter, Parametrised};
+use crate::model::recorded::RecordedParam;
+use crate::model::{GearParam, Parameter, Parametrised};
 use crate::orbits::{OrbitSpec, ShootingOptions};
 use serde::Serialize;
 
@@ -17,13 +19,16 @@ use serde::Serialize;
 pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
+    #[command(flatten)]
+    model: ModelArgs,
     /// Drive frequency f [Hz], in [1e-3, 1e4] (the guess when --param f).
     #[arg(long)]
     f: f64,
     /// Type: fold, flip, sb (symmetry-breaking) or ns (Neimark–Sacker).
     #[arg(long)]
     kind: String,
-    /// The parameter solved for (f, theta, delta, zeta, eta, g).
+    /// The parameter solved for (f, theta, delta, zeta, eta, g; with --model any parameter of
+    /// the recorded gear with a column, docs/recorded_gear.md).
     #[arg(long, default_value = "f")]
     param: String,
     /// Guess of the state "BETA,OMEGA": β [rad], ω [rad/s] (physical convention; |β| <= 2π,
@@ -77,12 +82,12 @@ pub(crate) fn parse_kind(s: &str) -> Result<SpecialKind> {
 
 /// The point located at tolerance `tol` from `start` (state, parameter), then refined at `tol`/10
 /// from there (so both solves refine the same point), with `method`.
-fn locate_twice<M: FlowMethod<Gear>>(
+fn locate_twice<S: Parametrised, M: FlowMethod<S>>(
     method: &M,
-    gear: &Gear,
+    gear: &S,
     spec: &OrbitSpec,
     kind: SpecialKind,
-    param: GearParam,
+    param: S::Param,
     start: ([f64; 2], f64),
     tol: f64,
 ) -> Result<(CurvePoint, CurvePoint)> {
@@ -105,19 +110,39 @@ pub fn run(a: Args) -> Result<()> {
     tolerance("tol", a.tol)?;
     check_winding(a.winding)?;
     count("period", a.period, 1, 1000)?;
-    let gear = a.gear.params()?.driven(a.f)?;
     let kind = parse_kind(&a.kind)?;
-    let param = GearParam::from_name(&a.param)?;
     let spec = match parse_section(&a.section)? {
         Section::HalfPeriod => OrbitSpec::symmetric(a.winding),
         Section::Stroboscopic => OrbitSpec::stroboscopic(a.period, a.winding),
     };
     let x = parse_state(&a.state)?;
-    let lam0 = gear.param(param);
+    if let Some(m) = a.model.recorded(&a.gear, a.f)? {
+        let param = RecordedParam::from_name(&a.param)?;
+        let m = m.with_column(param)?;
+        return report(&a, &m, &spec, kind, param, x);
+    }
+    let gear = a.gear.params()?.driven(a.f)?;
+    let param = GearParam::from_name(&a.param)?;
+    report(&a, &gear, &spec, kind, param, x)
+}
+
+/// Locates the point on `sys` from the guess `x` (and the current value of `param`) and prints it.
+fn report<S: Parametrised>(
+    a: &Args,
+    sys: &S,
+    spec: &OrbitSpec,
+    kind: SpecialKind,
+    param: S::Param,
+    x: [f64; 2],
+) -> Result<()>
+where
+    EventDriven: FlowMethod<S>,
+{
+    let lam0 = sys.param(param);
     let (p1, p2) = if a.dp5 {
-        locate_twice(&EventDriven, &gear, &spec, kind, param, (x, lam0), a.tol)?
+        locate_twice(&EventDriven, sys, spec, kind, param, (x, lam0), a.tol)?
     } else {
-        locate_twice(&DEFAULT_METHOD, &gear, &spec, kind, param, (x, lam0), a.tol)?
+        locate_twice(&DEFAULT_METHOD, sys, spec, kind, param, (x, lam0), a.tol)?
     };
     let te = (p1.free - p2.free).abs();
     let out = Located {

@@ -3,8 +3,9 @@
 
 use super::common::{count, limits, GearArgs, Output};
 use super::methods::{DriveArgs, MethodArgs};
+use super::model_arg::{start, ModelArgs, SystemInfo};
 use crate::error::{Error, Result};
-use crate::integrator::{FlowOptions, Mode, Sensitivity, Stats};
+use crate::integrator::{FlowMethod, FlowOptions, Mode, Sensitivity, Stats};
 use crate::maps::{multipliers, poincare_map, Section};
 use crate::model::{Convention, DrivenOscillator};
 use serde::Serialize;
@@ -25,6 +26,8 @@ pub enum SectionArg {
 pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
+    #[command(flatten)]
+    model: ModelArgs,
     #[command(flatten)]
     drive: DriveArgs,
     #[command(flatten)]
@@ -76,20 +79,41 @@ struct MapReport {
     multipliers: [Multiplier; 2],
     events: usize,
     stats: Stats,
+    /// The model file (--model), if the gear is a recorded one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    model: Option<String>,
 }
 
 /// Runs `gearbif map`.
 pub fn run(a: Args) -> Result<()> {
+    super::common::check_frequency(a.drive.f)?;
+    if let Some(m) = a.model.recorded(&a.gear, a.drive.f)? {
+        let x = start(&m, &a.drive.x0)?;
+        let method = super::model_arg::method(&a.method)?;
+        let info = SystemInfo::of_model(&m, &a.model);
+        return map(&m, &*method, x, &info, &a);
+    }
     let gear = a.drive.gear(&a.gear)?;
     let x = a.drive.x0(&gear)?;
     let method = a.method.method()?;
+    map(&gear, &*method, x, &SystemInfo::of_gear(&gear), &a)
+}
+
+/// The map of `sys` at `x` with `method`, printed as `a` asks.
+fn map<S: DrivenOscillator>(
+    gear: &S,
+    method: &dyn FlowMethod<S>,
+    x: [f64; 2],
+    info: &SystemInfo,
+    a: &Args,
+) -> Result<()> {
     count("iterations", a.iterations, 1, limits::TURNS_MAX)?;
     let section = match a.section {
         SectionArg::Strobe => Section::Stroboscopic,
         SectionArg::Half => Section::HalfPeriod,
     };
     let opts = FlowOptions::with_tol(a.method.tol).sensitivity(Sensitivity::StateAndParams);
-    let img = poincare_map(method.as_ref(), &gear, section, x, a.iterations, &opts)?;
+    let img = poincare_map(method, gear, section, x, a.iterations, &opts)?;
     let jx = img.jac_x.ok_or(Error::MissingJacobian { what: "state" })?;
     let jp = img
         .jac_p
@@ -103,12 +127,12 @@ pub fn run(a: Args) -> Result<()> {
             SectionArg::Half => "half",
         },
         iterations: a.iterations,
-        convention: gear.convention,
-        f_hz: gear.f,
-        g: gear.g,
-        delta: gear.delta,
-        zeta: gear.zeta,
-        eta: gear.eta,
+        convention: info.convention,
+        f_hz: info.f,
+        g: info.base[0],
+        delta: info.base[1],
+        zeta: info.base[2],
+        eta: info.base[3],
         x,
         image: img.x,
         winding: (img.x[0] - x[0]) / std::f64::consts::TAU,
@@ -128,6 +152,7 @@ pub fn run(a: Args) -> Result<()> {
         }),
         events: img.stats.events,
         stats: img.stats,
+        model: info.model.clone(),
     };
     Output { json: a.json }.emit_tagged("gearbif.map/1", &report, || {
         let r = &report;

@@ -19,6 +19,7 @@ mod info;
 mod locate;
 mod map;
 mod methods;
+mod model_arg;
 mod report;
 mod simulate;
 mod sweep;

@@ -2,9 +2,10 @@
 
 use super::common::{count, limits, output_file, within, GearArgs, Output};
 use super::methods::{DriveArgs, MethodArgs};
+use super::model_arg::{start, ModelArgs, SystemInfo};
 use crate::error::{positive, Error, Result};
-use crate::integrator::{Event, EventKind, FlowOptions, Mode, Stats};
-use crate::model::Convention;
+use crate::integrator::{Event, EventKind, FlowMethod, FlowOptions, Mode, Stats};
+use crate::model::{Convention, DrivenOscillator};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -14,6 +15,8 @@ use std::path::PathBuf;
 pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
+    #[command(flatten)]
+    model: ModelArgs,
     #[command(flatten)]
     drive: DriveArgs,
     #[command(flatten)]
@@ -70,6 +73,9 @@ struct Summary {
     wall_time_s: f64,
     out: Option<String>,
     events_file: Option<String>,
+    /// The model file (--model), if the gear is a recorded one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    model: Option<String>,
 }
 
 fn kind_fields(k: &EventKind) -> (&'static str, i8) {
@@ -93,9 +99,28 @@ pub fn events_csv(events: &[Event]) -> String {
 
 /// Runs `gearbif simulate`.
 pub fn run(a: Args) -> Result<()> {
+    super::common::check_frequency(a.drive.f)?;
+    if let Some(m) = a.model.recorded(&a.gear, a.drive.f)? {
+        let x0 = start(&m, &a.drive.x0)?;
+        let method = super::model_arg::method(&a.method)?;
+        let info = SystemInfo::of_model(&m, &a.model);
+        return simulate(&m, &*method, x0, &info, &a);
+    }
     let gear = a.drive.gear(&a.gear)?;
     let x0 = a.drive.x0(&gear)?;
     let method = a.method.method()?;
+    let info = SystemInfo::of_gear(&gear);
+    simulate(&gear, &*method, x0, &info, &a)
+}
+
+/// The trajectory of `sys` from `x0` with `method`, written and summarised as `a` asks.
+fn simulate<S: DrivenOscillator>(
+    sys: &S,
+    method: &dyn FlowMethod<S>,
+    x0: [f64; 2],
+    info: &SystemInfo,
+    a: &Args,
+) -> Result<()> {
     positive("periods", a.periods)?;
     within("periods", a.periods, 0.0, 1e6, "must be in (0, 1e6]")?;
     count(
@@ -109,7 +134,7 @@ pub fn run(a: Args) -> Result<()> {
             output_file(flag, p, false)?;
         }
     }
-    let period = 1.0 / gear.f;
+    let period = sys.period();
     let t_end = a.periods * period;
     let n = (a.periods * a.samples_per_period as f64).floor() as usize;
     if n > 50_000_000 {
@@ -124,13 +149,13 @@ pub fn run(a: Args) -> Result<()> {
         .record_events(true)
         .samples(times);
     let start = std::time::Instant::now();
-    let flow = method.flow(&gear, 0.0, x0, t_end, &opts)?;
+    let flow = method.flow(sys, 0.0, x0, t_end, &opts)?;
     let wall = start.elapsed().as_secs_f64();
 
     let mut csv = String::with_capacity(flow.samples.len() * 80);
     csv.push_str("t,alpha,beta,omega,delta\n");
     for s in &flow.samples {
-        let alpha = gear.alpha(s.t);
+        let alpha = sys.drive_phase(s.t);
         let _ = writeln!(
             csv,
             "{},{},{},{},{}",
@@ -158,12 +183,12 @@ pub fn run(a: Args) -> Result<()> {
     }
     let summary = Summary {
         method: method.name(),
-        convention: gear.convention,
-        f_hz: gear.f,
-        g: gear.g,
-        delta: gear.delta,
-        zeta: gear.zeta,
-        eta: gear.eta,
+        convention: info.convention,
+        f_hz: info.f,
+        g: info.base[0],
+        delta: info.base[1],
+        zeta: info.base[2],
+        eta: info.base[3],
         periods: a.periods,
         t_end_s: t_end,
         x0,
@@ -176,6 +201,7 @@ pub fn run(a: Args) -> Result<()> {
         wall_time_s: wall,
         out: a.out.as_ref().map(|p| p.display().to_string()),
         events_file: a.events.as_ref().map(|p| p.display().to_string()),
+        model: info.model.clone(),
     };
     if a.json {
         Output { json: true }.emit_tagged("gearbif.simulate/1", &summary, String::new)

@@ -163,6 +163,9 @@ pub struct Diagnosis {
     pub aug_pred: Vec<Prediction>,
     /// Row centres (α, β, β̇) and base / augmented equation-error residuals (for fingerprints).
     pub fingerprint: Vec<(f64, f64, f64, f64, f64)>,
+    /// θ and covariance of the final refit (the base refit's when nothing was accepted; `None`
+    /// without a refit by simulation): model.json's covariance.
+    pub fitted: Option<super::spec::FittedTheta>,
 }
 
 /// Stage 1 output: cleaned runs and the ring-down route.
@@ -842,6 +845,16 @@ fn report(
     );
     // fingerprints: base equation-error residuals (the final model's on the same rows)
     let fingerprint = fingerprints(&base, final_state.as_ref(), runs, &opts.weak, latency);
+    let fitted = match &final_state {
+        Some(st) if !st.effects.is_empty() || excess > 0.0 => Some(st),
+        _ => base.state.as_ref(),
+    }
+    .map(|st| super::spec::FittedTheta {
+        terms: st.terms.clone(),
+        fit_latency: st.fit_latency,
+        theta: st.fit.theta.clone(),
+        cov: st.fit.cov.clone(),
+    });
     Ok(Diagnosis {
         report: Report {
             schema: SCHEMA.into(),
@@ -864,6 +877,7 @@ fn report(
         base_pred,
         aug_pred,
         fingerprint,
+        fitted,
     })
 }
 

@@ -16,6 +16,7 @@ pub mod beam;
 pub mod breakaway;
 pub mod catalog;
 pub mod diagnose;
+pub mod export;
 pub mod findings;
 pub mod judge;
 pub mod lm;

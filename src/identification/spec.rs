@@ -6,6 +6,21 @@
 use super::model::{Coefficients, ExtraTerm, Shape};
 use super::regression::{grid_weight, load_grid_term, Clock, DriftParam, SessionPosition, Term};
 
+/// A fitted model's θ as the refit by simulation left it: its terms, whether the last entry is
+/// the latency, θ and its covariance (an infinite variance: a held entry). What model.json's
+/// covariance is propagated from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FittedTheta {
+    /// The terms of θ (then the latency when `fit_latency`).
+    pub terms: Vec<Term>,
+    /// Whether θ's last entry is the latency.
+    pub fit_latency: bool,
+    /// θ.
+    pub theta: Vec<f64>,
+    /// Covariance of θ.
+    pub cov: nalgebra::DMatrix<f64>,
+}
+
 /// The column standing for `t` at the shape values `shapes`: a family's term with its shape
 /// parameter baked in (the drag's −β̇|β̇| becomes −(|β̇|/V)^p sgn β̇ on the grid of tenths, the
 /// load friction the load at the weight (ρ_z, ρ_n) in hundredths, the Stribeck excess the decay

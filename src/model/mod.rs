@@ -22,6 +22,7 @@ pub mod one_sided;
 pub mod oscillators;
 pub mod params;
 pub mod ramped;
+pub mod recorded;
 pub mod taylor;
 
 pub use gear::{Convention, Gear, GearParam, GearParams, LockBranch, LockPoint};
