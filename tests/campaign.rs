@@ -278,7 +278,13 @@ fn ci_campaign_dependence_rate_on_white_noise() {
     assert_eq!(ctl.len(), 20);
     let found: Vec<String> = ctl
         .iter()
-        .filter_map(|c| Some(format!("seed {}: {}", c.seed, c.remaining_depends_on.as_ref()?)))
+        .filter_map(|c| {
+            Some(format!(
+                "seed {}: {}",
+                c.seed,
+                c.remaining_depends_on.as_ref()?
+            ))
+        })
         .collect();
     let bound = max_consistent_failures(ctl.len(), 0.01, 0.01);
     assert!(

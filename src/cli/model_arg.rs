@@ -55,8 +55,8 @@ impl ModelArgs {
     }
 }
 
-/// The integration method of `m` for the recorded gear (the regularised method is the paper's
-/// gear's only).
+/// The integration method of `m` for the recorded gear (the regularised and the Taylor method are
+/// the paper's gear's only).
 pub fn method(m: &MethodArgs) -> Result<Box<dyn FlowMethod<RecordedModel>>> {
     super::common::tolerance("tol", m.tol)?;
     match m.method {
@@ -71,6 +71,10 @@ pub fn method(m: &MethodArgs) -> Result<Box<dyn FlowMethod<RecordedModel>>> {
         MethodArg::Regularised => Err(Error::inconsistent(
             "--model, --method regularised",
             "the regularised method runs the paper's gear only",
+        )),
+        MethodArg::Taylor => Err(Error::inconsistent(
+            "--model, --method taylor",
+            "the recorded gear has no Taylor coefficients yet: use --method dop853 or event",
         )),
     }
 }
