@@ -1231,8 +1231,9 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
 /// The Stribeck excess, diagnosed end to end on recordings of the campaign generator (friction
 /// η + Δη_s exp(−(β̇/w)²), Δη_s = η, w = 0.5 rad/s: level 2 of `stribeck`, `ci` sets of 6
 /// ring-downs of 3 s and 3 driven runs of 12 turns) over 3 seeds with the diagnosis's default
-/// options: every set is named `static_friction` with a size (not a lower bound) within 20 % of
-/// the truth Δη_s/η = 1. The weak form does not propose the Stribeck member on these sets; the
+/// options: every set is named `static_friction` (or `partly_explained` with the static friction
+/// leading, where the final model leaves a significant remainder) with a size (not a lower bound)
+/// within 20 % of the truth Δη_s/η = 1. The weak form does not propose the Stribeck member on these sets; the
 /// stick-phase profile at rest does, and the member with a width is then refitted by simulation
 /// (`breakaway::width_member`). Before, the finding was the profile at rest (the member's w → 0
 /// limit), which reads the braking of slow sliding as a larger excess at rest: 1.5 ± 0.0001–0.009
@@ -1262,8 +1263,12 @@ fn stribeck_member_sizes_the_excess_on_generated_sets() {
         let (v, s) = e
             .reported
             .unwrap_or_else(|| panic!("seed {}: no size ({:?})", c.seed, e.note));
+        // the verdict follows the remainder (docs/verdict.md): where the final model leaves a
+        // significant remainder it is `partly_explained`, with the static friction leading
+        let leads = c.verdict == "partly_explained"
+            && c.findings.first().map(|f| f.effect.as_str()) == Some("static_friction");
         assert!(
-            c.named_right && (v - e.truth).abs() <= 0.2 * e.truth,
+            (c.named_right || leads) && (v - e.truth).abs() <= 0.2 * e.truth,
             "seed {}: verdict {}, excess {v} ± {s} (truth {})",
             c.seed,
             c.verdict,
@@ -1445,8 +1450,8 @@ fn the_screening_stops_only_candidates_the_judge_rejects() {
 /// Forms the catalog does not contain (docs/diagnosis.md, "The verdict"): an off-centre output
 /// magnet (the coupling modulated once per output turn), a bearing defect (a friction bump at one
 /// output angle), a friction growing with the transmitted torque, a Stribeck peak far narrower than
-/// the family's widths and a distortion of the angle reading, 2 seeds each at 1 and 2 times their
-/// reference size on the CI campaign's tiny sets. Wherever the report's own remainder test finds a
+/// the family's widths and a distortion of the angle reading, at 1 and 2 times their reference
+/// size on the CI campaign's tiny sets (a lab of its own for each form and size). Wherever the report's own remainder test finds a
 /// significant mismatch left, the verdict is `partly_explained` or `unexplained`, never a catalog
 /// name; and the verdict is honest (no catalog effect the truth does not contain, no error) in
 /// ≥ 90 % of the cases: more than `max_consistent_failures(n, 0.10, 0.01)` confident wrong names
@@ -1462,9 +1467,9 @@ fn out_of_catalog_forms_get_honest_verdicts() {
     ];
     let mut cases = Vec::new();
     for level in [1.0, 2.0] {
-        cases.extend(tiny_campaign(&format!("ooc{level}"), &forms, level, 2, 0).cases);
+        cases.extend(tiny_campaign(&format!("ooc{level}"), &forms, level, 1, 0).cases);
     }
-    assert_eq!(cases.len(), forms.len() * 4);
+    assert_eq!(cases.len(), forms.len() * 2);
     let mut lines = Vec::new();
     for c in &cases {
         lines.push(format!(
