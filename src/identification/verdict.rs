@@ -232,41 +232,30 @@ pub fn standing(f: &Finding, fraction: Option<(f64, f64)>) -> Standing {
         ),
         Some((s, sign)) => {
             let z = s.value / s.sigma;
+            let quoted = format!(
+                "{} = {} ± {} {}",
+                s.name,
+                sig(s.value, s.sigma),
+                sig(s.sigma, s.sigma),
+                s.unit
+            );
             let (status, reason) = if z.abs() < ZERO_Z {
                 (
                     Status::ConsistentWithZero,
                     format!(
-                        "{} = {} ± {} {} is consistent with zero ({:.1}σ < {ZERO_Z}σ)",
-                        s.name,
-                        sig(s.value, s.sigma),
-                        sig(s.sigma, s.sigma),
-                        s.unit,
+                        "{quoted} is consistent with zero ({:.1}σ < {ZERO_Z}σ)",
                         z.abs()
                     ),
                 )
             } else if let (Sign::Positive(what), true) = (sign, z < 0.0) {
                 (
                     Status::Unphysical,
-                    format!(
-                        "{} = {} ± {} {} is negative at {:.1}σ: {what}",
-                        s.name,
-                        sig(s.value, s.sigma),
-                        sig(s.sigma, s.sigma),
-                        s.unit,
-                        -z
-                    ),
+                    format!("{quoted} is negative at {:.1}σ: {what}", -z),
                 )
             } else {
                 (
                     Status::Stands,
-                    format!(
-                        "{} = {} ± {} {} ({:.1}σ from zero)",
-                        s.name,
-                        sig(s.value, s.sigma),
-                        sig(s.sigma, s.sigma),
-                        s.unit,
-                        z.abs()
-                    ),
+                    format!("{quoted} ({:.1}σ from zero)", z.abs()),
                 )
             };
             (status, Some(s), reason)
