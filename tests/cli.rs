@@ -283,6 +283,8 @@ fn bench_integrators_writes_csv_figure_and_json() {
         "1e-6,1e-9",
         "--dop853-tols",
         "1e-9",
+        "--taylor-tols",
+        "1e-9",
         "--fixed-steps",
         "50",
         "--reg-tols",
@@ -300,13 +302,14 @@ fn bench_integrators_writes_csv_figure_and_json() {
     assert_eq!(v["schema"], "gearbif.bench_integrators/1");
     let pts = v["points"].as_array().unwrap();
     let n_reg = usize::from(cfg!(feature = "diffsol-check"));
-    // DP5 at two tolerances, DOP853 at one, the fixed step, the regularised method
-    assert_eq!(pts.len(), 4 + n_reg);
+    // DP5 at two tolerances, DOP853 at one, Taylor at one, the fixed step, the regularised method
+    assert_eq!(pts.len(), 5 + n_reg);
     let err = |i: usize| pts[i]["error"].as_f64().unwrap();
     assert!(err(1) < err(0) && err(1) < 1e-7);
     assert!(err(2) < 1e-7, "DOP853 at tol 1e-9: error {}", err(2));
+    assert!(err(3) < 1e-7, "Taylor at tol 1e-9: error {}", err(3));
     // the paper's 50 steps per period: error far above the event-driven one, Jacobian wrong
-    assert!(err(3) > 1e-3 && pts[3]["jac_error"].as_f64().unwrap() > 1e-2);
+    assert!(err(4) > 1e-3 && pts[4]["jac_error"].as_f64().unwrap() > 1e-2);
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), pts.len() + 1);
     assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
@@ -394,6 +397,38 @@ fn synth_fit_diagnose_round_trip() {
         (gd - g_true).abs() <= 3.0 * gd_err,
         "g {gd} ± {gd_err} vs {g_true}"
     );
+    // model.json: the diagnosed gear, whose static torque is the finding's, runs in the dynamics
+    // commands (`simulate --model`)
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("model.json")).unwrap()).unwrap();
+    assert_eq!(model["schema"], "gearbif.model/1");
+    assert_eq!(model["effects"][0], "static_torque", "{model}");
+    let param = |name: &str| {
+        model["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == name)
+            .and_then(|p| p["value"].as_f64())
+            .unwrap_or_else(|| panic!("{name} missing from {model}"))
+    };
+    let a_file = param("static_a").hypot(param("static_b"));
+    assert!(
+        (a_file - amp).abs() < 1e-9 * amp,
+        "model.json amplitude {a_file} vs report {amp}"
+    );
+    let m = out.join("model.json");
+    let sim = json(&gearbif(&[
+        "simulate",
+        "--f",
+        "1.5",
+        "--periods",
+        "2",
+        "--json",
+        "--model",
+        m.to_str().unwrap(),
+    ]));
+    assert!(sim["x_end"][0].as_f64().unwrap().is_finite(), "{sim}");
     // --list names every catalogued effect the generator knows
     let l = gearbif(&["synth", "--list"]);
     let text = String::from_utf8_lossy(&l.stdout);
