@@ -19,6 +19,25 @@ fn paper_start(theta: f64, f: f64) -> (Gear, [f64; 2]) {
     (g, [90f64.to_radians(), 0.0])
 }
 
+/// A friction above the largest coupling torque (η = 400 s⁻² > g ≈ 298 s⁻²) holds the output at
+/// rest for ever: the rigorous class is `rest`, not QP or chaos (whatever the paper's flowchart
+/// makes of a motionless δ), and the state at the end is the start. The same gear with the
+/// paper's friction moves (a control).
+#[test]
+fn a_motionless_output_is_at_rest_not_quasi_periodic() {
+    let base = Gear::paper(25.0, 2.7).unwrap();
+    let stuck = Gear::new(base.g, base.delta, base.zeta, 400.0, 2.7).unwrap();
+    let x0 = [90f64.to_radians(), 0.0];
+    let r = classify_point(&stuck, x0, &EventDriven, &ClassifyOptions::default()).unwrap();
+    let rig = r.rigorous.unwrap();
+    assert_eq!(rig.dynamics, Dynamics::Rest, "{rig:?}");
+    assert_eq!(rig.label, "rest");
+    assert_eq!(rig.rotation_number, 0.0);
+    assert_eq!(r.agree, Some(false));
+    let moving = classify_point(&base, x0, &EventDriven, &ClassifyOptions::default()).unwrap();
+    assert_ne!(moving.rigorous.unwrap().dynamics, Dynamics::Rest);
+}
+
 #[test]
 fn locked_orbit_matches_the_analytic_branch() {
     let f = 2.0;

@@ -250,7 +250,7 @@ fn grid_axis(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(String, Vec<f64>)>
 /// "dop853" (event-driven Dormand–Prince 8(5,3), the default) or "event" (Dormand–Prince 5(4)).
 ///
 /// Returns a dict: row_param, row_values (numpy), col_param, col_values (numpy), label (list of
-/// lists of str: "T/2", "T", "3T", "QP", "chaos", "?" — the rigorous class, or the paper's class
+/// lists of str: "T/2", "T", "3T", "QP", "chaos", "?", "rest" — the rigorous class, or the paper's class
 /// when analysis_turns = 0), rotation_number, net_rotation_hz, rms_delta_deg, lyapunov (numpy
 /// arrays of shape (rows, cols), NaN where not computed) and points (list of lists of the
 /// classification dicts).

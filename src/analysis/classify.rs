@@ -162,6 +162,9 @@ pub enum Dynamics {
     Chaotic,
     /// No period found although λ is negative: a long transient or a period beyond the limit.
     Unresolved,
+    /// The output stays at rest (stuck by its dry friction) over the whole analysis window: a
+    /// point of a continuum of equilibria, neither periodic motion nor chaos.
+    Rest,
 }
 
 /// The rigorous classification of one attractor.
@@ -169,7 +172,7 @@ pub enum Dynamics {
 pub struct RigorousClass {
     /// What was found.
     pub dynamics: Dynamics,
-    /// Short label: "T/2", "T", "3T", "3T/2", "QP", "chaos", "?".
+    /// Short label: "T/2", "T", "3T", "3T/2", "QP", "chaos", "?", "rest".
     pub label: String,
     /// Mean winding of β per drive period (β on the lift over the analysis window / 2π).
     pub rotation_number: f64,
@@ -507,8 +510,8 @@ pub fn rigorous_classify_with_section<S: DrivenOscillator + ?Sized>(
     let lyapunov = lyap.estimate(turns, period);
     // candidate periods on the trajectory (only even k without the symmetry)
     let kmax = opts.max_half_periods.min(steps / 2);
-    let mut found = None;
-    for k in 1..=kmax {
+    let mut found = at_rest(&raw).then_some(Dynamics::Rest);
+    for k in (1..=kmax).filter(|_| found.is_none()) {
         if sym.is_none() && k % 2 == 1 {
             continue;
         }
@@ -534,6 +537,7 @@ pub fn rigorous_classify_with_section<S: DrivenOscillator + ?Sized>(
     let locked_rn = (rotation_number.abs() - 1.0).abs() < 1e-3;
     let thr = opts.lyapunov_threshold;
     let (dynamics, label) = match found {
+        Some(Dynamics::Rest) => (Dynamics::Rest, "rest".to_string()),
         Some(d) => {
             let k = match &d {
                 Dynamics::Periodic { half_periods, .. } => *half_periods,
@@ -559,6 +563,14 @@ pub fn rigorous_classify_with_section<S: DrivenOscillator + ?Sized>(
         end,
         z,
     ))
+}
+
+/// The output never moved: every state at t = jT/2 has ω = 0 and the β of the first (a stick
+/// phase keeps β exactly; 1e-12 relative allows for the lift's arithmetic).
+fn at_rest(raw: &[[f64; 2]]) -> bool {
+    let b0 = raw[0][0];
+    raw.iter()
+        .all(|x| x[1] == 0.0 && (x[0] - b0).abs() <= 1e-12 * (1.0 + b0.abs()))
 }
 
 fn reduce(sym: Option<HalfPeriodSymmetry>, x: [f64; 2], j: usize) -> [f64; 2] {
