@@ -279,15 +279,17 @@ fn sig(v: f64, s: f64) -> String {
     format!("{v:.digits$}")
 }
 
+/// Whether a finding stands (one without a standing yet is taken as standing).
+fn stands(f: &Finding) -> bool {
+    f.standing
+        .as_ref()
+        .is_none_or(|s| s.status == Status::Stands)
+}
+
 /// Orders `findings` so that the standing ones come first (otherwise in their order) and returns
 /// the verdict with its assessment, from the standings already set on each finding and the
 /// remainder `rem` (`None` when it was not measured).
 pub fn decide(findings: &mut [Finding], rem: Option<&Remainder>) -> (String, Assessment) {
-    let stands = |f: &Finding| {
-        f.standing
-            .as_ref()
-            .is_none_or(|s| s.status == Status::Stands)
-    };
     // stable: standing findings first, each group in the selection's order
     findings.sort_by_key(|f| !stands(f));
     let explained_by: Vec<String> = findings
@@ -347,11 +349,7 @@ fn statement(kind: Kind, findings: &[Finding], rem: Option<&Remainder>) -> Strin
     };
     let standing: Vec<String> = findings
         .iter()
-        .filter(|f| {
-            f.standing
-                .as_ref()
-                .is_none_or(|s| s.status == Status::Stands)
-        })
+        .filter(|f| stands(f))
         .map(|f| removed(f).unwrap_or_else(|| format!("`{}`", f.effect)))
         .collect();
     let rejected: Vec<String> = findings
@@ -363,6 +361,10 @@ fn statement(kind: Kind, findings: &[Finding], rem: Option<&Remainder>) -> Strin
         .collect();
     let left = rem.map(remainder_words).unwrap_or_default();
     let mut out = match kind {
+        Kind::Explained if rem.is_none() => format!(
+            "Found: {} (what is left was not measured).",
+            standing.join("; ")
+        ),
         Kind::Explained => format!("Explained to the noise: {}.{left}", standing.join("; ")),
         Kind::PartlyExplained => format!(
             "Partly explained: {}. A significant mismatch is left that none of the findings \
