@@ -122,6 +122,17 @@ pub struct EventCounts {
     pub grazes: usize,
 }
 
+impl std::fmt::Display for EventCounts {
+    /// "2 crossings, 0 sticks, 0 grazes".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} crossings, {} sticks, {} grazes",
+            self.crossings, self.sticks, self.grazes
+        )
+    }
+}
+
 impl EventCounts {
     /// Counts the events of a map image.
     pub fn from_image(img: &MapImage) -> Self {

@@ -182,7 +182,7 @@ fn print(a: &Args, shafts: [f64; 2], ev: PointResult, rk: Option<PointResult>) -
     };
     Output { json: a.json }.emit_tagged("gearbif.classify/1", &out, || {
         let mut s = format!(
-            "Θ = {:.3}°, Φ = {:.3}°, f = {} Hz, start α = {}°, β = {}° ({:?}), {} + {} turns\n",
+            "Θ = {:.3}°, Φ = {:.3}°, f = {} Hz, start α = {}°, β = {}° ({}), {} + {} turns\n",
             shafts[0].to_degrees(),
             shafts[1].to_degrees(),
             a.f,

@@ -155,7 +155,7 @@ where
     Output { json: a.json }.emit_tagged("gearbif.locate/1", &out, || {
         let p = &out.point;
         format!(
-            "{} at {} = {:.10} (error estimate {:.1e}: tolerance {:.1e}, Newton {:.1e})\n  x = ({:.9}, {:.9})  μ = {:?}  events {:?}\n",
+            "{} at {} = {:.10} (error estimate {:.1e}: tolerance {:.1e}, Newton {:.1e})\n  x = ({:.9}, {:.9})  μ = {}  events: {}\n",
             kind.label(),
             out.param,
             p.free,
@@ -164,8 +164,25 @@ where
             p.precision,
             p.x[0],
             p.x[1],
-            p.floquet.multipliers,
+            multipliers_text(&p.floquet.multipliers),
             p.events
         )
     })
+}
+
+/// Floquet multipliers [[re, im], [re, im]] as "a, b" or "a ± b i" for a complex pair.
+fn multipliers_text(mu: &[[f64; 2]; 2]) -> String {
+    let one = |m: &[f64; 2]| {
+        if m[1] == 0.0 {
+            format!("{:.6}", m[0])
+        } else {
+            format!(
+                "{:.6} {} {:.6}i",
+                m[0],
+                if m[1] < 0.0 { "−" } else { "+" },
+                m[1].abs()
+            )
+        }
+    };
+    format!("{}, {}", one(&mu[0]), one(&mu[1]))
 }

@@ -159,13 +159,13 @@ fn map<S: DrivenOscillator>(
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "{} map ×{} at f = {} Hz ({}), convention {:?}",
+            "{} map ×{} at f = {} Hz ({}), {}",
             r.section, r.iterations, r.f_hz, r.method, r.convention
         );
         let _ = writeln!(s, "x     = ({:.12}, {:.12})   [rad, rad/s]", r.x[0], r.x[1]);
         let _ = writeln!(
             s,
-            "image = ({:.12}, {:.12})   winding {:.6}, mode {:?}",
+            "image = ({:.12}, {:.12})   winding {:.6}, mode {}",
             r.image[0], r.image[1], r.winding, r.mode
         );
         let _ = writeln!(

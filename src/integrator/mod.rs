@@ -69,6 +69,17 @@ pub enum Mode {
     Stick,
 }
 
+impl std::fmt::Display for Mode {
+    /// "ω > 0", "ω < 0" or "stuck".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Mode::Positive => "ω > 0",
+            Mode::Negative => "ω < 0",
+            Mode::Stick => "stuck",
+        })
+    }
+}
+
 impl Mode {
     /// s = +1, −1, or 0 while stuck.
     pub fn side(self) -> f64 {

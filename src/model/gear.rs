@@ -36,6 +36,16 @@ pub enum Convention {
     Paper,
 }
 
+impl std::fmt::Display for Convention {
+    /// "physical sign" or "paper's sign".
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Convention::Physical => "physical sign",
+            Convention::Paper => "paper's sign",
+        })
+    }
+}
+
 impl Convention {
     /// +1 for [`Convention::Physical`], −1 for [`Convention::Paper`].
     pub fn sign(self) -> f64 {
