@@ -167,7 +167,10 @@ fn strength_key(effect: &str) -> Option<(&'static str, &'static str, &'static st
 fn strength(f: &Finding) -> Option<(EffectSize, Sign)> {
     if let Some((v, e, unit, sign)) = strength_key(&f.effect) {
         let get = |k: &str| f.params.get(k).copied();
-        if let Some(profiled) = profiled_strength(f, sign) {
+        if let Some(profiled) = (f.effect == "static_friction")
+            .then(|| profiled_strength(f, sign))
+            .flatten()
+        {
             return Some(profiled);
         }
         if let (Some(value), Some(sigma)) = (get(v), get(e)) {

@@ -875,36 +875,32 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     /// Decides what happens when ω reaches 0 from side `s` at time `tc`, applies the saltation
     /// matrix to the Jacobian columns, records the event, and returns the new mode.
     fn handle_arrival(&mut self, tc: f64, y: &mut [f64; N], s: f64, force_stick: bool) -> Mode {
-        let sys = self.sys;
         let beta = y[0];
-        let f = sys.forces(tc, beta, 0.0);
-        let rs = sys.static_friction(tc, beta);
-        if f.a.abs() <= rs || force_stick {
-            self.stick_saltation(y);
-            self.record_event(tc, beta, EventKind::StickStart);
-            return Mode::Stick;
+        match arrival(self.sys, tc, beta, s, force_stick) {
+            Arrival::Stick => {
+                self.stick_saltation(y);
+                self.record_event(tc, beta, EventKind::StickStart);
+                Mode::Stick
+            }
+            Arrival::Graze => {
+                self.record_event(tc, beta, EventKind::Graze { side: s as i8 });
+                Mode::from_side(s)
+            }
+            Arrival::Cross { to, ratio } => {
+                for c in 0..self.layout.ncols {
+                    y[z_omega(c)] *= ratio;
+                }
+                self.record_event(
+                    tc,
+                    beta,
+                    EventKind::Crossing {
+                        from: s as i8,
+                        to: to as i8,
+                    },
+                );
+                Mode::from_side(to)
+            }
         }
-        let new_side = if f.a > 0.0 { 1.0 } else { -1.0 };
-        if new_side == s {
-            // tangency: the acceleration on side s points away from Σ; no switch, S = I
-            self.record_event(tc, beta, EventKind::Graze { side: s as i8 });
-            return Mode::from_side(s);
-        }
-        let a_before = f.a - s * f.r;
-        let a_after = f.a - new_side * f.r;
-        let ratio = a_after / a_before;
-        for c in 0..self.layout.ncols {
-            y[z_omega(c)] *= ratio;
-        }
-        self.record_event(
-            tc,
-            beta,
-            EventKind::Crossing {
-                from: s as i8,
-                to: new_side as i8,
-            },
-        );
-        Mode::from_side(new_side)
     }
 
     /// Stick entry: S = diag(1, 0) (the sliding field vanishes).
@@ -919,16 +915,9 @@ impl<'a, S: DrivenOscillator + ?Sized, P: Pair, const N: usize> Solver<'a, S, P,
     fn release_saltation(&self, y: &mut [f64; N], tr: f64, jump: f64, s: f64) {
         let sys = self.sys;
         let beta = y[0];
-        let period = sys.period();
-        let ht = 1e-7 * period;
-        let hb = 1e-7;
-        let gt = (release_function(sys, tr + ht, beta) - release_function(sys, tr - ht, beta))
-            / (2.0 * ht);
-        let gb = (release_function(sys, tr, beta + hb) - release_function(sys, tr, beta - hb))
-            / (2.0 * hb);
-        if gt == 0.0 || !gt.is_finite() {
+        let Some((gt, gb)) = release_gradient(sys, tr, beta) else {
             return;
-        }
+        };
         let jet = sys.forces_jet(tr, beta, 0.0, self.layout.with_params);
         for c in 0..self.layout.ncols {
             let mut gz = gb * y[z_beta(c)];
@@ -1010,6 +999,64 @@ struct StepInfo {
 /// Guard against Zeno-like repetition of events without progress: events closer than
 /// 10⁻¹³ T to the previous one count as a stall; more than 8 in a row mark the point degenerate
 /// (the event handlers then take the degenerate branch), more than 16 are an error.
+/// What an arrival on Σ = {ω = 0} from side `s` at (t, β) is under the Filippov convention
+/// ([`arrival`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Arrival {
+    /// |a| ≤ r_s (or a stick forced at a degenerate point): saltation diag(1, 0).
+    Stick,
+    /// a points back to side s (a tangency): no switch, saltation I.
+    Graze,
+    /// A crossing to side `to`: saltation diag(1, `ratio`), ratio = a₊/a₋ with a± = a − s± r.
+    Cross {
+        /// The new side, ±1.
+        to: f64,
+        /// a₊/a₋.
+        ratio: f64,
+    },
+}
+
+/// The Filippov rule at an arrival on Σ from side `s` at time `tc` and angle `beta`: stick while
+/// |a(tc, β, 0)| ≤ r_s(tc, β) (or when `force_stick`), a graze when a keeps the sign of s, else a
+/// crossing with the ratio of the accelerations after and before. Shared by every event-driven
+/// method (the Runge–Kutta pairs here, the Taylor method).
+pub(super) fn arrival<S: DrivenOscillator + ?Sized>(
+    sys: &S,
+    tc: f64,
+    beta: f64,
+    s: f64,
+    force_stick: bool,
+) -> Arrival {
+    let f = sys.forces(tc, beta, 0.0);
+    if f.a.abs() <= sys.static_friction(tc, beta) || force_stick {
+        return Arrival::Stick;
+    }
+    let to = if f.a > 0.0 { 1.0 } else { -1.0 };
+    if to == s {
+        return Arrival::Graze;
+    }
+    Arrival::Cross {
+        to,
+        ratio: (f.a - to * f.r) / (f.a - s * f.r),
+    }
+}
+
+/// (G_t, G_β) of the release function G(t, β) = |a| − r_s at a release (tr, β), by central
+/// differences (steps 1e-7 T and 1e-7 rad); `None` where G_t is 0 or not finite (no jump
+/// saltation then). The release saltation's dt_r/dz = −G_β Z_β / G_t of every event-driven method.
+pub(super) fn release_gradient<S: DrivenOscillator + ?Sized>(
+    sys: &S,
+    tr: f64,
+    beta: f64,
+) -> Option<(f64, f64)> {
+    let (ht, hb) = (1e-7 * sys.period(), 1e-7);
+    let gt =
+        (release_function(sys, tr + ht, beta) - release_function(sys, tr - ht, beta)) / (2.0 * ht);
+    let gb =
+        (release_function(sys, tr, beta + hb) - release_function(sys, tr, beta - hb)) / (2.0 * hb);
+    (gt != 0.0 && gt.is_finite()).then_some((gt, gb))
+}
+
 pub(super) struct ZenoGuard {
     stalled: usize,
     last_event_t: f64,

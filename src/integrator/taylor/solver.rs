@@ -3,13 +3,13 @@
 //! of ω, and the events, stick phases and saltation matrices of `event_driven.rs` (numerics.md).
 
 use super::super::augmented::{z_beta, z_omega, Layout};
-use super::super::event_driven::ZenoGuard;
+use super::super::event_driven::{arrival, release_gradient, Arrival, ZenoGuard};
 use super::super::{check_interval, Event, EventKind, Flow, FlowOptions, Mode, Sample, Stats};
 use super::crossing::first_crossing;
 use super::expansion::Expansion;
 use super::Taylor;
 use crate::error::{Error, Result};
-use crate::model::{release_function, TaylorOscillator};
+use crate::model::TaylorOscillator;
 use nalgebra::Matrix2;
 
 /// Integrates over [t₀, t₁] with the augmented dimension N (2: the state, 6: with the state
@@ -208,31 +208,24 @@ impl<'a, S: TaylorOscillator + ?Sized, const N: usize> Solver<'a, S, N> {
     /// crossing (saltation diag(1, a₊/a₋)).
     fn handle_arrival(&mut self, tc: f64, y: &mut [f64; N], s: f64, force_stick: bool) -> Mode {
         let beta = y[0];
-        let f = self.sys.forces(tc, beta, 0.0);
-        if f.a.abs() <= self.sys.static_friction(tc, beta) || force_stick {
-            self.stick_saltation(y);
-            self.record_event(tc, beta, EventKind::StickStart);
-            return Mode::Stick;
-        }
-        let new_side = if f.a > 0.0 { 1.0 } else { -1.0 };
-        if new_side == s {
-            self.record_event(tc, beta, EventKind::Graze { side: s as i8 });
-            return if s > 0.0 {
-                Mode::Positive
-            } else {
-                Mode::Negative
-            };
-        }
-        let ratio = (f.a - new_side * f.r) / (f.a - s * f.r);
-        for c in 0..self.layout.ncols {
-            y[z_omega(c)] *= ratio;
-        }
-        let (from, to) = (s as i8, new_side as i8);
-        self.record_event(tc, beta, EventKind::Crossing { from, to });
-        if new_side > 0.0 {
-            Mode::Positive
-        } else {
-            Mode::Negative
+        match arrival(self.sys, tc, beta, s, force_stick) {
+            Arrival::Stick => {
+                self.stick_saltation(y);
+                self.record_event(tc, beta, EventKind::StickStart);
+                Mode::Stick
+            }
+            Arrival::Graze => {
+                self.record_event(tc, beta, EventKind::Graze { side: s as i8 });
+                Mode::from_side(s)
+            }
+            Arrival::Cross { to, ratio } => {
+                for c in 0..self.layout.ncols {
+                    y[z_omega(c)] *= ratio;
+                }
+                let (from, to) = (s as i8, to as i8);
+                self.record_event(tc, beta, EventKind::Crossing { from, to });
+                Mode::from_side(f64::from(to))
+            }
         }
     }
 
@@ -276,15 +269,9 @@ impl<'a, S: TaylorOscillator + ?Sized, const N: usize> Solver<'a, S, N> {
     /// `event_driven.rs`: Z₊ = Z₋ − (0, jump) dt_r/dz, dt_r/dz = −G_β Z_β / G_t from
     /// G(t, β) = |a| − r_s = 0 (central differences of G).
     fn release_saltation(&self, y: &mut [f64; N], tr: f64, jump: f64) {
-        let (sys, beta) = (self.sys, y[0]);
-        let (ht, hb) = (1e-7 * sys.period(), 1e-7);
-        let gt = (release_function(sys, tr + ht, beta) - release_function(sys, tr - ht, beta))
-            / (2.0 * ht);
-        let gb = (release_function(sys, tr, beta + hb) - release_function(sys, tr, beta - hb))
-            / (2.0 * hb);
-        if gt == 0.0 || !gt.is_finite() {
+        let Some((gt, gb)) = release_gradient(self.sys, tr, y[0]) else {
             return;
-        }
+        };
         for c in 0..self.layout.ncols {
             let dt = -gb * y[z_beta(c)] / gt;
             y[z_omega(c)] -= jump * dt;
