@@ -100,6 +100,14 @@ fn same_files(a: &Path, b: &Path) {
     }
 }
 
+/// The environment variable `name` parsed, else `default` (the kill tests' seed and count).
+fn env_or<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default)
+}
+
 #[test]
 fn killed_and_resumed_sweep_is_bit_identical() {
     let root = tmpdir("sweep");
@@ -107,14 +115,10 @@ fn killed_and_resumed_sweep_is_bit_identical() {
     let t = Instant::now();
     run_to_end(&reference);
     let t_ref = t.elapsed();
-    let seed = std::env::var("GEARBIF_KILL_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(0x5eed_u64);
-    let kills: usize = std::env::var("GEARBIF_KILLS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(15);
+    let (seed, kills) = (
+        env_or("GEARBIF_KILL_SEED", 0x5eed_u64),
+        env_or("GEARBIF_KILLS", 15),
+    );
     let mut rng = Rng(seed | 1);
     let (mut killed_mid_run, mut rows_seen) = (0, Vec::new());
     let mut scale = t_ref;
@@ -261,14 +265,10 @@ fn killed_writer_leaves_one_whole_result(name: &str, args_a: &[&str], args_b: &[
     let t_b = t.elapsed();
     let snap_b = snapshot(&b);
     assert_ne!(snap_a, snap_b, "the two results must differ");
-    let seed = std::env::var("GEARBIF_KILL_SEED")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(0x5eed_u64);
-    let kills: usize = std::env::var("GEARBIF_KILLS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(4);
+    let (seed, kills) = (
+        env_or("GEARBIF_KILL_SEED", 0x5eed_u64),
+        env_or("GEARBIF_KILLS", 4),
+    );
     let mut rng = Rng(seed | 1);
     let (mut old, mut new) = (0, 0);
     for _ in 0..kills {
