@@ -4,14 +4,14 @@
 use super::common::{limits, output_file, tolerance, GearArgs, Output};
 use super::continue_::{check_winding, parse_range, parse_section, parse_state};
 use super::locate::parse_kind;
+use super::model_arg::ModelArgs;
+use crate::analysis::uncertainty::{located_sigma, LocatedSigma};
 use crate::continuation::palc2::{continue_curve, lock_loss_curves, CurveOptions};
 use crate::continuation::two_param::{follow, grid, Curve};
 use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::DEFAULT_METHOD;
 use crate::maps::Section;
-use super::model_arg::ModelArgs;
-use crate::analysis::uncertainty::{located_sigma, LocatedSigma};
 use crate::model::recorded::file::ModelFile;
 use crate::model::recorded::RecordedParam;
 use crate::model::{GearParam, Parameter, Parametrised};
@@ -222,7 +222,9 @@ fn emit<S: Parametrised + serde::Serialize>(
     // one document for --out and --json: {"schema": "gearbif.curves/1", "curves": [[label, curve],
     // ...]} and, with --model, "sigma": the σ of each point of the curve
     let tagged = match sigma {
-        Some(sg) => serde_json::json!({ "schema": "gearbif.curves/1", "curves": curves, "sigma": sg }),
+        Some(sg) => {
+            serde_json::json!({ "schema": "gearbif.curves/1", "curves": curves, "sigma": sg })
+        }
         None => serde_json::json!({ "schema": "gearbif.curves/1", "curves": curves }),
     };
     if let Some(p) = &a.out {

@@ -3,12 +3,12 @@
 use super::common::{
     check_frequency, count, limits, output_file, start_state, tolerance, within, GearArgs, Output,
 };
+use super::model_arg::ModelArgs;
 use crate::continuation::multiple_shooting::{continue_branch, MultipleShootingOptions};
 use crate::continuation::pinned::switch_at;
 use crate::continuation::{Branch, Continuation, ContinuationOptions};
 use crate::error::{Error, Result};
 use crate::maps::Section;
-use super::model_arg::ModelArgs;
 use crate::model::recorded::{RecordedModel, RecordedParam};
 use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};

@@ -4,8 +4,8 @@
 use super::common::{check_frequency, count, tolerance, GearArgs, Output};
 use super::continue_::{check_winding, parse_section, parse_state};
 use super::model_arg::ModelArgs;
-use crate::continuation::two_param::{locate_augmented_with, CurvePoint};
 use crate::analysis::uncertainty::{located_sigma, LocatedSigma};
+use crate::continuation::two_param::{locate_augmented_with, CurvePoint};
 use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::{EventDriven, FlowMethod, DEFAULT_METHOD};
@@ -142,9 +142,27 @@ pub fn run(a: Args) -> Result<()> {
         };
         let cov = &file.covariance;
         let value = if a.dp5 {
-            located_sigma(&EventDriven, &m, cov, &spec, kind, (param, None), &out.point, &opts)
+            located_sigma(
+                &EventDriven,
+                &m,
+                cov,
+                &spec,
+                kind,
+                (param, None),
+                &out.point,
+                &opts,
+            )
         } else {
-            located_sigma(&DEFAULT_METHOD, &m, cov, &spec, kind, (param, None), &out.point, &opts)
+            located_sigma(
+                &DEFAULT_METHOD,
+                &m,
+                cov,
+                &spec,
+                kind,
+                (param, None),
+                &out.point,
+                &opts,
+            )
         }?;
         out.sigma = Some(Sigma {
             value,
@@ -226,7 +244,10 @@ fn sigma_text(param: &str, unit: &str, v: &LocatedSigma) -> String {
         }
     );
     for d in &v.gradient {
-        s.push_str(&format!("    d{param}/d{} = {:.6e}\n", d.name, d.derivative));
+        s.push_str(&format!(
+            "    d{param}/d{} = {:.6e}\n",
+            d.name, d.derivative
+        ));
     }
     if !v.omitted.is_empty() {
         s.push_str(&format!("    not in σ: {}\n", v.omitted.join(", ")));

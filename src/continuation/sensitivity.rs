@@ -58,7 +58,9 @@ pub fn point_gradient<S: Parametrised, M: FlowMethod<S>>(
     opts: &ShootingOptions,
 ) -> Result<Vec<f64>> {
     let sys = sys.with_param(free, point.free)?;
-    let cols: Vec<S::Param> = std::iter::once(free).chain(params.iter().copied()).collect();
+    let cols: Vec<S::Param> = std::iter::once(free)
+        .chain(params.iter().copied())
+        .collect();
     let x = point.x;
     let h = [STEP, STEP * x[1].abs().max(1.0)];
     let at = |y: [f64; 2]| linearise_map(method, &sys, spec, y, &cols, opts);
@@ -88,7 +90,8 @@ pub fn point_gradient<S: Parametrised, M: FlowMethod<S>>(
         .map(|q| {
             let gp = Vector3::new(l0.columns[q][0], l0.columns[q][1], dpsi_dq(q));
             lu.solve(&(-gp)).map(|z| z[2]).ok_or(Error::SingularMatrix {
-                what: "bordered Jacobian [G_x G_λ] of the located point (implicit-function theorem)",
+                what:
+                    "bordered Jacobian [G_x G_λ] of the located point (implicit-function theorem)",
             })
         })
         .collect()

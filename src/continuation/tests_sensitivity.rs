@@ -116,7 +116,10 @@ fn draws(mean: &[f64], cov: &DMatrix<f64>, n: usize, seed: u64) -> Vec<Vec<f64>>
 #[test]
 fn sigma_agrees_with_monte_carlo() {
     let cases = [
-        (case(paper(39.7), OrbitSpec::symmetric(1)), vec![G, Zeta, Eta]),
+        (
+            case(paper(39.7), OrbitSpec::symmetric(1)),
+            vec![G, Zeta, Eta],
+        ),
         (
             case(bench_gear(39.5), OrbitSpec::stroboscopic(1, 1)),
             vec![G, Zeta, Eta, DragQ, DragP],
