@@ -633,6 +633,9 @@ pub fn param_names<S: DrivenOscillator + ?Sized>(s: &S) -> Vec<&'static str> {
 }
 
 /// Any system of the module, owned (so computations can run without the interpreter lock).
+// one System per call from Python: its size does not matter, and boxing the recorded gear would
+// break the one generic code path of `dispatch!`
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone)]
 pub enum System {
     Gear(Gear),

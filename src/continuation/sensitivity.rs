@@ -28,10 +28,11 @@
 //! ```
 //!
 //! with D_v the derivative along v, a forward difference of the linearisation at x + h v. At a
-//! fold or a flip without sticking D is the adjugate of M ∓ I, of rank one at the point (its
+//! fold or a flip without sticking D is the cofactor matrix of M ∓ I, of rank one at the point (its
 //! second singular value is |ψ|/d_1, zero to the locating tolerance), so one direction suffices:
 //! the whole Jacobian costs two linearisations of the map with the columns of λ and of every p,
 //! whatever the number of parameters (three for a Neimark–Sacker point or with a stick phase).
+
 use super::minaug::{linearise_map, MapLinearisation};
 use super::two_param::CurvePoint;
 use super::SpecialKind;
@@ -64,7 +65,9 @@ pub fn point_gradient<S: Parametrised, M: FlowMethod<S>>(
     opts: &ShootingOptions,
 ) -> Result<Vec<f64>> {
     let sys = sys.with_param(free, point.free)?;
-    let cols: Vec<S::Param> = std::iter::once(free).chain(params.iter().copied()).collect();
+    let cols: Vec<S::Param> = std::iter::once(free)
+        .chain(params.iter().copied())
+        .collect();
     let x = point.x;
     let at = |y: [f64; 2]| linearise_map(method, &sys, spec, y, &cols, opts);
     let l0 = at(x)?;
@@ -73,7 +76,10 @@ pub fn point_gradient<S: Parametrised, M: FlowMethod<S>>(
     let mut dpsi_dx = [0.0; 2];
     let mut dpsi_dq = vec![0.0; cols.len()];
     for (d, u, v) in directions(&test_gradient(kind, &l0)?) {
-        let h = STEP * (0..2).map(|i| scale[i] / v[i].abs()).fold(f64::INFINITY, f64::min);
+        let h = STEP
+            * (0..2)
+                .map(|i| scale[i] / v[i].abs())
+                .fold(f64::INFINITY, f64::min);
         let lv = at([x[0] + h * v[0], x[1] + h * v[1]])?;
         let dm = (lv.jac - l0.jac) / h;
         for (m, out) in dpsi_dx.iter_mut().enumerate() {
@@ -100,7 +106,8 @@ pub fn point_gradient<S: Parametrised, M: FlowMethod<S>>(
         .map(|q| {
             let gp = Vector3::new(l0.columns[q][0], l0.columns[q][1], dpsi_dq[q]);
             lu.solve(&(-gp)).map(|z| z[2]).ok_or(Error::SingularMatrix {
-                what: "bordered Jacobian [G_x G_λ] of the located point (implicit-function theorem)",
+                what:
+                    "bordered Jacobian [G_x G_λ] of the located point (implicit-function theorem)",
             })
         })
         .collect()

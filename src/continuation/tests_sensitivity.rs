@@ -215,3 +215,19 @@ fn flip_and_symmetry_breaking_gradients_match_differences() {
         }
     }
 }
+
+/// The singular directions reconstruct ∂ψ/∂M: Σ d_k u_k v_kᵀ = D for a full-rank D (two terms,
+/// the Neimark–Sacker and stick-phase case) and for a rank-one D (one term, a located fold).
+#[test]
+fn directions_reconstruct_the_test_gradient() {
+    let full = Matrix2::new(0.3, -1.2, 0.7, 2.0);
+    let rank_one = Matrix2::new(1.0, -2.0, -0.5, 1.0);
+    for (d, terms) in [(full, 2), (rank_one, 1)] {
+        let dirs = directions(&d);
+        assert_eq!(dirs.len(), terms, "{d}");
+        let back = dirs.iter().fold(Matrix2::zeros(), |acc, (s, u, v)| {
+            acc + Matrix2::new(u[0] * v[0], u[0] * v[1], u[1] * v[0], u[1] * v[1]) * *s
+        });
+        assert!((back - d).norm() < 1e-12 * d.norm(), "{back} {d}");
+    }
+}
