@@ -25,6 +25,15 @@ pub enum Section {
     HalfPeriod,
 }
 
+impl std::fmt::Display for Section {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Section::Stroboscopic => "stroboscopic P_T",
+            Section::HalfPeriod => "half-period G",
+        })
+    }
+}
+
 impl Section {
     /// Duration of one application of the map, in drive periods (1 or ½).
     pub fn periods(self) -> f64 {

@@ -188,3 +188,190 @@ fn conflicts_and_bad_model_files_exit_2() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The paper's model file with the covariance over (g, ζ, η) replaced by `cov` (row by row),
+/// written to a fresh file.
+fn with_covariance(tag: &str, cov: [[f64; 3]; 3]) -> PathBuf {
+    let text = std::fs::read_to_string(asset("paper_gear.model.json")).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    doc["covariance"] = serde_json::json!({ "names": ["g", "zeta", "eta"], "matrix": cov });
+    let p = std::env::temp_dir().join(format!("gearbif-sigma-{tag}-{}.json", std::process::id()));
+    std::fs::write(&p, serde_json::to_string(&doc).unwrap()).unwrap();
+    p
+}
+
+/// The paper's gear: f_c = (g − η)/(2πζ) (model.md).
+const G: f64 = 298.452035046191;
+fn f_c(eta: f64) -> f64 {
+    (G - eta) / (std::f64::consts::TAU * 1.1)
+}
+
+/// σ of the lock-loss fold from the model file's covariance: locate --model gives the closed
+/// form's σ² = aᵀCa with a = ∂f_c/∂(g, ζ, η) = (1, −2π f_c, −1)/(2πζ), to 1e-5 relative; and
+/// boundary --model along η gives, at every point, the σ of (g, ζ) alone (η is the coordinate).
+#[test]
+fn sigma_of_located_points_is_the_closed_forms() {
+    let cov = [[4.0, 0.0, 1.0], [0.0, 4e-4, 0.0], [1.0, 0.0, 1.0]];
+    let file = with_covariance("fold", cov);
+    let m = file.to_str().unwrap();
+    let a = |eta: f64| {
+        let s = std::f64::consts::TAU * 1.1;
+        [1.0 / s, -f_c(eta) / 1.1, -1.0 / s]
+    };
+    let quad = |g: [f64; 3], keep: &[usize]| {
+        let mut q = 0.0;
+        for &i in keep {
+            for &j in keep {
+                q += g[i] * cov[i][j] * g[j];
+            }
+        }
+        q.sqrt()
+    };
+    let out = json(&gearbif(&[
+        "locate",
+        "--model",
+        m,
+        "--f",
+        "39.7",
+        "--kind",
+        "fold",
+        "--state-rad",
+        "1.5808,250.3",
+        "--json",
+    ]));
+    let sigma = out["sigma"]["sigma"].as_f64().unwrap();
+    let want = quad(a(23.1), &[0, 1, 2]);
+    assert!(
+        (sigma / want - 1.0).abs() < 1e-5,
+        "σ {sigma}, closed form {want}"
+    );
+
+    let out = json(&gearbif(&[
+        "boundary",
+        "--model",
+        m,
+        "--free",
+        "f",
+        "--along",
+        "eta",
+        "--range",
+        "23.1:24.1",
+        "--step",
+        "0.5",
+        "--start-free",
+        "39.8",
+        "--start-state-rad",
+        "1.5808,250.3",
+        "--method",
+        "natural",
+        "--json",
+    ]));
+    let points = out["curves"][0][1]["points"].as_array().unwrap();
+    let sigmas = out["sigma"].as_array().unwrap();
+    assert_eq!(points.len(), 3);
+    assert_eq!(sigmas.len(), 3);
+    for (p, s) in points.iter().zip(sigmas) {
+        let eta = p["along"].as_f64().unwrap();
+        let f = p["free"].as_f64().unwrap();
+        assert!((f - f_c(eta)).abs() < 1e-8, "{f} {}", f_c(eta));
+        let (got, want) = (s["sigma"].as_f64().unwrap(), quad(a(eta), &[0, 1]));
+        assert!(
+            (got / want - 1.0).abs() < 1e-5,
+            "at η = {eta}: σ {got}, {want}"
+        );
+        assert_eq!(s["omitted"], serde_json::json!(["eta"]));
+    }
+    std::fs::remove_file(&file).ok();
+}
+
+/// continue --model on the paper's model file follows the paper's branch: in η at 3 Hz, the same
+/// points as without --model; the stop reason in words.
+#[test]
+fn continue_on_the_papers_model_file_is_the_papers_branch() {
+    let model = asset("paper_gear.model.json");
+    let common = [
+        "continue",
+        "--f",
+        "3",
+        "--param",
+        "eta",
+        "--range",
+        "20:26",
+        "--max-steps",
+        "12",
+        "--json",
+    ];
+    let a = json(&gearbif(&common));
+    let mut with_model = common.to_vec();
+    with_model.extend(["--model", model.to_str().unwrap()]);
+    let b = json(&gearbif(&with_model));
+    let (pa, pb) = (
+        a["branches"][0]["points"].as_array().unwrap(),
+        b["branches"][0]["points"].as_array().unwrap(),
+    );
+    assert_eq!(pa.len(), pb.len());
+    for (u, v) in pa.iter().zip(pb) {
+        let (x, y) = (u["param"].as_f64().unwrap(), v["param"].as_f64().unwrap());
+        assert!((x - y).abs() < 1e-8 * (1.0 + x.abs()), "{x} {y}");
+        for i in 0..2 {
+            let (x, y) = (u["x"][i].as_f64().unwrap(), v["x"][i].as_f64().unwrap());
+            assert!((x - y).abs() < 1e-8 * (1.0 + x.abs()), "{x} {y}");
+        }
+    }
+    let mut text = with_model.clone();
+    text.retain(|&s| s != "--json");
+    let out = gearbif(&text);
+    let s = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        s.contains("stop: took the largest number of steps, 12"),
+        "{s}"
+    );
+}
+
+/// diagram --model runs on the recorded gear (seeds from simulations), each run ends at a bound
+/// of the range; every command refuses the gear flags next to --model, naming the flag.
+#[test]
+fn diagram_on_a_model_file_and_conflicting_flags() {
+    let model = asset("static_torque.model.json");
+    let m = model.to_str().unwrap();
+    let d = json(&gearbif(&[
+        "diagram",
+        "--model",
+        m,
+        "--param",
+        "f",
+        "--range",
+        "2.6:2.8",
+        "--grid",
+        "2",
+        "--max-steps",
+        "40",
+        "--relax",
+        "50",
+        "--json",
+    ]));
+    let runs = d["branches"].as_array().unwrap();
+    assert!(!runs.is_empty());
+    for r in runs {
+        assert_eq!(r["branch"]["stop"]["reason"], "parameter_bound", "{r}");
+    }
+    for (args, flag) in [
+        (
+            &["continue", "--zeta", "1", "--f", "3", "--range", "1:2"][..],
+            "--zeta",
+        ),
+        (&["diagram", "--eta", "20", "--range", "1:2"][..], "--eta"),
+        (&["boundary", "--theta-deg", "10"][..], "--theta-deg"),
+    ] {
+        let cmd = args[0];
+        let mut a = args.to_vec();
+        a.extend(["--model", m]);
+        let out = gearbif(&a);
+        assert_eq!(out.status.code(), Some(2), "{cmd}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("--model") && err.contains(flag),
+            "{cmd}: {err}"
+        );
+    }
+}

@@ -347,6 +347,7 @@ fn continue_system<S: PySystem>(
     opts: ContinuationOptions,
 ) -> gearbif::Result<Box<dyn AnyBranch>> {
     let p = sys.param_by_name(param)?;
+    let sys = sys.for_param(p)?;
     Ok(Box::new(
         Continuation::new(sys, p, spec, x0, opts)?.run(None)?,
     ))

@@ -6,6 +6,8 @@ use crate::errors::{invalid, IntoPyResult};
 use crate::user::{PyUserSystem, UserParam, UserSystem};
 use gearbif::model::gear::GearParam;
 use gearbif::model::params::{Parameter, Parametrised};
+use gearbif::model::recorded::file::ModelFile;
+use gearbif::model::recorded::{RecordedModel, RecordedParam};
 use gearbif::model::{
     Convention, CoulombOscillator, DrivenOscillator, ForcedPendulum, Gear, GearParams,
 };
@@ -324,6 +326,67 @@ impl PyGear {
     }
 }
 
+/// A recorded gear: the gear of a model file (`model.json` of `gearbif diagnose`, schema
+/// `gearbif.model/1`) with every term the diagnosis found, driven at f [Hz]. Usable wherever a
+/// system is (simulate, poincare_map, continuation, classify, sweep, …); its parameters are the
+/// lens names of docs/recorded_gear.md (f, g, delta, zeta, eta, static_a, drag_q, …).
+///
+/// Model.load(path, f=1.0). Raises RecordingError naming the file and the field for a malformed
+/// file (another schema, a covariance that is not symmetric positive semi-definite, an unknown
+/// parameter or effect).
+#[pyclass(name = "Model", module = "gearbif", frozen)]
+#[derive(Clone)]
+pub struct PyModel {
+    pub inner: RecordedModel,
+}
+
+#[pymethods]
+impl PyModel {
+    /// The recorded gear of the model file at `path`, driven at `f` [Hz].
+    #[staticmethod]
+    #[pyo3(signature = (path, f=1.0))]
+    fn load(path: std::path::PathBuf, f: f64) -> PyResult<Self> {
+        let file = ModelFile::read(&path).py()?;
+        Ok(Self {
+            inner: file.model(f).py()?,
+        })
+    }
+    /// A copy with one parameter changed (by its name).
+    fn with_param(&self, name: &str, value: f64) -> PyResult<Self> {
+        Ok(Self {
+            inner: with_named_param(&self.inner, name, value)?,
+        })
+    }
+    /// Every parameter as a dict {name: value}.
+    #[getter]
+    fn params<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        params_dict(py, &self.inner)
+    }
+    /// Drive frequency f [Hz].
+    #[getter]
+    fn f(&self) -> f64 {
+        self.inner.param(RecordedParam::F)
+    }
+    /// Drive period T = 1/f [s].
+    #[getter]
+    fn period(&self) -> f64 {
+        self.inner.period()
+    }
+    /// Names of the parameter columns of the map Jacobians (the active set; a continuation adds
+    /// its parameter).
+    #[getter]
+    fn param_names(&self) -> Vec<&'static str> {
+        param_names(&self.inner)
+    }
+    /// The forces (a, r) at (t [s], β [rad], ω [rad/s]), both [1/s²], in β̈ = a − sgn(ω) r.
+    fn forces(&self, t: f64, beta: f64, omega: f64) -> PyResult<(f64, f64)> {
+        forces(&self.inner, t, beta, omega)
+    }
+    fn __repr__(&self) -> String {
+        repr("Model", &self.inner)
+    }
+}
+
 /// Defines the Python class of a built-in oscillator with a parameter lens: the constructor takes
 /// the parameters by name (validated by the Rust constructor), one getter per parameter, and the
 /// methods every system shares (`period`, `param_names`, `params`, `with_param`, `forces`).
@@ -463,6 +526,29 @@ pub trait PySystem: Parametrised + Serialize + 'static {
     fn take_error(&self) -> Option<PyErr> {
         None
     }
+    /// The system ready to be continued in `p`: with `p` among its Jacobian columns (a recorded
+    /// gear carries an active set of columns; every other system has them all).
+    fn for_param(self, _p: Self::Param) -> gearbif::Result<Self> {
+        Ok(self)
+    }
+}
+
+impl PySystem for RecordedModel {
+    fn to_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        Ok(Bound::new(
+            py,
+            PyModel {
+                inner: self.clone(),
+            },
+        )?
+        .into_any())
+    }
+    fn into_system(self) -> System {
+        System::Recorded(self)
+    }
+    fn for_param(self, p: RecordedParam) -> gearbif::Result<Self> {
+        self.with_column(p)
+    }
 }
 
 impl PySystem for UserSystem {
@@ -547,12 +633,16 @@ pub fn param_names<S: DrivenOscillator + ?Sized>(s: &S) -> Vec<&'static str> {
 }
 
 /// Any system of the module, owned (so computations can run without the interpreter lock).
+// one System per call from Python: its size does not matter, and boxing the recorded gear would
+// break the one generic code path of `dispatch!`
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone)]
 pub enum System {
     Gear(Gear),
     Coulomb(CoulombOscillator),
     Pendulum(ForcedPendulum),
     User(UserSystem),
+    Recorded(RecordedModel),
 }
 
 /// Runs `$body` with `$s` bound to the concrete system inside a [`System`] (one generic code path
@@ -564,6 +654,7 @@ macro_rules! dispatch {
             $crate::systems::System::Coulomb($s) => $body,
             $crate::systems::System::Pendulum($s) => $body,
             $crate::systems::System::User($s) => $body,
+            $crate::systems::System::Recorded($s) => $body,
         }
     };
 }
@@ -582,10 +673,10 @@ impl System {
             None => r.py(),
         }
     }
-    /// The default winding of an orbit: 1 for the gear (the lock), 0 for the oscillators.
+    /// The default winding of an orbit: 1 for the gears (the lock), 0 for the oscillators.
     pub fn default_winding(&self) -> i32 {
         match self {
-            System::Gear(_) => 1,
+            System::Gear(_) | System::Recorded(_) => 1,
             _ => 0,
         }
     }
@@ -605,8 +696,11 @@ pub fn system(obj: &Bound<'_, PyAny>) -> PyResult<System> {
     if let Ok(u) = obj.cast::<PyUserSystem>() {
         return Ok(System::User(u.get().inner.clone()));
     }
+    if let Ok(m) = obj.cast::<PyModel>() {
+        return Ok(System::Recorded(m.get().inner.clone()));
+    }
     Err(invalid(format!(
-        "expected a gearbif system (Gear, CoulombOscillator, ForcedPendulum, UserSystem), got {}",
+        "expected a gearbif system (Gear, CoulombOscillator, ForcedPendulum, UserSystem, Model), got {}",
         obj.get_type().name()?
     )))
 }
@@ -628,5 +722,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyCoulomb>()?;
     m.add_class::<PyPendulum>()?;
     m.add_class::<PyUserSystem>()?;
+    m.add_class::<PyModel>()?;
     Ok(())
 }

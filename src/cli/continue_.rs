@@ -3,11 +3,13 @@
 use super::common::{
     check_frequency, count, limits, output_file, start_state, tolerance, within, GearArgs, Output,
 };
+use super::model_arg::ModelArgs;
 use crate::continuation::multiple_shooting::{continue_branch, MultipleShootingOptions};
 use crate::continuation::pinned::switch_at;
 use crate::continuation::{Branch, Continuation, ContinuationOptions};
 use crate::error::{Error, Result};
 use crate::maps::Section;
+use crate::model::recorded::{RecordedModel, RecordedParam};
 use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};
 
@@ -17,8 +19,11 @@ use crate::orbits::{orbit_from_simulation, shoot, OrbitSpec, ShootingOptions};
 pub struct BranchArgs {
     #[command(flatten)]
     pub gear: GearArgs,
+    #[command(flatten)]
+    pub model: ModelArgs,
     /// Continuation parameter: f [Hz], theta (parallel shafts) [deg], delta [1], zeta [1/s],
-    /// eta [1/s²] or g [1/s²].
+    /// eta [1/s²] or g [1/s²]; with --model any parameter of the recorded gear with a column
+    /// (docs/recorded_gear.md).
     #[arg(long, default_value = "f")]
     pub param: String,
     /// Parameter range `lo:hi` in the parameter's unit (finite, lo < hi, both in the parameter's
@@ -47,6 +52,27 @@ impl BranchArgs {
         let range = parse_range(&self.range)?;
         super::common::param_value(param, range.0)?;
         super::common::param_value(param, range.1)?;
+        self.check_files()?;
+        Ok((param, range))
+    }
+
+    /// The parameter of the recorded gear `m` and its range (both ends in the lens's domain);
+    /// checks the tolerance and the output files. Returns `m` with the parameter's column.
+    pub fn parse_recorded(
+        &self,
+        m: RecordedModel,
+    ) -> Result<(RecordedModel, RecordedParam, (f64, f64))> {
+        let param = RecordedParam::from_name(&self.param)?;
+        let m = m.with_column(param)?;
+        let range = parse_range(&self.range)?;
+        m.with_param(param, range.0)?;
+        m.with_param(param, range.1)?;
+        self.check_files()?;
+        Ok((m, param, range))
+    }
+
+    /// Checks the tolerance and the output files.
+    fn check_files(&self) -> Result<()> {
         tolerance("tol", self.tol)?;
         if let Some(p) = &self.out {
             output_file("--out", p, false)?;
@@ -54,7 +80,7 @@ impl BranchArgs {
         if let Some(p) = &self.plot {
             output_file("--plot", p, true)?;
         }
-        Ok((param, range))
+        Ok(())
     }
 
     /// Checks the continuation steps: 0 < |ds| <= ds_max (finite), 1 <= max_steps.
@@ -190,9 +216,25 @@ pub(crate) fn parse_section(s: &str) -> Result<Section> {
     }
 }
 
-fn start_orbit(
+/// The analytic lock orbit of `--lock` on the paper's gear: its state and winding.
+fn lock_start(a: &Args, gear: &Gear) -> Result<Option<([f64; 2], i32)>> {
+    let Some(which) = &a.lock else {
+        return Ok(None);
+    };
+    let lb = gear.lock_branch()?;
+    let pt = match which.as_str() {
+        "stable" => lb.stable,
+        "unstable" => lb.unstable,
+        l => return Err(Error::unknown_name("--lock", l, ["stable", "unstable"])),
+    };
+    Ok(Some((pt.state, pt.winding * a.period as i32)))
+}
+
+/// The start orbit: the lock orbit `lock` (state, winding), --state-rad, or a simulation.
+fn start_orbit<S: Parametrised>(
     a: &Args,
-    gear: &Gear,
+    sys: &S,
+    lock: Option<([f64; 2], i32)>,
     shooting: &ShootingOptions,
 ) -> Result<crate::orbits::PeriodicOrbit> {
     let section = parse_section(&a.section)?;
@@ -200,25 +242,18 @@ fn start_orbit(
         Section::HalfPeriod => OrbitSpec::symmetric(p),
         Section::Stroboscopic => OrbitSpec::stroboscopic(a.period, p),
     };
-    if let Some(which) = &a.lock {
-        let lb = gear.lock_branch()?;
-        let pt = match which.as_str() {
-            "stable" => lb.stable,
-            "unstable" => lb.unstable,
-            l => return Err(Error::unknown_name("--lock", l, ["stable", "unstable"])),
-        };
-        let p = a.winding.unwrap_or(pt.winding * a.period as i32);
-        return shoot(gear, &mk_spec(p), pt.state, shooting);
+    if let Some((x, winding)) = lock {
+        return shoot(sys, &mk_spec(a.winding.unwrap_or(winding)), x, shooting);
     }
     if let Some(s) = &a.state {
         let x = parse_state(s)?;
         let p = a.winding.ok_or_else(|| {
             Error::inconsistent("--state-rad, --winding", "--state-rad needs --winding")
         })?;
-        return shoot(gear, &mk_spec(p), x, shooting);
+        return shoot(sys, &mk_spec(p), x, shooting);
     }
     let o = orbit_from_simulation(
-        gear,
+        sys,
         [0.0, 0.0],
         400,
         8,
@@ -228,11 +263,11 @@ fn start_orbit(
     Ok(o)
 }
 
-fn summary(b: &Branch) -> String {
+fn summary<S: Parametrised>(b: &Branch<S>) -> String {
     let mut s = String::new();
     let (lo, hi) = b.param_range().unwrap_or((f64::NAN, f64::NAN));
     s.push_str(&format!(
-        "branch in {} ({:?}, k = {}, p = {}): {} points, {} ∈ [{lo:.6}, {hi:.6}], {} map evaluations, stop: {:?}\n",
+        "branch in {} ({}, k = {}, p = {}): {} points, {} ∈ [{lo:.6}, {hi:.6}], {} map evaluations, stop: {}\n",
         b.param.name(),
         b.spec.section,
         b.spec.iterations,
@@ -279,20 +314,45 @@ fn summary(b: &Branch) -> String {
 /// Runs `gearbif continue`.
 pub fn run(a: Args) -> Result<()> {
     check_frequency(a.f)?;
+    if let Some(m) = a.common.model.recorded(&a.common.gear, a.f)? {
+        let (m, param, range) = a.common.parse_recorded(m)?;
+        check_args(&a)?;
+        if a.lock.is_some() {
+            return Err(Error::inconsistent(
+                "--model, --lock",
+                "the analytic lock branch is the paper's gear's: start from --state-rad with \
+                 --winding, or from a simulation",
+            ));
+        }
+        return continue_on(&a, m, param, range, None);
+    }
     let params = a.common.gear.params()?;
     let gear = params.driven(a.f)?;
-    let (param, (lo, hi)) = a.common.parse()?;
+    let (param, range) = a.common.parse()?;
+    check_args(&a)?;
+    let lock = lock_start(&a, &gear)?;
+    continue_on(&a, gear, param, range, lock)
+}
+
+/// Continues from the start orbit of `sys` (the lock orbit `lock`, --state-rad or a simulation)
+/// in `param` over `lo..hi`, switches if asked, writes and prints the branches.
+fn continue_on<S: Parametrised + serde::Serialize>(
+    a: &Args,
+    sys: S,
+    param: S::Param,
+    (lo, hi): (f64, f64),
+    lock: Option<([f64; 2], i32)>,
+) -> Result<()> {
     let sign = match a.direction.as_str() {
         "up" => 1.0,
         "down" => -1.0,
         d => return Err(Error::unknown_name("--direction", d, ["up", "down"])),
     };
-    check_args(&a)?;
     let shooting = ShootingOptions {
         tol: a.common.tol,
         ..Default::default()
     };
-    let orbit = start_orbit(&a, &gear, &shooting)?;
+    let orbit = start_orbit(a, &sys, lock, &shooting)?;
     let opts = ContinuationOptions {
         ds: sign * a.ds.abs(),
         ds_max: a.ds_max,
@@ -305,45 +365,64 @@ pub fn run(a: Args) -> Result<()> {
     };
     let ms = (!a.no_multiple_shooting).then(MultipleShootingOptions::default);
     let branch = continue_branch(
-        Continuation::from_orbit(gear, param, &orbit, opts)?,
+        Continuation::from_orbit(sys, param, &orbit, opts)?,
         &opts,
         ms.as_ref(),
         None,
     )?;
     let mut branches = vec![branch];
     if let Some(n) = a.switch_at {
-        let b0 = &branches[0];
-        let sp = b0.specials.get(n).ok_or_else(|| {
-            Error::shape(
-                "--switch-at: index of a special point",
-                format!("< {} (the special points of the branch)", b0.specials.len()),
-                n,
-            )
-        })?;
-        // pinned switching: the new orbit is found at a fixed distance from the bifurcating one,
-        // with the parameter free, so it lands on the side where the new branch exists; the new
-        // branch is continued away from the point
-        let (sys1, orbit1) = switch_at(b0, sp, 1e-2, &shooting)?;
-        let side = (sys1.param(param) - sp.param).signum();
-        let o1 = ContinuationOptions {
-            ds: side * 0.25 * a.ds.abs(),
-            ..opts
-        };
-        let b1 = continue_branch(
-            Continuation::from_orbit(sys1, param, &orbit1, o1)?,
-            &o1,
-            ms.as_ref(),
-            None,
-        )?;
+        let b1 = switch_and_continue(a, &branches[0], n, &opts, ms.as_ref())?;
         branches.push(b1);
     }
+    emit(a, param, &branches)
+}
+
+/// Switches at special point `n` of `b0` and continues the new branch away from the point.
+fn switch_and_continue<S: Parametrised>(
+    a: &Args,
+    b0: &Branch<S>,
+    n: usize,
+    opts: &ContinuationOptions,
+    ms: Option<&MultipleShootingOptions>,
+) -> Result<Branch<S>> {
+    let sp = b0.specials.get(n).ok_or_else(|| {
+        Error::shape(
+            "--switch-at: index of a special point",
+            format!("< {} (the special points of the branch)", b0.specials.len()),
+            n,
+        )
+    })?;
+    // pinned switching: the new orbit is found at a fixed distance from the bifurcating one,
+    // with the parameter free, so it lands on the side where the new branch exists; the new
+    // branch is continued away from the point
+    let (sys1, orbit1) = switch_at(b0, sp, 1e-2, &opts.shooting)?;
+    let side = (sys1.param(b0.param) - sp.param).signum();
+    let o1 = ContinuationOptions {
+        ds: side * 0.25 * a.ds.abs(),
+        ..*opts
+    };
+    continue_branch(
+        Continuation::from_orbit(sys1, b0.param, &orbit1, o1)?,
+        &o1,
+        ms,
+        None,
+    )
+}
+
+/// Writes --out, the plots, and prints the branches.
+fn emit<S: Parametrised + serde::Serialize>(
+    a: &Args,
+    param: S::Param,
+    branches: &[Branch<S>],
+) -> Result<()> {
     // one document for --out and --json: {"schema": "gearbif.branches/1", "branches": [...]}
-    let tagged = serde_json::json!({ "schema": BRANCHES_SCHEMA, "branches": &branches });
+    let tagged = serde_json::json!({ "schema": BRANCHES_SCHEMA, "branches": branches });
     if let Some(p) = &a.common.out {
         crate::io::write_json_atomic(p, &tagged)?;
     }
     a.common
-        .save_plot(format!("continuation in {}", param.name()), &branches)?;
+        .save_plot(format!("continuation in {}", param.name()), branches)?;
     if let Some(p) = &a.plot_multipliers {
         let fig = crate::plotting::branch::MultiplierPlot {
             title: format!(

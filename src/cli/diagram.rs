@@ -4,11 +4,12 @@
 
 use super::common::{check_frequency, count, frequency, limits, Output};
 use super::continue_::BranchArgs;
-use crate::continuation::diagram::{diagram, lock_seeds, Diagram, DiagramOptions};
+use crate::continuation::diagram::{diagram, lock_seeds, AnalyticSeed, Diagram, DiagramOptions};
 use crate::continuation::multiple_shooting::MultipleShootingOptions;
 use crate::continuation::ContinuationOptions;
 use crate::error::{Error, Result};
-use crate::model::{GearParam, Parameter};
+use crate::model::recorded::RecordedParam;
+use crate::model::{GearParam, Parameter, Parametrised};
 use crate::orbits::ShootingOptions;
 
 /// Arguments of `gearbif diagram`.
@@ -39,7 +40,7 @@ pub struct Args {
     max_steps: usize,
 }
 
-fn summary(d: &Diagram) -> String {
+fn summary<S: Parametrised>(d: &Diagram<S>) -> String {
     let mut s = format!(
         "diagram in {} ∈ [{}, {}]: {} continuation runs, {} map evaluations\n",
         d.param.name(),
@@ -59,7 +60,7 @@ fn summary(d: &Diagram) -> String {
     for (i, p) in pts {
         let b = &d.branches[p.branch].branch;
         let extra = match (&p.criticality, &p.point.jump) {
-            (Some(c), _) => format!(" {c:?}"),
+            (Some(c), _) => format!(" {c}"),
             (None, Some(j)) => format!(
                 " {:?} → {:?}{}",
                 j.events_before.signature(),
@@ -72,7 +73,7 @@ fn summary(d: &Diagram) -> String {
             _ => String::new(),
         };
         s.push_str(&format!(
-            "  [{i:>2}] {:<18} {} = {:.9} ± {:.1e}  on {:?} k = {} p = {:+}{extra}\n",
+            "  [{i:>2}] {:<18} {} = {:.9} ± {:.1e}  on {} k = {} p = {:+}{extra}\n",
             p.point.kind.label(),
             d.param.name(),
             p.point.param,
@@ -86,7 +87,7 @@ fn summary(d: &Diagram) -> String {
     for (i, b) in d.branches.iter().enumerate() {
         let (lo, hi) = b.branch.param_range().unwrap_or((f64::NAN, f64::NAN));
         s.push_str(&format!(
-            "  [{i:>2}] {:?} k = {} p = {:+} {} points, {} ∈ [{lo:.6}, {hi:.6}], from {:?}, stop {:?}\n",
+            "  [{i:>2}] {} k = {} p = {:+} {} points, {} ∈ [{lo:.6}, {hi:.6}], from {}, stop: {}\n",
             b.branch.spec.section,
             b.branch.spec.iterations,
             b.branch.spec.winding,
@@ -116,6 +117,29 @@ fn check_args(a: &Args) -> Result<()> {
 
 /// Runs `gearbif diagram`.
 pub fn run(a: Args) -> Result<()> {
+    if a.common.model.model.is_some() {
+        // the frequency first, as without --model: f is the range's midpoint when it is the
+        // parameter
+        let is_f = a.common.param == RecordedParam::F.name();
+        let f = if is_f {
+            let (lo, hi) = super::continue_::parse_range(&a.common.range)?;
+            frequency("f", lo)?;
+            frequency("f", hi)?;
+            0.5 * (lo + hi)
+        } else {
+            a.f
+        };
+        check_frequency(f)?;
+        let m = a
+            .common
+            .model
+            .recorded(&a.common.gear, f)?
+            .ok_or_else(|| Error::option("--model", "missing"))?;
+        let (m, param, range) = a.common.parse_recorded(m)?;
+        check_args(&a)?;
+        // no analytic seeds: the lock branch in closed form is the paper's gear's
+        return draw(&a, &m, param, range, Vec::new());
+    }
     let (param, (lo, hi)) = a.common.parse()?;
     let f = if param == GearParam::F {
         frequency("f", lo)?;
@@ -127,10 +151,26 @@ pub fn run(a: Args) -> Result<()> {
     check_frequency(f)?;
     check_args(&a)?;
     let gear = a.common.gear.params()?.driven(f)?;
-    let shooting = ShootingOptions {
+    let seeds = lock_seeds(&gear, &shooting(&a));
+    draw(&a, &gear, param, (lo, hi), seeds)
+}
+
+fn shooting(a: &Args) -> ShootingOptions {
+    ShootingOptions {
         tol: a.common.tol,
         ..Default::default()
-    };
+    }
+}
+
+/// The diagram of `sys` in `param` over `lo..hi` from the simulations and the `seeds`: written,
+/// drawn and printed.
+fn draw<S: Parametrised + serde::Serialize>(
+    a: &Args,
+    sys: &S,
+    param: S::Param,
+    (lo, hi): (f64, f64),
+    seeds: Vec<AnalyticSeed<S>>,
+) -> Result<()> {
     let opts = DiagramOptions {
         grid: a.grid,
         max_period: a.max_period,
@@ -139,15 +179,14 @@ pub fn run(a: Args) -> Result<()> {
             ds: a.ds,
             ds_max: a.ds_max,
             max_steps: a.max_steps,
-            shooting,
+            shooting: shooting(a),
             ..Default::default()
         },
         multiple_shooting: Some(MultipleShootingOptions::default()),
         ..DiagramOptions::new(param, (lo, hi))
     };
     opts.continuation.validate()?;
-    let seeds = lock_seeds(&gear, &shooting);
-    let d = diagram(&gear, &opts, seeds)?;
+    let d = diagram(sys, &opts, seeds)?;
     if let Some(p) = &a.common.out {
         crate::io::write_json_atomic(p, &crate::io::with_schema("gearbif.diagram/1", &d))?;
     }

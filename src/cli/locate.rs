@@ -4,6 +4,7 @@
 use super::common::{check_frequency, count, tolerance, GearArgs, Output};
 use super::continue_::{check_winding, parse_section, parse_state};
 use super::model_arg::ModelArgs;
+use crate::analysis::uncertainty::{located_sigma, LocatedSigma};
 use crate::continuation::two_param::{locate_augmented_with, CurvePoint};
 use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
@@ -68,6 +69,20 @@ struct Located {
     tolerance_error: f64,
     /// Total error estimate: Newton's last correction plus the tolerance error.
     error_estimate: f64,
+    /// Wall time of the two solves, s.
+    wall_time_s: f64,
+    /// σ of the located parameter from the model file's covariance (--model only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sigma: Option<Sigma>,
+}
+
+/// [`LocatedSigma`] and the wall time it took.
+#[derive(Debug, Serialize)]
+struct Sigma {
+    #[serde(flatten)]
+    value: LocatedSigma,
+    /// Wall time of σ (three linearisations of the map per group of parameters), s.
+    wall_time_s: f64,
 }
 
 pub(crate) fn parse_kind(s: &str) -> Result<SpecialKind> {
@@ -116,28 +131,64 @@ pub fn run(a: Args) -> Result<()> {
         Section::Stroboscopic => OrbitSpec::stroboscopic(a.period, a.winding),
     };
     let x = parse_state(&a.state)?;
-    if let Some(m) = a.model.recorded(&a.gear, a.f)? {
+    if let Some(file) = a.model.file(&a.gear)? {
         let param = RecordedParam::from_name(&a.param)?;
-        let m = m.with_column(param)?;
-        return report(&a, &m, &spec, kind, param, x);
+        let m = file.model(a.f)?.with_column(param)?;
+        let mut out = locate(&a, &m, &spec, kind, param, x)?;
+        let clock = std::time::Instant::now();
+        let opts = ShootingOptions {
+            tol: a.tol,
+            ..Default::default()
+        };
+        let cov = &file.covariance;
+        let value = if a.dp5 {
+            located_sigma(
+                &EventDriven,
+                &m,
+                cov,
+                &spec,
+                kind,
+                (param, None),
+                &out.point,
+                &opts,
+            )
+        } else {
+            located_sigma(
+                &DEFAULT_METHOD,
+                &m,
+                cov,
+                &spec,
+                kind,
+                (param, None),
+                &out.point,
+                &opts,
+            )
+        }?;
+        out.sigma = Some(Sigma {
+            value,
+            wall_time_s: clock.elapsed().as_secs_f64(),
+        });
+        return emit(&a, &out, param.unit());
     }
     let gear = a.gear.params()?.driven(a.f)?;
     let param = GearParam::from_name(&a.param)?;
-    report(&a, &gear, &spec, kind, param, x)
+    let out = locate(&a, &gear, &spec, kind, param, x)?;
+    emit(&a, &out, param.unit())
 }
 
-/// Locates the point on `sys` from the guess `x` (and the current value of `param`) and prints it.
-fn report<S: Parametrised>(
+/// Locates the point on `sys` from the guess `x` (and the current value of `param`).
+fn locate<S: Parametrised>(
     a: &Args,
     sys: &S,
     spec: &OrbitSpec,
     kind: SpecialKind,
     param: S::Param,
     x: [f64; 2],
-) -> Result<()>
+) -> Result<Located>
 where
     EventDriven: FlowMethod<S>,
 {
+    let clock = std::time::Instant::now();
     let lam0 = sys.param(param);
     let (p1, p2) = if a.dp5 {
         locate_twice(&EventDriven, sys, spec, kind, param, (x, lam0), a.tol)?
@@ -145,18 +196,24 @@ where
         locate_twice(&DEFAULT_METHOD, sys, spec, kind, param, (x, lam0), a.tol)?
     };
     let te = (p1.free - p2.free).abs();
-    let out = Located {
+    Ok(Located {
         kind,
         param: param.name(),
         error_estimate: te + p2.precision,
         tolerance_error: te,
         point: p2,
-    };
-    Output { json: a.json }.emit_tagged("gearbif.locate/1", &out, || {
+        wall_time_s: clock.elapsed().as_secs_f64(),
+        sigma: None,
+    })
+}
+
+/// Prints the located point (`unit`: the parameter's).
+fn emit(a: &Args, out: &Located, unit: &str) -> Result<()> {
+    Output { json: a.json }.emit_tagged("gearbif.locate/1", out, || {
         let p = &out.point;
-        format!(
+        let mut s = format!(
             "{} at {} = {:.10} (error estimate {:.1e}: tolerance {:.1e}, Newton {:.1e})\n  x = ({:.9}, {:.9})  μ = {}  events: {}\n",
-            kind.label(),
+            out.kind.label(),
             out.param,
             p.free,
             out.error_estimate,
@@ -166,8 +223,36 @@ where
             p.x[1],
             multipliers_text(&p.floquet.multipliers),
             p.events
-        )
+        );
+        if let Some(sg) = &out.sigma {
+            s.push_str(&sigma_text(out.param, unit, &sg.value));
+        }
+        s
     })
+}
+
+/// "σ(λ) = … from the covariance of …" with the largest contributions.
+fn sigma_text(param: &str, unit: &str, v: &LocatedSigma) -> String {
+    let names: Vec<&str> = v.gradient.iter().map(|d| d.name).collect();
+    let mut s = format!(
+        "  σ({param}) = {:.4e} {unit} (first order, from the model file's covariance of {})\n",
+        v.sigma,
+        if names.is_empty() {
+            "no parameter".to_string()
+        } else {
+            names.join(", ")
+        }
+    );
+    for d in &v.gradient {
+        s.push_str(&format!(
+            "    d{param}/d{} = {:.6e}\n",
+            d.name, d.derivative
+        ));
+    }
+    if !v.omitted.is_empty() {
+        s.push_str(&format!("    not in σ: {}\n", v.omitted.join(", ")));
+    }
+    s
 }
 
 /// Floquet multipliers [[re, im], [re, im]] as "a, b" or "a ± b i" for a complex pair.

@@ -24,6 +24,12 @@ impl ModelArgs {
     /// The recorded gear driven at `f` Hz, or `None` without --model. Refuses the gear flags
     /// (and `--convention paper`) next to --model: the file defines the gear.
     pub fn recorded(&self, gear: &GearArgs, f: f64) -> Result<Option<RecordedModel>> {
+        self.file(gear)?.map(|m| m.model(f)).transpose()
+    }
+
+    /// The model file, read and checked, or `None` without --model; refuses the gear flags next
+    /// to it as [`Self::recorded`] does.
+    pub fn file(&self, gear: &GearArgs) -> Result<Option<ModelFile>> {
         let Some(path) = &self.model else {
             return Ok(None);
         };
@@ -51,7 +57,7 @@ impl ModelArgs {
                 "the model file defines the gear (physical sign): drop the gear flags",
             ));
         }
-        ModelFile::read(path)?.model(f).map(Some)
+        ModelFile::read(path).map(Some)
     }
 }
 

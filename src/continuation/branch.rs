@@ -125,6 +125,29 @@ pub enum StopReason {
     Running,
 }
 
+impl std::fmt::Display for StopReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StopReason::ParameterBound(v) => write!(f, "reached the range's bound {v}"),
+            StopReason::MaxSteps(n) => write!(f, "took the largest number of steps, {n}"),
+            StopReason::MultiplierLimit(m) => write!(
+                f,
+                "a multiplier's modulus {m:.3e} exceeds the limit of single shooting"
+            ),
+            StopReason::StepTooSmall { at, ds_min } => write!(
+                f,
+                "the corrector failed at the smallest step {ds_min:e} after the point at {at}"
+            ),
+            StopReason::BoundNotReached(v) => write!(
+                f,
+                "left the range but no orbit could be corrected onto the bound {v}"
+            ),
+            StopReason::KnownBranch(which) => write!(f, "ran onto a known branch ({which})"),
+            StopReason::Running => f.write_str("running"),
+        }
+    }
+}
+
 /// A branch of periodic orbits of system `S` with its special points.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(bound(serialize = "S: Serialize", deserialize = "S: DeserializeOwned"))]

@@ -107,6 +107,18 @@ pub enum Origin {
     },
 }
 
+impl std::fmt::Display for Origin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Origin::Simulation { at } => write!(f, "a simulation at {at}"),
+            Origin::Analytic { which } => write!(f, "the analytic {which} lock"),
+            Origin::Switch { parent, point } => {
+                write!(f, "switching at point [{point}] of run [{parent}]")
+            }
+        }
+    }
+}
+
 /// One continuation run of the diagram.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(bound(serialize = "S: Serialize", deserialize = "S: DeserializeOwned"))]
@@ -132,6 +144,16 @@ pub enum Criticality {
     Subcritical,
     /// The parent is unstable on both sides, so stability does not tell.
     Undetermined,
+}
+
+impl std::fmt::Display for Criticality {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Criticality::Supercritical => "supercritical",
+            Criticality::Subcritical => "subcritical",
+            Criticality::Undetermined => "criticality undetermined",
+        })
+    }
 }
 
 /// A special point of the diagram.

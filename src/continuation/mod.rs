@@ -16,7 +16,9 @@
 //!   the minimally augmented systems;
 //! - [`palc2`]: two-parameter curves by pseudo-arclength on the minimally augmented systems and of
 //!   nonsmooth points (grazing, end of sticking), with [`codim2`]: codimension-two points located
-//!   on them.
+//!   on them;
+//! - [`sensitivity`]: dλ*/dp of a located special point by the implicit-function theorem on its
+//!   augmented system, and its σ from a parameter covariance.
 //!
 //! Unknowns u = (β, ω, λ). Equations: F(x, λ) = Pᵏ(x; λ) − x − (s, 0) = 0 and the arclength
 //! condition t·(u − u_pred) = 0, with t the unit tangent. The λ column ∂F/∂λ is the map's `jac_p`
@@ -35,6 +37,7 @@ pub mod options;
 pub mod palc;
 pub mod palc2;
 pub mod pinned;
+pub mod sensitivity;
 pub mod switch;
 pub mod two_param;
 

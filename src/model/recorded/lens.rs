@@ -655,3 +655,20 @@ impl Parametrised for RecordedModel {
             .map(Column::primary)
     }
 }
+
+/// In JSON (a branch's `system`): every parameter of the lens by name, the shaft angles and the
+/// active columns; the sparse-search terms are the model file's.
+impl Serialize for RecordedModel {
+    fn serialize<Z: serde::Serializer>(&self, s: Z) -> std::result::Result<Z::Ok, Z::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(RecordedParam::ALL.len() + 3))?;
+        for &p in RecordedParam::ALL {
+            map.serialize_entry(p.name(), &self.param(p))?;
+        }
+        map.serialize_entry("theta_deg", &self.gear.geo.theta().to_degrees())?;
+        map.serialize_entry("phi_deg", &self.gear.geo.phi().to_degrees())?;
+        let cols: Vec<&str> = self.active.iter().map(|p| p.name()).collect();
+        map.serialize_entry("columns", &cols)?;
+        map.end()
+    }
+}
