@@ -298,6 +298,11 @@ const CASES: &[(&str, &str)] = &[
     ("boundary --start-state-rad 0,1e9 --start-free 1", "omega"),
     ("boundary --plot b.gif", ".svg or .png"),
     ("boundary --out {file}/b.json", "not a folder"),
+    // a start guess far from the fold: the corrector's excursion is named as a bad start
+    (
+        "boundary --free f --along eta --start-free 39.8 --start-state-rad 1.5808,250.3",
+        "start nearer",
+    ),
     // classify
     ("classify --f 1.3 --settle 2000000", "settle"),
     ("classify --f 1.3 --record 0", "record"),

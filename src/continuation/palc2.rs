@@ -321,6 +321,33 @@ impl<S: Parametrised, M: FlowMethod<S>> System<'_, S, M> {
         let u0 = Vector4::new(x0[0], x0[1], free0, along0);
         let orient = e4 * self.opts.ds.signum();
         self.correct(u0, e4, e4 * along0, 0.0, orient)
+            .map_err(|e| self.start_failed(e, free0))
+    }
+
+    /// The error of a start guess from which the corrector does not reach the curve: a Newton
+    /// iterate outside a parameter's domain is named as a bad start, not as a bad input value.
+    fn start_failed(&self, e: Error, free0: f64) -> Error {
+        let free = self.params[0].name();
+        let why = match e {
+            Error::InvalidParameter {
+                name,
+                value,
+                reason,
+            } => format!(
+                "the corrector left the domain of the parameters ({name} = {value:.6e} {reason})"
+            ),
+            Error::NewtonFailed { .. } => e.to_string(),
+            other => return other,
+        };
+        Error::NoStartOrbit {
+            param: free,
+            value: free0,
+            reason: format!(
+                "no {} point near the start guess: {why}; start nearer the point (`locate` \
+                 finds it from a guess of the state and {free})",
+                self.kind.label()
+            ),
+        }
     }
 
     /// Resets the bordering vectors to the null vectors at `node` (a no-op for NS curves).
