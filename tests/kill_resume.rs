@@ -91,7 +91,7 @@ fn checkpoint_files_are_whole(out: &Path) -> usize {
 }
 
 fn same_files(a: &Path, b: &Path) {
-    for f in ["points.csv", "sweep.json", "rms_map.svg"] {
+    for f in ["points.csv", "sweep.json", "rms_map.svg", "complete.json"] {
         let (x, y) = (
             std::fs::read(a.join(f)).unwrap(),
             std::fs::read(b.join(f)).unwrap(),
@@ -371,4 +371,152 @@ fn killed_report_leaves_one_whole_result() {
         &["report", "--quiet", "--eta", "20"],
         &["report", "--quiet"],
     );
+}
+
+/// The hidden temporaries (`.NAME.tmp-PID…`) anywhere under `dir`.
+fn temporaries(dir: &Path) -> Vec<String> {
+    let mut v = Vec::new();
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            let name = e.file_name().to_string_lossy().to_string();
+            if name.starts_with('.') && name.contains(".tmp-") {
+                v.push(e.path().display().to_string());
+            }
+            if e.path().is_dir() {
+                v.extend(temporaries(&e.path()));
+            }
+        }
+    }
+    v
+}
+
+/// Runs `args` (writing into `root`) with the `n`-th output write failing with ENOSPC, for n = 1,
+/// 2, … until a run writes everything; `check` inspects `root` after each failed run. Returns
+/// the number of failed runs (each must exit with 2 naming the full disk).
+fn fail_each_write(root: &Path, args: &[&str], check: impl Fn(usize)) -> usize {
+    for n in 1..100 {
+        let o = Command::new(env!("CARGO_BIN_EXE_gearbif"))
+            .args(args)
+            .current_dir(root)
+            .env("GEARBIF_FAIL_WRITE", n.to_string())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        if o.status.success() {
+            return n - 1;
+        }
+        assert_eq!(o.status.code(), Some(2), "write {n} of {args:?}: {err}");
+        assert!(
+            err.contains("No space left"),
+            "write {n} of {args:?}: {err}"
+        );
+        check(n);
+    }
+    panic!("{args:?} never finished");
+}
+
+/// A full disk in the middle of the output (every write failing in turn, through the same
+/// error path a real ENOSPC takes) leaves no temporary and no partial result: a staged folder
+/// (`synth`) and staged flag files (`simulate --out --events`) stay as the earlier result; a
+/// sweep's work folder holds no completion marker until its last write, and a rerun completes it
+/// with the files of an uninterrupted run.
+#[test]
+fn a_full_disk_mid_output_leaves_no_temporary_and_no_partial_result() {
+    let root = tmpdir("full-disk");
+    let synth = |seed: &'static str| {
+        vec![
+            "synth",
+            "--effect",
+            "none",
+            "--out",
+            "set",
+            "--ringdowns",
+            "2",
+            "--driven",
+            "1",
+            "--turns",
+            "5",
+            "--truth",
+            "--seed",
+            seed,
+        ]
+    };
+    let sim = |f: &'static str| {
+        vec![
+            "simulate",
+            "--f",
+            f,
+            "--periods",
+            "2",
+            "--out",
+            "sub/x.csv",
+            "--events",
+            "sub/e.csv",
+        ]
+    };
+    for args in [synth("1"), sim("1")] {
+        let o = Command::new(env!("CARGO_BIN_EXE_gearbif"))
+            .args(&args)
+            .current_dir(&root)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    for args in [synth("2"), sim("1.5")] {
+        let before = files(&root, false);
+        let failed = fail_each_write(&root, &args, |n| {
+            assert!(
+                files(&root, false) == before,
+                "write {n} of {args:?} changed the folder: {:?}",
+                files(&root, false).keys().collect::<Vec<_>>()
+            );
+        });
+        assert!(failed >= 2, "{args:?}: {failed} writes");
+    }
+    // a new folder under a missing parent: nothing of it is left either
+    let fresh = [
+        "simulate",
+        "--f",
+        "1",
+        "--periods",
+        "2",
+        "--out",
+        "new/x.csv",
+    ];
+    let failed = fail_each_write(&root, &fresh, |_| assert!(!root.join("new").exists()));
+    assert_eq!(failed, 1);
+
+    let small: Vec<&str> = SWEEP
+        .iter()
+        .map(|&a| match a {
+            "theta:0:45:5" => "theta:0:10:5",
+            "400" => "100",
+            a => a,
+        })
+        .collect();
+    let sweep_args: Vec<&str> = small.iter().copied().chain(["--out", "sweep"]).collect();
+    let sweep_dir = root.join("sweep");
+    let failed = fail_each_write(&root, &sweep_args, |n| {
+        assert!(!sweep_dir.join("complete.json").exists(), "write {n}");
+        assert!(
+            temporaries(&root).is_empty(),
+            "write {n}: {:?}",
+            temporaries(&root)
+        );
+    });
+    // each rerun resumes from the rows checkpointed before (the failing write counts from there)
+    assert!(failed >= 4, "{failed} writes");
+    let whole = root.join("sweep-whole");
+    let o = Command::new(env!("CARGO_BIN_EXE_gearbif"))
+        .args(&small)
+        .arg("--out")
+        .arg(&whole)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    same_files(&sweep_dir, &whole);
+    assert!(temporaries(&root).is_empty(), "{:?}", temporaries(&root));
+    std::fs::remove_dir_all(root).ok();
 }

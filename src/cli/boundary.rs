@@ -9,6 +9,7 @@ use crate::continuation::two_param::{follow, grid, Curve};
 use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::DEFAULT_METHOD;
+use crate::io::{FileKind, StagedFiles};
 use crate::maps::Section;
 use crate::model::{Gear, GearParam, Parameter, Parametrised};
 use crate::orbits::{OrbitSpec, ShootingOptions};
@@ -80,6 +81,14 @@ pub fn run(a: Args) -> Result<()> {
     let free = GearParam::from_name(&a.free)?;
     let along = GearParam::from_name(&a.along)?;
     check_args(&a)?;
+    let mut plan = Vec::new();
+    if let Some(p) = &a.out {
+        plan.push(("--out", p.as_path(), FileKind::Data));
+    }
+    if let Some(p) = &a.plot {
+        plan.push(("--plot", p.as_path(), FileKind::Figure));
+    }
+    let files = StagedFiles::begin(&plan)?;
     let opts = ShootingOptions {
         tol: a.tol,
         ..Default::default()
@@ -143,7 +152,7 @@ pub fn run(a: Args) -> Result<()> {
     // one document for --out and --json: {"schema": "gearbif.curves/1", "curves": [[label, curve], ...]}
     let tagged = serde_json::json!({ "schema": "gearbif.curves/1", "curves": &curves });
     if let Some(p) = &a.out {
-        crate::io::write_json_atomic(p, &tagged)?;
+        crate::io::write_json_atomic(files.path(p), &tagged)?;
     }
     if let Some(p) = &a.plot {
         let mut marks = Vec::new();
@@ -170,8 +179,9 @@ pub fn run(a: Args) -> Result<()> {
             curves: curves.clone(),
             marks,
         };
-        crate::plotting::save(&fig, p)?;
+        crate::plotting::save(&fig, files.path(p))?;
     }
+    files.commit()?;
     Output { json: a.json }.emit(&tagged, || {
         let mut s = String::new();
         for (label, c) in &curves {

@@ -126,6 +126,7 @@ pub fn run(a: Args) -> Result<()> {
     };
     check_frequency(f)?;
     check_args(&a)?;
+    let files = crate::io::StagedFiles::begin(&a.common.plan())?;
     let gear = a.common.gear.params()?.driven(f)?;
     let shooting = ShootingOptions {
         tol: a.common.tol,
@@ -149,10 +150,14 @@ pub fn run(a: Args) -> Result<()> {
     let seeds = lock_seeds(&gear, &shooting);
     let d = diagram(&gear, &opts, seeds)?;
     if let Some(p) = &a.common.out {
-        crate::io::write_json_atomic(p, &crate::io::with_schema("gearbif.diagram/1", &d))?;
+        crate::io::write_json_atomic(
+            files.path(p),
+            &crate::io::with_schema("gearbif.diagram/1", &d),
+        )?;
     }
     let branches: Vec<_> = d.branches.iter().map(|b| b.branch.clone()).collect();
     a.common.save_plot(
+        &files,
         format!(
             "bifurcation diagram in {} (automatic, {} runs)",
             param.name(),
@@ -160,6 +165,7 @@ pub fn run(a: Args) -> Result<()> {
         ),
         &branches,
     )?;
+    files.commit()?;
     Output {
         json: a.common.json,
     }

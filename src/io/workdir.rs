@@ -1,0 +1,106 @@
+//! The output folder of a resumable job (`sweep`, `campaign`): the folder is the work, written as
+//! the job goes (checkpoint rows, finished cases, each file atomically) so that a rerun resumes
+//! from it; the result files are written when the work is complete, and the completion marker
+//! `complete.json` last. [`WorkDir::begin`] removes the marker before anything else is written,
+//! so a folder with the marker holds one whole result and a folder without it is work in
+//! progress (killed, failed or stopped), whatever result files it holds.
+//!
+//! The plan is checked before the work: the target is a folder or absent, no name of the result
+//! exists with the wrong kind (a folder `points.csv`), and a file can be created in it (a
+//! read-only mount is found here, not after the work). Names that are not the job's are left
+//! alone.
+
+use crate::error::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// The name of the completion marker.
+pub const MARKER: &str = "complete.json";
+
+/// The marker's content: what the folder holds when complete.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Complete {
+    /// The schema id, `gearbif.complete/1`.
+    pub schema: String,
+    /// The command that wrote the folder (`sweep`, `campaign`).
+    pub command: String,
+    /// The result files, relative to the folder.
+    pub files: Vec<String>,
+}
+
+/// A resumable job's output folder (see the module documentation).
+#[derive(Debug)]
+pub struct WorkDir {
+    target: PathBuf,
+    command: &'static str,
+}
+
+impl WorkDir {
+    /// Checks the plan of the job `command` writing the folder `target` (given by `flag`), whose
+    /// result names are `files` and `dirs`, creates the folder and removes its marker.
+    pub fn begin(
+        flag: &str,
+        target: &Path,
+        command: &'static str,
+        files: &[&str],
+        dirs: &[&str],
+    ) -> Result<Self> {
+        let what = || format!("{flag} {}", target.display());
+        crate::io::outdir::check_ancestors(flag, target)?;
+        let planned = files
+            .iter()
+            .chain([MARKER].iter())
+            .map(|n| (n, false))
+            .chain(dirs.iter().map(|n| (n, true)));
+        {
+            for (n, want_dir) in planned {
+                let p = target.join(n);
+                if p.exists() && p.is_dir() != want_dir {
+                    let (is, meant) = if want_dir {
+                        ("file", "folder")
+                    } else {
+                        ("folder", "file")
+                    };
+                    return Err(Error::option(
+                        what(),
+                        format!("holds the {is} `{n}` where the result has a {meant}"),
+                    ));
+                }
+            }
+        }
+        std::fs::create_dir_all(target).map_err(|e| Error::file("create", target, e))?;
+        let probe = target.join(format!(".probe.tmp-{}", std::process::id()));
+        std::fs::write(&probe, b"").map_err(|e| Error::file("write", &probe, e))?;
+        let _ = std::fs::remove_file(&probe);
+        let marker = target.join(MARKER);
+        if marker.exists() {
+            std::fs::remove_file(&marker).map_err(|e| Error::file("remove", &marker, e))?;
+        }
+        Ok(Self {
+            target: target.to_path_buf(),
+            command,
+        })
+    }
+
+    /// The folder.
+    pub fn path(&self) -> &Path {
+        &self.target
+    }
+
+    /// Writes the marker, naming the result files `files` (written before this call).
+    pub fn complete(self, files: &[&str]) -> Result<()> {
+        let c = Complete {
+            schema: "gearbif.complete/1".into(),
+            command: self.command.into(),
+            files: files.iter().map(|f| f.to_string()).collect(),
+        };
+        crate::io::write_json_atomic(self.target.join(MARKER), &c)
+    }
+}
+
+/// True if `dir` holds a completion marker that parses and names only files that exist.
+pub fn is_complete(dir: &Path) -> bool {
+    std::fs::read_to_string(dir.join(MARKER))
+        .ok()
+        .and_then(|t| serde_json::from_str::<Complete>(&t).ok())
+        .is_some_and(|c| c.files.iter().all(|f| dir.join(f).is_file()))
+}
