@@ -402,4 +402,40 @@ mod tests {
         drop(s);
         std::fs::remove_dir_all(root).ok();
     }
+
+    #[test]
+    fn a_merged_result_replaces_only_its_own_names() {
+        let root = tmp("merge");
+        let out = root.join("figs");
+        std::fs::create_dir_all(out.join("f-data")).unwrap();
+        std::fs::write(out.join("f-data/old.csv"), "old").unwrap();
+        std::fs::write(out.join("f.svg"), "old").unwrap();
+        std::fs::write(out.join("g.svg"), "other").unwrap();
+        let owned = |n: &str, d: bool| {
+            if d {
+                n.ends_with("-data")
+            } else {
+                n.ends_with(".svg")
+            }
+        };
+        {
+            let s = StagedDir::begin_merge("--out", &out, "figure-f", owned).unwrap();
+            std::fs::write(s.path().join("f.svg"), "new").unwrap();
+        }
+        assert_eq!(names(&out), ["f-data", "f.svg", "g.svg"]);
+        assert_eq!(std::fs::read_to_string(out.join("f.svg")).unwrap(), "old");
+        let s = StagedDir::begin_merge("--out", &out, "figure-f", owned).unwrap();
+        std::fs::write(s.path().join("f.svg"), "new").unwrap();
+        std::fs::create_dir(s.path().join("f-data")).unwrap();
+        std::fs::write(s.path().join("f-data/new.csv"), "new").unwrap();
+        s.commit().unwrap();
+        assert_eq!(names(&out), ["f-data", "f.svg", "g.svg"]);
+        assert_eq!(names(&out.join("f-data")), ["new.csv"]);
+        assert_eq!(std::fs::read_to_string(out.join("g.svg")).unwrap(), "other");
+        std::fs::remove_file(out.join("g.svg")).unwrap();
+        std::fs::create_dir(out.join("g.svg")).unwrap();
+        let e = StagedDir::begin_merge("--out", &out, "figure-f", owned).unwrap_err();
+        assert!(e.to_string().contains("folder `g.svg`"), "{e}");
+        std::fs::remove_dir_all(root).ok();
+    }
 }

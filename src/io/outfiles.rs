@@ -163,3 +163,71 @@ impl Drop for StagedFiles {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmp(name: &str) -> PathBuf {
+        let d =
+            std::env::temp_dir().join(format!("gearbif-outfiles-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn the_plan_is_refused_before_the_work() {
+        let root = tmp("plan");
+        let (a, b) = (root.join("a.json"), root.join("sub/../a.json"));
+        std::fs::create_dir_all(root.join("sub")).unwrap();
+        let e = StagedFiles::begin(&[
+            ("--out", &a, FileKind::Data),
+            ("--plot", &b, FileKind::Data),
+        ])
+        .unwrap_err();
+        assert!(e.to_string().contains("both name the file"), "{e}");
+        let e = StagedFiles::begin(&[("--out", &root.join("sub"), FileKind::Data)]).unwrap_err();
+        assert!(e.to_string().contains("is a folder"), "{e}");
+        let e =
+            StagedFiles::begin(&[("--plot", &root.join("p.pdf"), FileKind::Figure)]).unwrap_err();
+        assert!(e.to_string().contains(".svg or .png"), "{e}");
+        std::fs::write(root.join("file"), "").unwrap();
+        let e =
+            StagedFiles::begin(&[("--out", &root.join("file/x.csv"), FileKind::Data)]).unwrap_err();
+        assert!(e.to_string().contains("not a folder"), "{e}");
+        std::fs::remove_dir_all(root).ok();
+    }
+
+    #[test]
+    fn files_reach_their_targets_together_or_not_at_all() {
+        let root = tmp("commit");
+        let (a, b) = (root.join("new/a.csv"), root.join("b.svg"));
+        std::fs::write(&b, "old").unwrap();
+        let plan = [
+            ("--out", a.as_path(), FileKind::Data),
+            ("--plot", b.as_path(), FileKind::Figure),
+        ];
+        {
+            let s = StagedFiles::begin(&plan).unwrap();
+            std::fs::write(s.path(&a), "new").unwrap();
+            // dropped before the second file: a failed run
+        }
+        assert!(!root.join("new").exists());
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "old");
+        let s = StagedFiles::begin(&plan).unwrap();
+        std::fs::write(s.path(&a), "new").unwrap();
+        std::fs::write(s.path(&b), "new").unwrap();
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "old");
+        s.commit().unwrap();
+        assert_eq!(std::fs::read_to_string(&a).unwrap(), "new");
+        assert_eq!(std::fs::read_to_string(&b).unwrap(), "new");
+        let names: Vec<_> = std::fs::read_dir(&root)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name())
+            .collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+        std::fs::remove_dir_all(root).ok();
+    }
+}

@@ -104,3 +104,33 @@ pub fn is_complete(dir: &Path) -> bool {
         .and_then(|t| serde_json::from_str::<Complete>(&t).ok())
         .is_some_and(|c| c.files.iter().all(|f| dir.join(f).is_file()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_marker_is_removed_at_the_start_and_written_last() {
+        let root = std::env::temp_dir().join(format!("gearbif-workdir-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let out = root.join("out");
+        let w = WorkDir::begin("--out", &out, "sweep", &["points.csv"], &["checkpoint"]).unwrap();
+        std::fs::write(out.join("points.csv"), "x").unwrap();
+        assert!(!is_complete(&out));
+        w.complete(&["points.csv"]).unwrap();
+        assert!(is_complete(&out));
+        // a rerun: incomplete from its start on, whatever result files the folder holds
+        let w = WorkDir::begin("--out", &out, "sweep", &["points.csv"], &["checkpoint"]).unwrap();
+        assert!(!is_complete(&out) && out.join("points.csv").exists());
+        drop(w);
+        // a name of the result with the wrong kind is refused before anything is written
+        std::fs::remove_file(out.join("points.csv")).unwrap();
+        std::fs::create_dir(out.join("points.csv")).unwrap();
+        std::fs::write(out.join("checkpoint"), "").unwrap();
+        let e = WorkDir::begin("--out", &out, "sweep", &["x"], &["checkpoint"]).unwrap_err();
+        assert!(e.to_string().contains("file `checkpoint`"), "{e}");
+        let e = WorkDir::begin("--out", &out, "sweep", &["points.csv"], &[]).unwrap_err();
+        assert!(e.to_string().contains("folder `points.csv`"), "{e}");
+        std::fs::remove_dir_all(root).ok();
+    }
+}
