@@ -11,26 +11,25 @@ set -eu
 BIN=${1:-target/release/gearbif}
 WORK=${2:-$(mktemp -d)}
 FIT_TURNS=${FIT_TURNS:-"80 320 1280 2500"}
-DIAG_TURNS=${DIAG_TURNS:-"80 320"}
+DIAG_TURNS=${DIAG_TURNS:-"80 320 1280"}
 
 peak_kb() { sed -n 's/.*Maximum resident set size (kbytes): //p' "$1"; }
-wall() { sed -n 's/.*Elapsed (wall clock) time (h:mm:ss or m:ss): //p' "$1"; }
 samples() { cat "$1"/*.csv | grep -c '^[0-9-]'; }
 
-echo "| command | input turns per driven run | samples | CSV bytes | peak RSS [MB] | wall |"
-echo "|---|---|---|---|---|---|"
+echo "| command | input turns per driven run | samples | CSV bytes | peak RSS [MB] |"
+echo "|---|---|---|---|---|"
 for turns in $FIT_TURNS; do
     set_dir="$WORK/set-$turns"
     [ -d "$set_dir" ] || "$BIN" synth --effect none --seed 3 --turns "$turns" --out "$set_dir" 2>/dev/null
     n=$(samples "$set_dir")
     bytes=$(cat "$set_dir"/*.csv | wc -c)
     /usr/bin/time -v "$BIN" fit "$set_dir" >/dev/null 2>"$WORK/fit-$turns.time"
-    echo "| fit | $turns | $n | $bytes | $(( $(peak_kb "$WORK/fit-$turns.time") / 1000 )) | $(wall "$WORK/fit-$turns.time") |"
+    echo "| fit | $turns | $n | $bytes | $(( $(peak_kb "$WORK/fit-$turns.time") / 1000 )) |"
     case " $DIAG_TURNS " in
     *" $turns "*)
         /usr/bin/time -v "$BIN" diagnose "$set_dir" --out "$WORK/diag-$turns" --no-figures \
             >/dev/null 2>"$WORK/diag-$turns.time"
-        echo "| diagnose --no-figures | $turns | $n | $bytes | $(( $(peak_kb "$WORK/diag-$turns.time") / 1000 )) | $(wall "$WORK/diag-$turns.time") |"
+        echo "| diagnose --no-figures | $turns | $n | $bytes | $(( $(peak_kb "$WORK/diag-$turns.time") / 1000 )) |"
         ;;
     esac
 done

@@ -32,6 +32,9 @@ pub struct Complete {
 pub struct WorkDir {
     target: PathBuf,
     command: &'static str,
+    /// The first folder of the target's path this run created: removed again, if still empty,
+    /// when the run ends without writing anything (an error found after the plan check).
+    created: Option<PathBuf>,
 }
 
 impl WorkDir {
@@ -67,7 +70,7 @@ impl WorkDir {
                 }
             }
         }
-        std::fs::create_dir_all(target).map_err(|e| Error::file("create", target, e))?;
+        let created = crate::io::outdir::create_missing(target)?;
         let probe = target.join(format!(".probe.tmp-{}", std::process::id()));
         std::fs::write(&probe, b"").map_err(|e| Error::file("write", &probe, e))?;
         let _ = std::fs::remove_file(&probe);
@@ -78,6 +81,7 @@ impl WorkDir {
         Ok(Self {
             target: target.to_path_buf(),
             command,
+            created,
         })
     }
 
@@ -87,13 +91,27 @@ impl WorkDir {
     }
 
     /// Writes the marker, naming the result files `files` (written before this call).
-    pub fn complete(self, files: &[&str]) -> Result<()> {
+    pub fn complete(mut self, files: &[&str]) -> Result<()> {
+        self.created = None;
         let c = Complete {
             schema: "gearbif.complete/1".into(),
             command: self.command.into(),
             files: files.iter().map(|f| f.to_string()).collect(),
         };
         crate::io::write_json_atomic(self.target.join(MARKER), &c)
+    }
+}
+
+impl Drop for WorkDir {
+    fn drop(&mut self) {
+        let Some(first) = &self.created else { return };
+        let mut d = Some(self.target.as_path());
+        while let Some(p) = d {
+            if std::fs::remove_dir(p).is_err() || p == first.as_path() {
+                break;
+            }
+            d = p.parent();
+        }
     }
 }
 
@@ -131,6 +149,9 @@ mod tests {
         assert!(e.to_string().contains("file `checkpoint`"), "{e}");
         let e = WorkDir::begin("--out", &out, "sweep", &["points.csv"], &[]).unwrap_err();
         assert!(e.to_string().contains("folder `points.csv`"), "{e}");
+        // a run that ends before writing anything leaves no folder it created
+        drop(WorkDir::begin("--out", &root.join("a/b"), "sweep", &[], &[]).unwrap());
+        assert!(!root.join("a").exists());
         std::fs::remove_dir_all(root).ok();
     }
 }
