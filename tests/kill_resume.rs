@@ -419,7 +419,8 @@ fn fail_each_write(root: &Path, args: &[&str], check: impl Fn(usize)) -> usize {
 
 /// A full disk in the middle of the output (every write failing in turn, through the same
 /// error path a real ENOSPC takes) leaves no temporary and no partial result: a staged folder
-/// (`synth`) and staged flag files (`simulate --out --events`) stay as the earlier result; a
+/// (`synth`), staged flag files (`simulate --out --events`) and a figure's staged files (`figure
+/// fig5`, six files) stay as the earlier result; a
 /// sweep's work folder holds no completion marker until its last write, and a rerun completes it
 /// with the files of an uninterrupted run.
 #[test]
@@ -456,7 +457,9 @@ fn a_full_disk_mid_output_leaves_no_temporary_and_no_partial_result() {
             "sub/e.csv",
         ]
     };
-    for args in [synth("1"), sim("1")] {
+    let fig =
+        |zeta: &'static str| vec!["figure", "fig5", "--quiet", "--zeta", zeta, "--out", "figs"];
+    for args in [synth("1"), sim("1"), fig("1.0")] {
         let o = Command::new(env!("CARGO_BIN_EXE_gearbif"))
             .args(&args)
             .current_dir(&root)
@@ -464,7 +467,7 @@ fn a_full_disk_mid_output_leaves_no_temporary_and_no_partial_result() {
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
-    for args in [synth("2"), sim("1.5")] {
+    for args in [synth("2"), sim("1.5"), fig("1.3")] {
         let before = files(&root, false);
         let failed = fail_each_write(&root, &args, |n| {
             assert!(
@@ -519,4 +522,54 @@ fn a_full_disk_mid_output_leaves_no_temporary_and_no_partial_result() {
     same_files(&sweep_dir, &whole);
     assert!(temporaries(&root).is_empty(), "{:?}", temporaries(&root));
     std::fs::remove_dir_all(root).ok();
+}
+
+/// `figure fig5` killed at random moments while it rewrites its files in a folder that also holds
+/// another figure (a run of a fraction of a second): after every kill the other figure is
+/// untouched, each fig5 file is whole (the earlier version or the new one) and nothing but the
+/// hidden staging folder of the killed run is added; the next complete run removes it.
+#[test]
+fn killed_figure_leaves_whole_files_and_the_other_figures() {
+    let root = tmpdir("figure");
+    let (out, b) = (root.join("out"), root.join("b"));
+    run_ok(&["figure", "fig5", "--quiet", "--zeta", "1.0"], &out);
+    std::fs::write(out.join("fig6.svg"), "another figure").unwrap();
+    let earlier = files(&out, false);
+    let args_b = ["figure", "fig5", "--quiet", "--zeta", "1.3"];
+    let t = Instant::now();
+    run_ok(&args_b, &b);
+    let t_b = t.elapsed();
+    let new = files(&b, false);
+    assert!(
+        new.iter().all(|(k, v)| earlier.get(k) != Some(v)),
+        "the results must differ"
+    );
+    let mut rng = Rng(env_or("GEARBIF_KILL_SEED", 0x5eed_u64) | 1);
+    for _ in 0..env_or("GEARBIF_KILLS", 6) {
+        let mut child = gearbif(&args_b, &out).spawn().unwrap();
+        std::thread::sleep(t_b.mul_f64(0.2 + 1.0 * rng.uniform()));
+        let _ = child.kill();
+        child.wait().unwrap();
+        for (k, v) in files(&out, false) {
+            if k.starts_with(".figure-fig5.tmp-") {
+                continue;
+            }
+            assert!(
+                earlier.get(&k) == Some(&v) || new.get(&k) == Some(&v),
+                "after a kill {k} is neither version"
+            );
+        }
+        assert_eq!(
+            std::fs::read(out.join("fig6.svg")).unwrap(),
+            b"another figure"
+        );
+    }
+    run_ok(&args_b, &out);
+    let mut want = new.clone();
+    want.insert("fig6.svg".into(), b"another figure".to_vec());
+    assert!(
+        files(&out, false) == want,
+        "the complete run differs or left temporaries"
+    );
+    std::fs::remove_dir_all(&root).ok();
 }
