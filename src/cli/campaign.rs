@@ -22,7 +22,8 @@ use std::time::Instant;
     the same command resumes."
 )]
 pub struct Args {
-    /// Output folder: campaign.json, campaign.md, campaign.svg, campaign.png, cases/.
+    /// Output folder: campaign.json, campaign.md, campaign.svg, campaign.png, cases/ (rerun the
+    /// same command to resume); complete.json is written last, when the campaign is complete.
     #[arg(long, required_unless_present = "list")]
     out: Option<PathBuf>,
     /// Effects, comma-separated, or `all` (see `--list`).

@@ -49,7 +49,8 @@ pub struct Args {
     name: Name,
     #[command(flatten)]
     gear: GearArgs,
-    /// Output folder.
+    /// Output folder (other figures in it are kept; this figure's files are replaced together at
+    /// the end).
     #[arg(long, default_value = "figures")]
     out: PathBuf,
     /// Fig. 8 at the paper's full resolution (37 × 4996 points, 1000 settling turns each), at

@@ -62,7 +62,8 @@ pub struct Args {
     /// Use the event-driven DP5 instead of the default event-driven DOP853.
     #[arg(long, conflicts_with = "rk4")]
     dp5: bool,
-    /// Output directory (checkpoints in it; rerun the same command to resume).
+    /// Output directory (checkpoints in it; rerun the same command to resume); complete.json is
+    /// written last, when the sweep is complete.
     #[arg(long, default_value = "sweep-out")]
     out: PathBuf,
     /// Stop after this many new rows (the rest can be resumed later).
@@ -100,7 +101,7 @@ pub struct MergeArgs {
     /// The shards' --out directories (or their checkpoint directories).
     #[arg(required = true)]
     dirs: Vec<PathBuf>,
-    /// Output directory of the merged sweep.
+    /// Output directory of the merged sweep (complete.json written last).
     #[arg(long, default_value = "sweep-out")]
     out: PathBuf,
 }
