@@ -516,7 +516,8 @@ fn cli_campaign_rejects_bad_input() {
 }
 
 /// A one-set campaign through the CLI writes campaign.json (schema `gearbif.campaign/1`), the
-/// Markdown tables and the figure; a second run resumes without diagnosing again.
+/// Markdown tables, the figure and the completion marker; a second run resumes without
+/// diagnosing again.
 #[test]
 fn cli_campaign_writes_its_outputs_and_resumes() {
     let out = std::env::temp_dir().join(format!("gearbif-campaign-cli-{}", std::process::id()));
@@ -553,6 +554,11 @@ fn cli_campaign_writes_its_outputs_and_resumes() {
         .unwrap()
         .contains("False positives"));
     assert!(out.join("campaign.svg").exists() && out.join("campaign.png").exists());
+    // the completion marker, written last, names the result files
+    let done: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("complete.json")).unwrap()).unwrap();
+    assert_eq!(done["schema"], "gearbif.complete/1");
+    assert_eq!(done["files"].as_array().map(Vec::len), Some(4));
     let again = gearbif(&args);
     assert!(String::from_utf8_lossy(&again.stderr).contains("1 already done, 0 to run"));
     std::fs::remove_dir_all(&out).ok();

@@ -27,6 +27,7 @@ impl Fixtures {
         w("syntax.toml", "[gear]\nm1 = = 3\n");
         w("unknown.toml", "[gear]\nmass = 3\n");
         w("nan.toml", "[gear]\neta = nan\n");
+        w("zeta.toml", "[gear]\nm1 = 3.51\n\nzeta = 1e300\n");
         let gear = "[gear]\nm1 = 3.51\nm2 = 3.51\nr = 0.04\ntheta_deg = 31.0\nphi_deg = 31.0\n";
         let run = "\n[[run]]\nkind = \"driven\"\nf_hz = 1.0\nfile = \"a.csv\"\n";
         w("set-nan/experiment.toml", &format!("{gear}{run}"));
@@ -167,6 +168,7 @@ const CASES: &[(&str, &str)] = &[
     ("info --config {syntax.toml}", "syntax.toml:2"),
     ("info --config {unknown.toml}", "mass"),
     ("info --config {nan.toml}", "nan.toml:2"),
+    ("info --config {zeta.toml}", "zeta.toml:4"),
     ("info --config {dir}", "cannot read"),
     // simulate
     ("simulate --theta-deg 1e308", "theta_deg"),

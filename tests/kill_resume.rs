@@ -91,7 +91,7 @@ fn checkpoint_files_are_whole(out: &Path) -> usize {
 }
 
 fn same_files(a: &Path, b: &Path) {
-    for f in ["points.csv", "sweep.json", "rms_map.svg"] {
+    for f in ["points.csv", "sweep.json", "rms_map.svg", "complete.json"] {
         let (x, y) = (
             std::fs::read(a.join(f)).unwrap(),
             std::fs::read(b.join(f)).unwrap(),
@@ -371,4 +371,205 @@ fn killed_report_leaves_one_whole_result() {
         &["report", "--quiet", "--eta", "20"],
         &["report", "--quiet"],
     );
+}
+
+/// The hidden temporaries (`.NAME.tmp-PID…`) anywhere under `dir`.
+fn temporaries(dir: &Path) -> Vec<String> {
+    let mut v = Vec::new();
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            let name = e.file_name().to_string_lossy().to_string();
+            if name.starts_with('.') && name.contains(".tmp-") {
+                v.push(e.path().display().to_string());
+            }
+            if e.path().is_dir() {
+                v.extend(temporaries(&e.path()));
+            }
+        }
+    }
+    v
+}
+
+/// Runs `args` (writing into `root`) with the `n`-th output write failing with ENOSPC, for n = 1,
+/// 2, … until a run writes everything; `check` inspects `root` after each failed run. Returns
+/// the number of failed runs (each must exit with 2 naming the full disk).
+fn fail_each_write(root: &Path, args: &[&str], check: impl Fn(usize)) -> usize {
+    for n in 1..100 {
+        let o = Command::new(env!("CARGO_BIN_EXE_gearbif"))
+            .args(args)
+            .current_dir(root)
+            .env("GEARBIF_FAIL_WRITE", n.to_string())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        if o.status.success() {
+            return n - 1;
+        }
+        assert_eq!(o.status.code(), Some(2), "write {n} of {args:?}: {err}");
+        assert!(
+            err.contains("No space left"),
+            "write {n} of {args:?}: {err}"
+        );
+        check(n);
+    }
+    panic!("{args:?} never finished");
+}
+
+/// A full disk in the middle of the output (every write failing in turn, through the same
+/// error path a real ENOSPC takes) leaves no temporary and no partial result: a staged folder
+/// (`synth`), staged flag files (`simulate --out --events`) and a figure's staged files (`figure
+/// fig5`, six files) stay as the earlier result; a
+/// sweep's work folder holds no completion marker until its last write, and a rerun completes it
+/// with the files of an uninterrupted run.
+#[test]
+fn a_full_disk_mid_output_leaves_no_temporary_and_no_partial_result() {
+    let root = tmpdir("full-disk");
+    let synth = |seed: &'static str| {
+        vec![
+            "synth",
+            "--effect",
+            "none",
+            "--out",
+            "set",
+            "--ringdowns",
+            "2",
+            "--driven",
+            "1",
+            "--turns",
+            "5",
+            "--truth",
+            "--seed",
+            seed,
+        ]
+    };
+    let sim = |f: &'static str| {
+        vec![
+            "simulate",
+            "--f",
+            f,
+            "--periods",
+            "2",
+            "--out",
+            "sub/x.csv",
+            "--events",
+            "sub/e.csv",
+        ]
+    };
+    let fig =
+        |zeta: &'static str| vec!["figure", "fig5", "--quiet", "--zeta", zeta, "--out", "figs"];
+    for args in [synth("1"), sim("1"), fig("1.0")] {
+        let o = Command::new(env!("CARGO_BIN_EXE_gearbif"))
+            .args(&args)
+            .current_dir(&root)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    for args in [synth("2"), sim("1.5"), fig("1.3")] {
+        let before = files(&root, false);
+        let failed = fail_each_write(&root, &args, |n| {
+            assert!(
+                files(&root, false) == before,
+                "write {n} of {args:?} changed the folder: {:?}",
+                files(&root, false).keys().collect::<Vec<_>>()
+            );
+        });
+        assert!(failed >= 2, "{args:?}: {failed} writes");
+    }
+    // a new folder under a missing parent: nothing of it is left either
+    let fresh = [
+        "simulate",
+        "--f",
+        "1",
+        "--periods",
+        "2",
+        "--out",
+        "new/x.csv",
+    ];
+    let failed = fail_each_write(&root, &fresh, |_| assert!(!root.join("new").exists()));
+    assert_eq!(failed, 1);
+
+    let small: Vec<&str> = SWEEP
+        .iter()
+        .map(|&a| match a {
+            "theta:0:45:5" => "theta:0:10:5",
+            "400" => "100",
+            a => a,
+        })
+        .collect();
+    let sweep_args: Vec<&str> = small.iter().copied().chain(["--out", "sweep"]).collect();
+    let sweep_dir = root.join("sweep");
+    let failed = fail_each_write(&root, &sweep_args, |n| {
+        assert!(!sweep_dir.join("complete.json").exists(), "write {n}");
+        assert!(
+            temporaries(&root).is_empty(),
+            "write {n}: {:?}",
+            temporaries(&root)
+        );
+    });
+    // each rerun resumes from the rows checkpointed before (the failing write counts from there)
+    assert!(failed >= 4, "{failed} writes");
+    let whole = root.join("sweep-whole");
+    let o = Command::new(env!("CARGO_BIN_EXE_gearbif"))
+        .args(&small)
+        .arg("--out")
+        .arg(&whole)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    same_files(&sweep_dir, &whole);
+    assert!(temporaries(&root).is_empty(), "{:?}", temporaries(&root));
+    std::fs::remove_dir_all(root).ok();
+}
+
+/// `figure fig5` killed at random moments while it rewrites its files in a folder that also holds
+/// another figure (a run of a fraction of a second): after every kill the other figure is
+/// untouched, each fig5 file is whole (the earlier version or the new one) and nothing but the
+/// hidden staging folder of the killed run is added; the next complete run removes it.
+#[test]
+fn killed_figure_leaves_whole_files_and_the_other_figures() {
+    let root = tmpdir("figure");
+    let (out, b) = (root.join("out"), root.join("b"));
+    run_ok(&["figure", "fig5", "--quiet", "--zeta", "1.0"], &out);
+    std::fs::write(out.join("fig6.svg"), "another figure").unwrap();
+    let earlier = files(&out, false);
+    let args_b = ["figure", "fig5", "--quiet", "--zeta", "1.3"];
+    let t = Instant::now();
+    run_ok(&args_b, &b);
+    let t_b = t.elapsed();
+    let new = files(&b, false);
+    assert!(
+        new.iter().all(|(k, v)| earlier.get(k) != Some(v)),
+        "the results must differ"
+    );
+    let mut rng = Rng(env_or("GEARBIF_KILL_SEED", 0x5eed_u64) | 1);
+    for _ in 0..env_or("GEARBIF_KILLS", 6) {
+        let mut child = gearbif(&args_b, &out).spawn().unwrap();
+        std::thread::sleep(t_b.mul_f64(0.2 + 1.0 * rng.uniform()));
+        let _ = child.kill();
+        child.wait().unwrap();
+        for (k, v) in files(&out, false) {
+            if k.starts_with(".figure-fig5.tmp-") {
+                continue;
+            }
+            assert!(
+                earlier.get(&k) == Some(&v) || new.get(&k) == Some(&v),
+                "after a kill {k} is neither version"
+            );
+        }
+        assert_eq!(
+            std::fs::read(out.join("fig6.svg")).unwrap(),
+            b"another figure"
+        );
+    }
+    run_ok(&args_b, &out);
+    let mut want = new.clone();
+    want.insert("fig6.svg".into(), b"another figure".to_vec());
+    assert!(
+        files(&out, false) == want,
+        "the complete run differs or left temporaries"
+    );
+    std::fs::remove_dir_all(&root).ok();
 }

@@ -128,6 +128,7 @@ pub fn run(a: Args) -> Result<()> {
         None => [0.5, 2.0],
     };
     check_args(&a)?;
+    let files = crate::io::StagedFiles::begin(&plan(&a))?;
     let methods = Methods::new(&a);
     let cands = methods.candidates(&a);
     let setup = WorkPrecisionSetup {
@@ -160,7 +161,8 @@ pub fn run(a: Args) -> Result<()> {
         rhs_only_time_s: rhs_t,
         rhs_only_evals: n_rhs,
     };
-    write_files(&a, &report)?;
+    write_files(&a, &files, &report)?;
+    files.commit()?;
     Output { json: a.json }.emit_tagged("gearbif.bench_integrators/1", &report, || {
         text_table(&report)
     })
@@ -272,10 +274,23 @@ impl Methods {
     }
 }
 
-/// Writes the `--csv` points and the `--figure` (log10 error over log10 wall time), if asked.
-fn write_files(a: &Args, report: &Report) -> Result<()> {
+/// The output files of `--csv` and `--figure`, for [`crate::io::StagedFiles::begin`].
+fn plan(a: &Args) -> Vec<(&'static str, &std::path::Path, crate::io::FileKind)> {
+    let mut v = Vec::new();
+    if let Some(p) = &a.csv {
+        v.push(("--csv", p.as_path(), crate::io::FileKind::Data));
+    }
+    if let Some(p) = &a.figure {
+        v.push(("--figure", p.as_path(), crate::io::FileKind::Figure));
+    }
+    v
+}
+
+/// Writes the `--csv` points and the `--figure` (log10 error over log10 wall time), if asked,
+/// into their staged files `files`.
+fn write_files(a: &Args, files: &crate::io::StagedFiles, report: &Report) -> Result<()> {
     if let Some(path) = &a.csv {
-        crate::io::write_atomic(path, to_csv(&report.points).as_bytes())?;
+        crate::io::write_atomic(files.path(path), to_csv(&report.points).as_bytes())?;
     }
     if let Some(path) = &a.figure {
         let title = format!(
@@ -289,7 +304,10 @@ fn write_files(a: &Args, report: &Report) -> Result<()> {
                 ""
             }
         );
-        crate::plotting::save(&crate::bench::figure(&report.points, &title), path)?;
+        crate::plotting::save(
+            &crate::bench::figure(&report.points, &title),
+            files.path(path),
+        )?;
     }
     Ok(())
 }

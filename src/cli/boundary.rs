@@ -11,6 +11,7 @@ use crate::continuation::two_param::{follow, grid, Curve};
 use crate::continuation::SpecialKind;
 use crate::error::{Error, Result};
 use crate::integrator::DEFAULT_METHOD;
+use crate::io::{FileKind, StagedFiles};
 use crate::maps::Section;
 use crate::model::recorded::file::ModelFile;
 use crate::model::recorded::RecordedParam;
@@ -90,6 +91,7 @@ pub fn run(a: Args) -> Result<()> {
     let free = GearParam::from_name(&a.free)?;
     let along = GearParam::from_name(&a.along)?;
     check_args(&a)?;
+    let files = output_plan(&a)?;
     let copts = curve_options(&a, free == GearParam::F)?;
     let curves = if a.start_state.is_none()
         && kind == SpecialKind::Fold
@@ -115,7 +117,7 @@ pub fn run(a: Args) -> Result<()> {
             fc,
         ));
     }
-    emit(&a, kind, &curves, marks, None)
+    emit(&a, files, kind, &curves, marks, None)
 }
 
 /// `boundary --model`: the curve from --start-state-rad and --start-free on the recorded gear,
@@ -125,6 +127,7 @@ fn run_recorded(a: &Args, file: &ModelFile) -> Result<()> {
     let free = RecordedParam::from_name(&a.free)?;
     let along = RecordedParam::from_name(&a.along)?;
     check_args(a)?;
+    let files = output_plan(a)?;
     let base = file.model(1.0)?.with_column(along)?.with_column(free)?;
     let copts = curve_options(a, free == RecordedParam::F)?;
     let curve = started_curve(a, &base, kind, (free, along), &copts)?;
@@ -145,7 +148,19 @@ fn run_recorded(a: &Args, file: &ModelFile) -> Result<()> {
             )
         })
         .collect::<Result<Vec<_>>>()?;
-    emit(a, kind, &[curve], Vec::new(), Some(&sigma))
+    emit(a, files, kind, &[curve], Vec::new(), Some(&sigma))
+}
+
+/// The output files (--out, --plot), checked and staged before any curve is computed.
+fn output_plan(a: &Args) -> Result<StagedFiles> {
+    let mut plan = Vec::new();
+    if let Some(p) = &a.out {
+        plan.push(("--out", p.as_path(), FileKind::Data));
+    }
+    if let Some(p) = &a.plot {
+        plan.push(("--plot", p.as_path(), FileKind::Figure));
+    }
+    StagedFiles::begin(&plan)
 }
 
 /// The options of the curve's continuation (`free_is_f`: the free parameter is a frequency, kept
@@ -214,6 +229,7 @@ fn started_curve<S: Parametrised>(
 /// if given).
 fn emit<S: Parametrised + serde::Serialize>(
     a: &Args,
+    files: StagedFiles,
     kind: SpecialKind,
     curves: &[(String, Curve<S>)],
     mut marks: Vec<(String, f64, f64)>,
@@ -228,7 +244,7 @@ fn emit<S: Parametrised + serde::Serialize>(
         None => serde_json::json!({ "schema": "gearbif.curves/1", "curves": curves }),
     };
     if let Some(p) = &a.out {
-        crate::io::write_json_atomic(p, &tagged)?;
+        crate::io::write_json_atomic(files.path(p), &tagged)?;
     }
     if let Some(p) = &a.plot {
         for (_, c) in curves {
@@ -244,8 +260,9 @@ fn emit<S: Parametrised + serde::Serialize>(
             curves: curves.to_vec(),
             marks,
         };
-        crate::plotting::save(&fig, p)?;
+        crate::plotting::save(&fig, files.path(p))?;
     }
+    files.commit()?;
     Output { json: a.json }.emit(&tagged, || curves_text(curves, sigma))
 }
 

@@ -22,7 +22,8 @@ use std::time::Instant;
     the same command resumes."
 )]
 pub struct Args {
-    /// Output folder: campaign.json, campaign.md, campaign.svg, campaign.png, cases/.
+    /// Output folder: campaign.json, campaign.md, campaign.svg, campaign.png, cases/ (rerun the
+    /// same command to resume); complete.json is written last, when the campaign is complete.
     #[arg(long, required_unless_present = "list")]
     out: Option<PathBuf>,
     /// Effects, comma-separated, or `all` (see `--list`).
@@ -122,6 +123,14 @@ fn spec_of(a: &Args) -> Result<CampaignSpec> {
     Ok(spec)
 }
 
+/// The result files of a campaign's output folder (besides spec.json, `cases/` and `sets/`).
+const RESULT: [&str; 4] = [
+    "campaign.svg",
+    "campaign.png",
+    "campaign.md",
+    "campaign.json",
+];
+
 /// Runs `gearbif campaign`.
 pub fn run(a: Args) -> Result<()> {
     if a.list {
@@ -143,6 +152,10 @@ pub fn run(a: Args) -> Result<()> {
         .clone()
         .ok_or_else(|| Error::option("--out", "is required"))?;
     super::common::output_dir("--out", &out)?;
+    // a resumable work folder: the cases as they finish, the result files at the end and the
+    // completion marker last (src/io/workdir.rs)
+    let planned = [&RESULT[..], &["spec.json"]].concat();
+    let work = crate::io::WorkDir::begin("--out", &out, "campaign", &planned, &["cases", "sets"])?;
     let t0 = Instant::now();
     let doc = run_campaign(
         &spec,
@@ -158,6 +171,11 @@ pub fn run(a: Args) -> Result<()> {
     }
     write_atomic(out.join("campaign.md"), markdown(&doc).as_bytes())?;
     write_json_atomic(out.join("campaign.json"), &doc)?;
+    work.complete(if a.no_figures {
+        &RESULT[2..]
+    } else {
+        &RESULT[..]
+    })?;
     let s = &doc.summary;
     println!(
         "false positives: {}/{}; coverage ±2σ: {}/{}; errors: {}",

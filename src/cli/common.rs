@@ -112,7 +112,8 @@ struct ConfigFile {
 type KeyCheck = (&'static str, Option<f64>, fn(f64) -> bool, &'static str);
 
 /// Parses the text of a `--config` TOML file (`file` names it in errors): its `[gear]` table, each
-/// value checked (m1, m2, r, inertia > 0; ζ, η ≥ 0; Θ, Φ within ±360°). Errors are
+/// value checked (m1, m2, r, inertia > 0; ζ in [0, 1e4] 1/s, η in [0, 1e8] 1/s²; Θ, Φ within
+/// ±360°). Errors are
 /// [`Error::Recording`] with the file and, where one line is at fault, its number.
 pub fn parse_config(text: &str, file: &str) -> Result<GearConfig> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
@@ -133,8 +134,18 @@ pub fn parse_config(text: &str, file: &str) -> Result<GearConfig> {
         ("m2", g.m2, |v| v > 0.0, "> 0"),
         ("r", g.r, |v| v > 0.0, "> 0"),
         ("inertia", g.inertia, |v| v > 0.0, "> 0"),
-        ("zeta", g.zeta, |v| v >= 0.0, ">= 0"),
-        ("eta", g.eta, |v| v >= 0.0, ">= 0"),
+        (
+            "zeta",
+            g.zeta,
+            |v| (0.0..=limits::ZETA_MAX).contains(&v),
+            "in [0, 1e4] 1/s",
+        ),
+        (
+            "eta",
+            g.eta,
+            |v| (0.0..=limits::ETA_MAX).contains(&v),
+            "in [0, 1e8] 1/s²",
+        ),
         (
             "theta_deg",
             g.theta_deg,

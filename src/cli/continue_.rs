@@ -8,6 +8,7 @@ use crate::continuation::multiple_shooting::{continue_branch, MultipleShootingOp
 use crate::continuation::pinned::switch_at;
 use crate::continuation::{Branch, Continuation, ContinuationOptions};
 use crate::error::{Error, Result};
+use crate::io::{FileKind, StagedFiles};
 use crate::maps::Section;
 use crate::model::recorded::{RecordedModel, RecordedParam};
 use crate::model::{Gear, GearParam, Parameter, Parametrised};
@@ -96,8 +97,25 @@ impl BranchArgs {
         Ok(())
     }
 
-    /// Draws `branches` to --plot, if given.
-    pub fn save_plot<S: Parametrised>(&self, title: String, branches: &[Branch<S>]) -> Result<()> {
+    /// The output files of --out and --plot, for [`StagedFiles::begin`].
+    pub fn plan(&self) -> Vec<(&'static str, &std::path::Path, FileKind)> {
+        let mut v = Vec::new();
+        if let Some(p) = &self.out {
+            v.push(("--out", p.as_path(), FileKind::Data));
+        }
+        if let Some(p) = &self.plot {
+            v.push(("--plot", p.as_path(), FileKind::Figure));
+        }
+        v
+    }
+
+    /// Draws `branches` to --plot (its staged file in `files`), if given.
+    pub fn save_plot<S: Parametrised>(
+        &self,
+        files: &StagedFiles,
+        title: String,
+        branches: &[Branch<S>],
+    ) -> Result<()> {
         let Some(p) = &self.plot else { return Ok(()) };
         let fig = crate::plotting::branch::BranchDiagram {
             title,
@@ -105,7 +123,7 @@ impl BranchArgs {
             paper_convention: self.gear.convention() == crate::model::Convention::Paper,
             ..Default::default()
         };
-        crate::plotting::save(&fig, p)
+        crate::plotting::save(&fig, files.path(p))
     }
 }
 
@@ -348,6 +366,11 @@ fn continue_on<S: Parametrised + serde::Serialize>(
         "down" => -1.0,
         d => return Err(Error::unknown_name("--direction", d, ["up", "down"])),
     };
+    let mut plan = a.common.plan();
+    if let Some(p) = &a.plot_multipliers {
+        plan.push(("--plot-multipliers", p.as_path(), FileKind::Figure));
+    }
+    let files = StagedFiles::begin(&plan)?;
     let shooting = ShootingOptions {
         tol: a.common.tol,
         ..Default::default()
@@ -375,7 +398,7 @@ fn continue_on<S: Parametrised + serde::Serialize>(
         let b1 = switch_and_continue(a, &branches[0], n, &opts, ms.as_ref())?;
         branches.push(b1);
     }
-    emit(a, param, &branches)
+    emit(a, files, param, &branches)
 }
 
 /// Switches at special point `n` of `b0` and continues the new branch away from the point.
@@ -413,16 +436,20 @@ fn switch_and_continue<S: Parametrised>(
 /// Writes --out, the plots, and prints the branches.
 fn emit<S: Parametrised + serde::Serialize>(
     a: &Args,
+    files: StagedFiles,
     param: S::Param,
     branches: &[Branch<S>],
 ) -> Result<()> {
     // one document for --out and --json: {"schema": "gearbif.branches/1", "branches": [...]}
     let tagged = serde_json::json!({ "schema": BRANCHES_SCHEMA, "branches": branches });
     if let Some(p) = &a.common.out {
-        crate::io::write_json_atomic(p, &tagged)?;
+        crate::io::write_json_atomic(files.path(p), &tagged)?;
     }
-    a.common
-        .save_plot(format!("continuation in {}", param.name()), branches)?;
+    a.common.save_plot(
+        &files,
+        format!("continuation in {}", param.name()),
+        branches,
+    )?;
     if let Some(p) = &a.plot_multipliers {
         let fig = crate::plotting::branch::MultiplierPlot {
             title: format!(
@@ -431,8 +458,9 @@ fn emit<S: Parametrised + serde::Serialize>(
             ),
             branch: Some(branches[0].clone()),
         };
-        crate::plotting::save(&fig, p)?;
+        crate::plotting::save(&fig, files.path(p))?;
     }
+    files.commit()?;
     Output {
         json: a.common.json,
     }

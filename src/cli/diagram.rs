@@ -137,8 +137,9 @@ pub fn run(a: Args) -> Result<()> {
             .ok_or_else(|| Error::option("--model", "missing"))?;
         let (m, param, range) = a.common.parse_recorded(m)?;
         check_args(&a)?;
+        let files = crate::io::StagedFiles::begin(&a.common.plan())?;
         // no analytic seeds: the lock branch in closed form is the paper's gear's
-        return draw(&a, &m, param, range, Vec::new());
+        return draw(&a, files, &m, param, range, Vec::new());
     }
     let (param, (lo, hi)) = a.common.parse()?;
     let f = if param == GearParam::F {
@@ -150,9 +151,10 @@ pub fn run(a: Args) -> Result<()> {
     };
     check_frequency(f)?;
     check_args(&a)?;
+    let files = crate::io::StagedFiles::begin(&a.common.plan())?;
     let gear = a.common.gear.params()?.driven(f)?;
     let seeds = lock_seeds(&gear, &shooting(&a));
-    draw(&a, &gear, param, (lo, hi), seeds)
+    draw(&a, files, &gear, param, (lo, hi), seeds)
 }
 
 fn shooting(a: &Args) -> ShootingOptions {
@@ -166,6 +168,7 @@ fn shooting(a: &Args) -> ShootingOptions {
 /// drawn and printed.
 fn draw<S: Parametrised + serde::Serialize>(
     a: &Args,
+    files: crate::io::StagedFiles,
     sys: &S,
     param: S::Param,
     (lo, hi): (f64, f64),
@@ -188,10 +191,14 @@ fn draw<S: Parametrised + serde::Serialize>(
     opts.continuation.validate()?;
     let d = diagram(sys, &opts, seeds)?;
     if let Some(p) = &a.common.out {
-        crate::io::write_json_atomic(p, &crate::io::with_schema("gearbif.diagram/1", &d))?;
+        crate::io::write_json_atomic(
+            files.path(p),
+            &crate::io::with_schema("gearbif.diagram/1", &d),
+        )?;
     }
     let branches: Vec<_> = d.branches.iter().map(|b| b.branch.clone()).collect();
     a.common.save_plot(
+        &files,
         format!(
             "bifurcation diagram in {} (automatic, {} runs)",
             param.name(),
@@ -199,6 +206,7 @@ fn draw<S: Parametrised + serde::Serialize>(
         ),
         &branches,
     )?;
+    files.commit()?;
     Output {
         json: a.common.json,
     }

@@ -49,7 +49,8 @@ pub struct Args {
     name: Name,
     #[command(flatten)]
     gear: GearArgs,
-    /// Output folder.
+    /// Output folder (other figures in it are kept; this figure's files are replaced together at
+    /// the end).
     #[arg(long, default_value = "figures")]
     out: PathBuf,
     /// Fig. 8 at the paper's full resolution (37 × 4996 points, 1000 settling turns each), at
@@ -63,9 +64,8 @@ pub struct Args {
 
 fn save_both(fig: &impl Figure, dir: &Path, stem: &str, out: &mut Vec<PathBuf>) -> Result<()> {
     for ext in ["svg", "png"] {
-        let p = dir.join(format!("{stem}.{ext}"));
-        save(fig, &p)?;
-        out.push(p);
+        save(fig, dir.join(format!("{stem}.{ext}")))?;
+        out.push(format!("{stem}.{ext}").into());
     }
     Ok(())
 }
@@ -164,11 +164,12 @@ fn net_rotation_plot(h: &Hysteresis) -> LinePlot {
     fig
 }
 
-/// Builds figure `name` into `dir`; returns the files written.
+/// Builds figure `name` into `dir` (a sweep's checkpoint into `work`); returns the names of the
+/// files written.
 pub fn make(
     name: Name,
     p: &GearParams,
-    dir: &Path,
+    (dir, work): (&Path, &Path),
     full: bool,
     progress: &Progress,
 ) -> Result<Vec<PathBuf>> {
@@ -176,7 +177,7 @@ pub fn make(
     match name {
         Name::Fig5 => fit_windows(p, dir, &mut out)?,
         Name::Fig6 => polar_windows(p, dir, &mut out)?,
-        Name::Fig7 | Name::Fig8 => rms_map(name, p, dir, full, progress, &mut out)?,
+        Name::Fig7 | Name::Fig8 => rms_map(name, p, (dir, work), full, progress, &mut out)?,
         Name::Fig9 => transition_hysteresis(p, dir, progress, &mut out)?,
         Name::Fig10 => lock_loss(p, dir, progress, &mut out)?,
         Name::Orbit | Name::Lyapunov => frequency_scan(name, p, dir, progress, &mut out)?,
@@ -232,7 +233,7 @@ fn polar_windows(p: &GearParams, dir: &Path, out: &mut Vec<PathBuf>) -> Result<(
 fn rms_map(
     name: Name,
     p: &GearParams,
-    dir: &Path,
+    (dir, work): (&Path, &Path),
     full: bool,
     progress: &Progress,
     out: &mut Vec<PathBuf>,
@@ -266,7 +267,7 @@ fn rms_map(
         _ => ("fig8", "fig8-rigorous"),
     };
     let res = match SweepRunner::new(spec)
-        .checkpoint(dir.join(format!("{stem}-checkpoint")))
+        .checkpoint(work.join(format!("{stem}-checkpoint")))
         .observer(progress)
         .run()?
     {
@@ -415,16 +416,32 @@ fn frequency_scan(
     }
 }
 
+/// The names a figure writes into its folder: figures (`.svg`, `.png`) and data (`.json`)
+/// files, a sweep's `-data` and `-checkpoint` folders.
+fn owned(name: &str, is_dir: bool) -> bool {
+    if is_dir {
+        name.ends_with("-data") || name.ends_with("-checkpoint")
+    } else {
+        [".svg", ".png", ".json"].iter().any(|e| name.ends_with(e))
+    }
+}
+
 /// Runs `gearbif figure`.
 pub fn run(a: Args) -> Result<()> {
     let p = a.gear.params()?;
     output_dir("--out", &a.out)?;
+    // the plan before the work; the figure's files are written into a staging folder inside
+    // --out and moved into place at the end, beside the other figures (a sweep's checkpoint is
+    // the work and stays in --out, so a rerun resumes from it)
+    let label = format!("figure-{:?}", a.name).to_lowercase();
+    let staged = crate::io::StagedDir::begin_merge("--out", &a.out, &label, owned)?;
     let progress = Progress::new(a.quiet);
     let t = std::time::Instant::now();
-    let files = make(a.name, &p, &a.out, a.full, &progress)?;
+    let files = make(a.name, &p, (staged.path(), &a.out), a.full, &progress)?;
     progress.finish();
+    staged.commit()?;
     for f in files {
-        eprintln!("wrote {}", f.display());
+        eprintln!("wrote {}", a.out.join(f).display());
     }
     eprintln!("in {:.1} s", t.elapsed().as_secs_f64());
     Ok(())

@@ -134,6 +134,12 @@ fn simulate<S: DrivenOscillator>(
             output_file(flag, p, false)?;
         }
     }
+    let mut plan = Vec::new();
+    for (flag, path) in [("--out", &a.out), ("--events", &a.events)] {
+        if let Some(p) = path {
+            plan.push((flag, p.as_path(), crate::io::FileKind::Data));
+        }
+    }
     let period = sys.period();
     let t_end = a.periods * period;
     let n = (a.periods * a.samples_per_period as f64).floor() as usize;
@@ -143,6 +149,7 @@ fn simulate<S: DrivenOscillator>(
             format!("{n} samples requested (at most 5e7): reduce one of them"),
         ));
     }
+    let files = crate::io::StagedFiles::begin(&plan)?;
     let dt = period / a.samples_per_period as f64;
     let times: Vec<f64> = (0..=n).map(|i| (i as f64 * dt).min(t_end)).collect();
     let opts = FlowOptions::with_tol(a.method.tol)
@@ -167,11 +174,12 @@ fn simulate<S: DrivenOscillator>(
         );
     }
     if let Some(p) = &a.out {
-        crate::io::write_atomic(p, csv.as_bytes())?;
+        crate::io::write_atomic(files.path(p), csv.as_bytes())?;
     }
     if let Some(p) = &a.events {
-        crate::io::write_atomic(p, events_csv(&flow.events).as_bytes())?;
+        crate::io::write_atomic(files.path(p), events_csv(&flow.events).as_bytes())?;
     }
+    files.commit()?;
     let mut counts = EventCounts::default();
     for e in &flow.events {
         match e.kind {

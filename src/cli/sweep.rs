@@ -4,6 +4,7 @@
 
 use super::common::{angle_deg, count, frequency, limits, output_dir, tolerance, GearArgs};
 use crate::analysis::ClassifyOptions;
+use crate::io::WorkDir;
 use crate::sweep::{
     merge_shards, spec_hash, Axis, Method, Protocol, Shard, SweepOutcome, SweepParam, SweepResult,
     SweepRunner, SweepSpec,
@@ -61,7 +62,8 @@ pub struct Args {
     /// Use the event-driven DP5 instead of the default event-driven DOP853.
     #[arg(long, conflicts_with = "rk4")]
     dp5: bool,
-    /// Output directory (checkpoints in it; rerun the same command to resume).
+    /// Output directory (checkpoints in it; rerun the same command to resume); complete.json is
+    /// written last, when the sweep is complete.
     #[arg(long, default_value = "sweep-out")]
     out: PathBuf,
     /// Stop after this many new rows (the rest can be resumed later).
@@ -99,7 +101,7 @@ pub struct MergeArgs {
     /// The shards' --out directories (or their checkpoint directories).
     #[arg(required = true)]
     dirs: Vec<PathBuf>,
-    /// Output directory of the merged sweep.
+    /// Output directory of the merged sweep (complete.json written last).
     #[arg(long, default_value = "sweep-out")]
     out: PathBuf,
 }
@@ -246,15 +248,32 @@ pub fn spec(a: &Args) -> Result<SweepSpec> {
     Ok(s)
 }
 
-/// Writes the outputs of a complete sweep (points.csv, sweep.json, the RMS map).
-fn write_outputs(res: &SweepResult, out: &Path, seconds: f64) -> Result<()> {
-    res.write(out)?;
+/// The result files of a sweep's output folder (besides its `checkpoint` folder).
+const RESULT: [&str; 4] = ["points.csv", "sweep.json", "rms_map.svg", "rms_map.png"];
+
+/// The output folder of a sweep, its plan checked (a resumable work folder with a completion
+/// marker, `src/io/workdir.rs`).
+fn work_dir(out: &Path) -> Result<WorkDir> {
+    WorkDir::begin("--out", out, "sweep", &RESULT, &["checkpoint"])
+}
+
+/// Writes the outputs of a complete sweep (points.csv, sweep.json, the RMS map), then the
+/// completion marker.
+fn write_outputs(res: &SweepResult, work: WorkDir, seconds: f64) -> Result<()> {
+    let out = work.path().to_path_buf();
+    res.write(&out)?;
     #[cfg(feature = "plot")]
     {
         let fig = crate::plotting::atlas::RmsMap::from_sweep(res);
         crate::plotting::save(&fig, out.join("rms_map.svg"))?;
         crate::plotting::save(&fig, out.join("rms_map.png"))?;
     }
+    let written = if cfg!(feature = "plot") {
+        &RESULT[..]
+    } else {
+        &RESULT[..2]
+    };
+    work.complete(written)?;
     let n = res.points().count();
     let dis = res.points().filter(|p| p.agree == Some(false)).count();
     eprintln!(
@@ -280,13 +299,14 @@ fn merge(a: MergeArgs) -> Result<()> {
             }
         })
         .collect();
+    let work = work_dir(&a.out)?;
     let res = merge_shards(&dirs)?;
     eprintln!(
         "merged {} shards of sweep {}",
         dirs.len(),
         spec_hash(&res.spec)?
     );
-    write_outputs(&res, &a.out, t.elapsed().as_secs_f64())
+    write_outputs(&res, work, t.elapsed().as_secs_f64())
 }
 
 /// Runs `gearbif sweep`.
@@ -296,6 +316,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     let spec = spec(&a)?;
     let shard = a.shard.as_deref().map(Shard::parse).transpose()?;
+    let work = work_dir(&a.out)?;
     let progress = Progress::new(a.quiet);
     let mut runner = SweepRunner::new(spec)
         .checkpoint(a.out.join("checkpoint"))
@@ -326,7 +347,7 @@ pub fn run(a: Args) -> Result<()> {
     progress.finish();
     match outcome {
         SweepOutcome::Complete(res) => {
-            write_outputs(&res, &a.out, t.elapsed().as_secs_f64())?;
+            write_outputs(&res, work, t.elapsed().as_secs_f64())?;
         }
         SweepOutcome::Stopped {
             rows_done,

@@ -1,10 +1,15 @@
 //! Input and output: atomic file writing (no half-written outputs), and readers/writers of the
 //! formats gearbif exchanges with other programs.
 
+pub mod full_disk;
 pub mod outdir;
+pub mod outfiles;
 pub mod recordings;
+pub mod workdir;
 
 pub use outdir::StagedDir;
+pub use outfiles::{FileKind, StagedFiles};
+pub use workdir::WorkDir;
 
 use crate::error::{Error, Result};
 use std::path::Path;
@@ -31,7 +36,10 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
         name.to_string_lossy(),
         std::process::id()
     ));
-    std::fs::write(&tmp, bytes).map_err(|e| Error::file("write", &tmp, e))?;
+    if let Err(e) = full_disk::write(&tmp, bytes) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(Error::file("write", &tmp, e));
+    }
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         Error::file("move into place", path, e)
@@ -48,11 +56,7 @@ pub fn remove_stale_temporaries(dir: &Path) {
     for e in entries.flatten() {
         let name = e.file_name();
         let name = name.to_string_lossy();
-        let Some(pid) = name
-            .strip_prefix('.')
-            .and_then(|n| n.rsplit_once(".tmp-"))
-            .and_then(|(_, pid)| pid.parse::<u32>().ok())
-        else {
+        let Some(pid) = temporary_pid(&name) else {
             continue;
         };
         if cfg!(target_os = "linux")
@@ -62,6 +66,17 @@ pub fn remove_stale_temporaries(dir: &Path) {
             let _ = std::fs::remove_file(e.path());
         }
     }
+}
+
+/// The process id in the name of a hidden temporary file or folder of this crate's writers
+/// (`.NAME.tmp-PID`, `.NAME.tmp-PID.EXT`, `.tmp-PID-N.png`), `None` for any other name.
+pub fn temporary_pid(name: &str) -> Option<u32> {
+    let (_, rest) = name
+        .strip_prefix('.')?
+        .rsplit_once(".tmp-")
+        .or_else(|| name.strip_prefix(".tmp-").map(|r| ("", r)))?;
+    let digits = rest.split(|c: char| !c.is_ascii_digit()).next()?;
+    digits.parse().ok()
 }
 
 /// Serialises `value` as pretty JSON and writes it atomically.

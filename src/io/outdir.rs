@@ -21,7 +21,18 @@ pub struct StagedDir {
     staging: PathBuf,
     /// The first ancestor of the target this run created (removed again on failure).
     created: Option<PathBuf>,
+    mode: Mode,
     committed: bool,
+}
+
+/// How a staged result reaches its target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Mode {
+    /// The result is the whole folder: staged beside it, it replaces the folder.
+    Replace,
+    /// The result is some of the folder's names (one figure among others): staged in a hidden
+    /// folder inside it, each name replaces its namesake and the others stay.
+    Merge,
 }
 
 /// `.NAME.tmp-PID` / `.NAME.old-PID` beside `target`.
@@ -91,22 +102,7 @@ impl StagedDir {
     /// file is meant), and a parent that cannot be written.
     pub fn begin(flag: &str, target: &Path, owned: Owned) -> Result<Self> {
         let what = || format!("{flag} {}", target.display());
-        if target.exists() && !target.is_dir() {
-            return Err(Error::option(what(), "exists and is not a folder"));
-        }
-        let mut up = target.parent();
-        while let Some(q) = up.filter(|q| !q.as_os_str().is_empty()) {
-            if q.exists() {
-                if !q.is_dir() {
-                    return Err(Error::option(
-                        what(),
-                        format!("{} is not a folder", q.display()),
-                    ));
-                }
-                break;
-            }
-            up = q.parent();
-        }
+        check_ancestors(flag, target)?;
         if target.exists() {
             let cwd = std::env::current_dir().ok();
             let real = target.canonicalize().ok();
@@ -138,19 +134,7 @@ impl StagedDir {
             }
         }
         clean_killed(target);
-        let parent = parent_of(target);
-        let mut created = None;
-        if !parent.exists() {
-            let mut first = parent;
-            while let Some(up) = first.parent().filter(|p| !p.as_os_str().is_empty()) {
-                if up.exists() {
-                    break;
-                }
-                first = up;
-            }
-            std::fs::create_dir_all(parent).map_err(|e| Error::file("create", parent, e))?;
-            created = Some(first.to_path_buf());
-        }
+        let created = create_missing(parent_of(target))?;
         let staging = sibling(target, "tmp", std::process::id())?;
         let _ = std::fs::remove_dir_all(&staging);
         if let Err(e) = std::fs::create_dir(&staging) {
@@ -163,6 +147,51 @@ impl StagedDir {
             target: target.to_path_buf(),
             staging,
             created,
+            mode: Mode::Replace,
+            committed: false,
+        })
+    }
+
+    /// Checks the plan of writing some names into the folder `target` (given by `flag`) beside
+    /// what it holds, and creates the staging folder `.LABEL.tmp-PID` inside it. Refused: a
+    /// target that is not a folder, and a name of the result (`owned`) that exists with the
+    /// wrong kind (a folder where a file is meant); other names are left alone.
+    pub fn begin_merge(flag: &str, target: &Path, label: &str, owned: Owned) -> Result<Self> {
+        let what = || format!("{flag} {}", target.display());
+        check_ancestors(flag, target)?;
+        if target.exists() {
+            let entries = std::fs::read_dir(target).map_err(|e| Error::file("read", target, e))?;
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().to_string();
+                let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
+                if !name.starts_with('.') && !owned(&name, is_dir) && owned(&name, !is_dir) {
+                    let (is, meant) = if is_dir {
+                        ("folder", "file")
+                    } else {
+                        ("file", "folder")
+                    };
+                    return Err(Error::option(
+                        what(),
+                        format!("holds the {is} `{name}` where the result has a {meant}"),
+                    ));
+                }
+            }
+        }
+        let created = create_missing(target)?;
+        clean_killed(&target.join(label));
+        let staging = sibling(&target.join(label), "tmp", std::process::id())?;
+        let _ = std::fs::remove_dir_all(&staging);
+        if let Err(e) = std::fs::create_dir(&staging) {
+            if let Some(c) = &created {
+                let _ = std::fs::remove_dir_all(c);
+            }
+            return Err(Error::file("create", &staging, e));
+        }
+        Ok(Self {
+            target: target.to_path_buf(),
+            staging,
+            created,
+            mode: Mode::Merge,
             committed: false,
         })
     }
@@ -177,9 +206,12 @@ impl StagedDir {
         &self.target
     }
 
-    /// Moves the result into place (an earlier result is replaced as a whole).
+    /// Moves the result into place: an earlier result is replaced as a whole (or, for
+    /// [`StagedDir::begin_merge`], each name of the result replaces its namesake).
     pub fn commit(mut self) -> Result<()> {
-        if self.target.exists() {
+        if self.mode == Mode::Merge {
+            self.merge()?;
+        } else if self.target.exists() {
             let old = sibling(&self.target, "old", std::process::id())?;
             let _ = std::fs::remove_dir_all(&old);
             std::fs::rename(&self.target, &old)
@@ -196,6 +228,69 @@ impl StagedDir {
         self.committed = true;
         Ok(())
     }
+}
+
+impl StagedDir {
+    /// Moves each name of the staging folder over its namesake in the target (a folder is moved
+    /// aside first and removed after), then removes the empty staging folder.
+    fn merge(&self) -> Result<()> {
+        let entries =
+            std::fs::read_dir(&self.staging).map_err(|e| Error::file("read", &self.staging, e))?;
+        for e in entries.flatten() {
+            let to = self.target.join(e.file_name());
+            if to.is_dir() {
+                let old = sibling(&to, "old", std::process::id())?;
+                let _ = std::fs::remove_dir_all(&old);
+                std::fs::rename(&to, &old).map_err(|err| Error::file("move aside", &to, err))?;
+                std::fs::rename(e.path(), &to)
+                    .map_err(|err| Error::file("move into place", &to, err))?;
+                let _ = std::fs::remove_dir_all(&old);
+            } else {
+                std::fs::rename(e.path(), &to)
+                    .map_err(|err| Error::file("move into place", &to, err))?;
+            }
+        }
+        let _ = std::fs::remove_dir(&self.staging);
+        Ok(())
+    }
+}
+
+/// Refuses a target under a regular file (its nearest existing ancestor must be a folder).
+pub(crate) fn check_ancestors(flag: &str, target: &Path) -> Result<()> {
+    let what = || format!("{flag} {}", target.display());
+    if target.exists() && !target.is_dir() {
+        return Err(Error::option(what(), "exists and is not a folder"));
+    }
+    let mut up = target.parent();
+    while let Some(q) = up.filter(|q| !q.as_os_str().is_empty()) {
+        if q.exists() {
+            if !q.is_dir() {
+                return Err(Error::option(
+                    what(),
+                    format!("{} is not a folder", q.display()),
+                ));
+            }
+            break;
+        }
+        up = q.parent();
+    }
+    Ok(())
+}
+
+/// Creates `dir` and its missing ancestors; returns the first one created (to remove on failure).
+pub(crate) fn create_missing(dir: &Path) -> Result<Option<PathBuf>> {
+    if dir.exists() {
+        return Ok(None);
+    }
+    let mut first = dir;
+    while let Some(up) = first.parent().filter(|p| !p.as_os_str().is_empty()) {
+        if up.exists() {
+            break;
+        }
+        first = up;
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::file("create", dir, e))?;
+    Ok(Some(first.to_path_buf()))
 }
 
 impl Drop for StagedDir {
@@ -305,6 +400,42 @@ mod tests {
             assert!(!root.join(".out.tmp-999999999").exists());
         }
         drop(s);
+        std::fs::remove_dir_all(root).ok();
+    }
+
+    #[test]
+    fn a_merged_result_replaces_only_its_own_names() {
+        let root = tmp("merge");
+        let out = root.join("figs");
+        std::fs::create_dir_all(out.join("f-data")).unwrap();
+        std::fs::write(out.join("f-data/old.csv"), "old").unwrap();
+        std::fs::write(out.join("f.svg"), "old").unwrap();
+        std::fs::write(out.join("g.svg"), "other").unwrap();
+        let owned = |n: &str, d: bool| {
+            if d {
+                n.ends_with("-data")
+            } else {
+                n.ends_with(".svg")
+            }
+        };
+        {
+            let s = StagedDir::begin_merge("--out", &out, "figure-f", owned).unwrap();
+            std::fs::write(s.path().join("f.svg"), "new").unwrap();
+        }
+        assert_eq!(names(&out), ["f-data", "f.svg", "g.svg"]);
+        assert_eq!(std::fs::read_to_string(out.join("f.svg")).unwrap(), "old");
+        let s = StagedDir::begin_merge("--out", &out, "figure-f", owned).unwrap();
+        std::fs::write(s.path().join("f.svg"), "new").unwrap();
+        std::fs::create_dir(s.path().join("f-data")).unwrap();
+        std::fs::write(s.path().join("f-data/new.csv"), "new").unwrap();
+        s.commit().unwrap();
+        assert_eq!(names(&out), ["f-data", "f.svg", "g.svg"]);
+        assert_eq!(names(&out.join("f-data")), ["new.csv"]);
+        assert_eq!(std::fs::read_to_string(out.join("g.svg")).unwrap(), "other");
+        std::fs::remove_file(out.join("g.svg")).unwrap();
+        std::fs::create_dir(out.join("g.svg")).unwrap();
+        let e = StagedDir::begin_merge("--out", &out, "figure-f", owned).unwrap_err();
+        assert!(e.to_string().contains("folder `g.svg`"), "{e}");
         std::fs::remove_dir_all(root).ok();
     }
 }

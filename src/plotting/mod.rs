@@ -76,22 +76,31 @@ pub fn save(fig: &impl Figure, path: impl AsRef<Path>) -> Result<()> {
                 .unwrap_or(Path::new("."));
             std::fs::create_dir_all(dir).map_err(|e| Error::file("create", dir, e))?;
             let tmp = dir.join(format!(".tmp-{}-{}.png", std::process::id(), unique()));
-            {
-                let root = BitMapBackend::new(&tmp, size).into_drawing_area();
-                root.fill(&WHITE).map_err(plot_err)?;
-                fig.draw(&root)?;
-                root.present().map_err(plot_err)?;
-            }
-            std::fs::rename(&tmp, path).map_err(|e| {
+            let written = draw_png(fig, &tmp, size).and_then(|()| {
+                crate::io::full_disk::after_external_write(&tmp)
+                    .map_err(|e| Error::file("write", &tmp, e))
+            });
+            let moved = written.and_then(|()| {
+                std::fs::rename(&tmp, path).map_err(|e| Error::file("move into place", path, e))
+            });
+            if moved.is_err() {
                 let _ = std::fs::remove_file(&tmp);
-                Error::file("move into place", path, e)
-            })
+            }
+            moved
         }
         _ => Err(Error::option(
             format!("figure path {}", path.display()),
             "must end in .svg or .png",
         )),
     }
+}
+
+/// Draws `fig` into the PNG file `path` (the backend writes it on `present`).
+fn draw_png(fig: &impl Figure, path: &Path, size: (u32, u32)) -> Result<()> {
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(plot_err)?;
+    fig.draw(&root)?;
+    root.present().map_err(plot_err)
 }
 
 fn unique() -> u64 {
