@@ -2,6 +2,7 @@
 //! flowchart; [`harmonic`]), the rigorous classification (period on the Poincaré section modulo the
 //! symmetry, rotation number, Lyapunov exponent; [`classify`], [`lyapunov`]).
 
+pub mod basins;
 pub mod classify;
 pub mod global_events;
 pub mod harmonic;
