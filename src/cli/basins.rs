@@ -21,7 +21,7 @@ pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
     /// Drive frequency f [Hz], in [1e-3, 1e4].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     f: f64,
     /// Grid cells along β (β over [0, 2π) rad), 1 to 2000.
     #[arg(long, default_value_t = 200)]
@@ -49,7 +49,7 @@ pub struct Args {
     #[arg(long, default_value = "velocity")]
     kick_norm: String,
     /// Largest kick tried (rad/s or rad; default 2 · 2πf for velocity, π for state).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     kick_max: Option<f64>,
     /// Drive phases at which the kick is applied, 1 to 64.
     #[arg(long, default_value_t = 4)]
@@ -194,7 +194,7 @@ pub fn run(a: Args) -> Result<()> {
     kick.iter_mut().for_each(|k| k.relabel(&new_of));
     let cells = map.cell_fractions(attractors.len());
     let out = Out {
-        theta_deg: p.theta,
+        theta_deg: p.theta.to_degrees(),
         f_hz: a.f,
         options: &opts,
         cell_fractions: &cells,

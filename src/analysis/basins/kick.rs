@@ -71,6 +71,9 @@ pub struct DirectionKick {
     pub direction: [f64; 2],
     /// Smallest fatal kick found, `None` if none up to `max_kick`.
     pub size: Option<f64>,
+    /// The largest kick known to keep the attractor: the lower end of the final bracket (or
+    /// `max_kick` when no kick was fatal).
+    pub safe: f64,
     /// The attractor reached after that kick.
     pub lands_on: Option<usize>,
 }
@@ -182,6 +185,7 @@ fn along<S: DrivenOscillator + ?Sized>(
         phase,
         direction: d,
         size: None,
+        safe: k.max_kick,
         lands_on: None,
     };
     let step = k.max_kick / k.scan as f64;
@@ -204,6 +208,7 @@ fn along<S: DrivenOscillator + ?Sized>(
         }
     }
     out.size = Some(hi);
+    out.safe = lo;
     out.lands_on = to;
     Ok(out)
 }
