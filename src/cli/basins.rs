@@ -243,7 +243,7 @@ fn write(
     };
     let json = serde_json::to_string(&crate::io::with_schema("gearbif.basins/1", &full))
         .map_err(|e| Error::format("JSON", "basins", e))?;
-    crate::io::write_atomic(&staged.path().join("basins.json"), json.as_bytes())?;
+    crate::io::write_atomic(staged.path().join("basins.json"), json.as_bytes())?;
     let fig = crate::plotting::basins::BasinFigure {
         title: format!(
             "Basins of P_T, Θ = {:.2}°, f = {} Hz ({} × {} cells)",

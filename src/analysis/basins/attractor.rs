@@ -169,30 +169,50 @@ impl AttractorSet {
         if let Some(i) = self.find_periodic(points[0]) {
             return Ok(i);
         }
-        let a = periodic(&self.metric, orbit, points, twin.is_none());
-        let (radius, certified) = certify(sys, &self.metric, &a, opts)?;
-        let a = Attractor {
-            radius,
-            certified,
-            ..a
+        let a = self.certified(
+            sys,
+            periodic(&self.metric, orbit, points, twin.is_none()),
+            opts,
+        )?;
+        // the twin's neighbourhood is certified on its own: G need not preserve distances
+        let twin = match twin {
+            Some(t) => Some(self.certified(
+                sys,
+                Attractor {
+                    points: t,
+                    ..a.clone()
+                },
+                opts,
+            )?),
+            None => None,
         };
         let mut list = self.list.write().map_err(|_| poisoned())?;
         if let Some(i) = find_in(&list, &self.metric, a.points[0]) {
             return Ok(i);
         }
         let i = list.len();
-        let twin_points = twin.map(|t| Attractor {
-            points: t,
-            twin: Some(i),
-            ..a.clone()
-        });
-        let has_twin = twin_points.is_some();
+        let has_twin = twin.is_some();
         list.push(Attractor {
             twin: has_twin.then_some(i + 1),
             ..a
         });
-        list.extend(twin_points);
+        list.extend(twin.map(|t| Attractor { twin: Some(i), ..t }));
         Ok(i)
+    }
+
+    /// `a` with the radius of its certified neighbourhood ([`certify`]).
+    fn certified<S: DrivenOscillator + ?Sized>(
+        &self,
+        sys: &S,
+        a: Attractor,
+        opts: &BasinOptions,
+    ) -> Result<Attractor> {
+        let (radius, certified) = certify(sys, &self.metric, &a, opts)?;
+        Ok(Attractor {
+            radius,
+            certified,
+            ..a
+        })
     }
 
     /// Adds a non-periodic set, or returns the known one with the same dynamics and a rotation
