@@ -339,3 +339,80 @@ fn cli_basins_rejects_bad_input_and_writes_its_folder() {
     assert!(out.join("basins.png").exists() && out.join("basins.svg").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Global continuation over f at Θ = 25°: the co-rotating attractors are born and die between the
+/// two frequencies that bracket the diagram's located points (docs/continuation.md): the symmetric
+/// lock dies across the subcritical symmetry breaking at 2.0777 Hz and is born again across the
+/// supercritical one at 2.5014 Hz; the asymmetric T pair is born across the flip at 1.8549 Hz and
+/// dies at 2.5014 Hz. 200 samples per frequency.
+#[test]
+fn global_continuation_births_and_deaths_bracket_the_diagrams_bifurcations() {
+    use gearbif::analysis::basins::{follow_attractors, FollowOptions, TrackEvent};
+    use gearbif::model::GearParam;
+    let values = [1.7, 1.9, 2.0, 2.1, 2.2, 2.4, 2.6, 2.8];
+    let fo = FollowOptions {
+        samples: 200,
+        seed: 7,
+        match_distance: 0.5,
+    };
+    let gear = Gear::paper(25.0, 2.0).unwrap();
+    let opts = BasinOptions::default();
+    let region = gear_region(2.0);
+    let fol = follow_attractors(&gear, GearParam::F, &values, region, &fo, &opts, &quiet).unwrap();
+    // the track's label and rotation number, from its first appearance
+    let class = |t: usize| {
+        fol.steps.iter().find_map(|s| {
+            let i = s.tracks.iter().position(|&x| x == t)?;
+            Some((
+                s.attractors[i].label.clone(),
+                s.attractors[i].rotation_number,
+            ))
+        })
+    };
+    for s in &fol.steps {
+        let names: Vec<String> = (0..s.attractors.len())
+            .map(|i| {
+                format!(
+                    "[{}] {} {:.2}",
+                    s.tracks[i],
+                    s.attractors[i].legend(i),
+                    s.fractions[i].fraction
+                )
+            })
+            .collect();
+        println!("f = {}: {}", s.value, names.join("; "));
+    }
+    let co =
+        |t: usize, label: &str| class(t).is_some_and(|(l, r)| l == label && (r - 1.0).abs() < 1e-9);
+    let mut found = Vec::new();
+    for e in &fol.events {
+        println!("{e:?}");
+        let (t, from, to, birth) = match *e {
+            TrackEvent::Birth { track, from, to } => (track, from, to, true),
+            TrackEvent::Death { track, from, to } => (track, from, to, false),
+        };
+        let label = if co(t, "T/2 sym") {
+            "T/2 sym"
+        } else if co(t, "T asym") {
+            "T asym"
+        } else {
+            continue;
+        };
+        found.push((label, birth, from, to));
+    }
+    let expect = [
+        ("T/2 sym", false, 2.0777),
+        ("T/2 sym", true, 2.5014),
+        ("T asym", true, 1.8549),
+        ("T asym", false, 2.5014),
+    ];
+    for (label, birth, f) in expect {
+        let n = found
+            .iter()
+            .filter(|e| e.0 == label && e.1 == birth && e.2 < f && f < e.3)
+            .count();
+        let want = if label == "T asym" { 2 } else { 1 }; // the twins
+        assert_eq!(n, want, "{label} birth={birth} across {f} Hz: {found:?}");
+    }
+    assert_eq!(found.len(), 6, "no other co-rotating event: {found:?}");
+}

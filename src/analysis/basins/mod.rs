@@ -9,7 +9,9 @@
 //!   neighbourhood or closes on a new periodic orbit;
 //! - [`grid`]: the basin map on a (β, ω) grid, in parallel;
 //! - [`sampling`]: basin fractions from uniform random samples, σ = √(p(1 − p)/n);
-//! - [`kick`]: the minimal fatal kick of an attractor by scan and bisection along directions.
+//! - [`kick`]: the minimal fatal kick of an attractor by scan and bisection along directions;
+//! - [`follow`]: the attractors and their fractions followed over a parameter, with births and
+//!   deaths.
 //!
 //! The iterated map is the half-period map G = R⁻¹ ∘ P_{T/2} when the system has the symmetry R,
 //! else P_T. Modulo the 2π lift, P_T = G² (R² is the identity or the shift by 2π, model.md,
@@ -17,6 +19,7 @@
 //! G, which maps the basin of an attractor A of P_T onto the basin of its twin G(A) exactly.
 
 pub mod attractor;
+pub mod follow;
 pub mod grid;
 pub mod kick;
 pub mod metric;
@@ -24,6 +27,7 @@ pub mod recognise;
 pub mod sampling;
 
 pub use attractor::{Attractor, AttractorKind, AttractorSet};
+pub use follow::{follow_attractors, Follow, FollowOptions, FollowStep, TrackEvent};
 pub use grid::{basin_map, BasinMap, Region};
 pub use kick::{minimal_fatal_kick, FatalKick, KickNorm, KickOptions};
 pub use metric::SectionMetric;
