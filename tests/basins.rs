@@ -293,7 +293,7 @@ fn g_maps_basins_onto_the_twins_basins_and_the_fatal_kick_brackets_the_boundary(
 }
 
 /// `gearbif basins`: bad input is an error (exit code 2 in the binary), a small run writes its
-/// folder with a JSON that names the attractors.
+/// folder with a JSON that names the attractors, and `--f-values` writes the continuation's.
 #[test]
 fn cli_basins_rejects_bad_input_and_writes_its_folder() {
     let run = |args: &[&str]| {
@@ -308,6 +308,8 @@ fn cli_basins_rejects_bad_input_and_writes_its_folder() {
         &["--f", "2", "--omega-range", "5:1"],
         &["--f", "2", "--kick-norm", "energy"],
         &["--f", "2", "--max-steps", "3"],
+        &["--f", "2", "--f-values", "3:1:0.1"],
+        &["--f", "2", "--f-values", "1:2:0"],
     ] {
         assert!(run(bad).is_err(), "{bad:?} accepted");
     }
@@ -337,6 +339,25 @@ fn cli_basins_rejects_bad_input_and_writes_its_folder() {
     assert!(!v["attractors"].as_array().unwrap().is_empty());
     assert_eq!(v["map"]["labels"].as_array().unwrap().len(), 36);
     assert!(out.join("basins.png").exists() && out.join("basins.svg").exists());
+    let out2 = dir.join("follow");
+    run(&[
+        "--theta-deg",
+        "25",
+        "--f",
+        "2",
+        "--f-values",
+        "2.0:2.2:0.1",
+        "--samples",
+        "30",
+        "--out",
+        out2.to_str().unwrap(),
+    ])
+    .unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out2.join("follow.json")).unwrap()).unwrap();
+    assert_eq!(v["schema"], "gearbif.basins-follow/1");
+    assert_eq!(v["steps"].as_array().unwrap().len(), 3);
+    assert!(out2.join("fractions.png").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
 

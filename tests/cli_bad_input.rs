@@ -316,6 +316,7 @@ const CASES: &[(&str, &str)] = &[
     ("basins --quiet --f 2 --kick-norm energy", "kick norm"),
     ("basins --quiet --f 2 --kick-max -1", "max_kick"),
     ("basins --quiet --f 2 --out {file}/b", "not a folder"),
+    ("basins --quiet --f 2 --f-values 1:2:0", "f-values"),
     // sweep
     ("sweep --quiet --rows theta:0:1e308:1e307", "theta_deg"),
     ("sweep --quiet --cols f:0:3:1", "`f`"),

@@ -6,11 +6,12 @@ use super::common::{check_frequency, count, limits, output_dir, tolerance, GearA
 use super::continue_::parse_range;
 use super::sweep::Progress;
 use crate::analysis::basins::{
-    basin_fractions, basin_map, minimal_fatal_kick, Attractor, AttractorSet, BasinMap,
-    BasinOptions, FatalKick, Fractions, KickNorm, KickOptions, Region,
+    basin_fractions, basin_map, follow_attractors, minimal_fatal_kick, Attractor, AttractorSet,
+    BasinMap, BasinOptions, FatalKick, Follow, FollowOptions, Fractions, KickNorm, KickOptions,
+    Region, TrackEvent,
 };
 use crate::error::{Error, Result};
-use crate::model::Gear;
+use crate::model::{Gear, GearParam};
 use serde::Serialize;
 use std::f64::consts::TAU;
 use std::path::PathBuf;
@@ -29,6 +30,11 @@ pub struct Args {
     /// Grid cells along ω, 1 to 2000.
     #[arg(long, default_value_t = 200)]
     cells_omega: usize,
+    /// Follow the attractors and their sample fractions over f = lo, lo + step, … ≤ hi [Hz]
+    /// (`lo:hi:step`, at most 1000 values) instead of one map; --f then only sets the default ω
+    /// range.
+    #[arg(long)]
+    f_values: Option<String>,
     /// ω range lo:hi of the grid and the samples [rad/s] (default ±3 · 2πf).
     #[arg(long, allow_hyphen_values = true)]
     omega_range: Option<String>,
@@ -91,7 +97,16 @@ struct Out<'a> {
 }
 
 fn owned(name: &str, is_dir: bool) -> bool {
-    !is_dir && matches!(name, "basins.json" | "basins.svg" | "basins.png")
+    !is_dir
+        && matches!(
+            name,
+            "basins.json"
+                | "basins.svg"
+                | "basins.png"
+                | "follow.json"
+                | "fractions.svg"
+                | "fractions.png"
+        )
 }
 
 /// Checks the arguments; the region and the kick options.
@@ -162,6 +177,10 @@ pub fn run(a: Args) -> Result<()> {
         Some(out) => Some(crate::io::StagedDir::begin("--out", out, owned)?),
         None => None,
     };
+    if let Some(v) = &a.f_values {
+        let values = parse_values(v)?;
+        return follow(&a, &gear, &values, region, &opts, staged);
+    }
     let t = std::time::Instant::now();
     let set = AttractorSet::new(&gear);
     let progress = Progress::new(a.quiet);
@@ -305,4 +324,122 @@ fn text(out: &Out<'_>, a: &Args) -> String {
         );
     }
     s
+}
+
+/// `lo:hi:step` → lo, lo + step, … ≤ hi (each a valid frequency, at most 1000 values).
+fn parse_values(s: &str) -> Result<Vec<f64>> {
+    let bad = |why: &str| Error::option(format!("--f-values `{s}`"), why.to_string());
+    let p: Vec<f64> = s
+        .split(':')
+        .map(|x| {
+            x.trim()
+                .parse::<f64>()
+                .map_err(|_| bad("expected lo:hi:step"))
+        })
+        .collect::<Result<_>>()?;
+    let [lo, hi, step] = p[..] else {
+        return Err(bad("expected lo:hi:step"));
+    };
+    if !(lo.is_finite() && hi.is_finite() && step.is_finite() && step > 0.0 && hi >= lo) {
+        return Err(bad("needs finite lo <= hi and step > 0"));
+    }
+    let n = ((hi - lo) / step + 1e-9).floor() + 1.0;
+    if n > 1000.0 {
+        return Err(bad("more than 1000 values"));
+    }
+    let values: Vec<f64> = (0..n as usize).map(|i| lo + i as f64 * step).collect();
+    for &f in &values {
+        check_frequency(f)?;
+    }
+    Ok(values)
+}
+
+/// `--f-values`: the global continuation over f, its JSON and the figure of the fractions.
+fn follow(
+    a: &Args,
+    gear: &Gear,
+    values: &[f64],
+    region: Region,
+    opts: &BasinOptions,
+    staged: Option<crate::io::StagedDir>,
+) -> Result<()> {
+    let fo = FollowOptions {
+        samples: a.samples.max(1),
+        seed: a.seed,
+        match_distance: 0.5,
+    };
+    let progress = Progress::new(a.quiet);
+    let fol = follow_attractors(gear, GearParam::F, values, region, &fo, opts, &progress)?;
+    progress.finish();
+    if let Some(staged) = staged {
+        let json = serde_json::to_string(&crate::io::with_schema("gearbif.basins-follow/1", &fol))
+            .map_err(|e| Error::format("JSON", "follow", e))?;
+        crate::io::write_atomic(staged.path().join("follow.json"), json.as_bytes())?;
+        let fig = fractions_plot(&fol);
+        crate::plotting::save(&fig, staged.path().join("fractions.svg"))?;
+        crate::plotting::save(&fig, staged.path().join("fractions.png"))?;
+        staged.commit()?;
+    }
+    Output { json: a.json }.emit_tagged("gearbif.basins-follow/1", &fol, || {
+        let mut s = String::new();
+        for st in &fol.steps {
+            s += &format!("f = {} Hz:", st.value);
+            for (i, at) in st.attractors.iter().enumerate() {
+                let fr = &st.fractions[i];
+                s += &format!(
+                    " [track {}] {} {:.1} ± {:.1} %;",
+                    st.tracks[i],
+                    at.label,
+                    100.0 * fr.fraction,
+                    100.0 * fr.sigma
+                );
+            }
+            s += "\n";
+        }
+        for e in &fol.events {
+            s += &match e {
+                TrackEvent::Birth { track, from, to } => {
+                    format!("track {track} born between {from} and {to} Hz\n")
+                }
+                TrackEvent::Death { track, from, to } => {
+                    format!("track {track} ends between {from} and {to} Hz\n")
+                }
+            };
+        }
+        s
+    })
+}
+
+/// Basin fraction against f, one marker series per track.
+fn fractions_plot(fol: &Follow) -> crate::plotting::LinePlot {
+    let series = (0..fol.tracks)
+        .map(|t| {
+            let mut label = String::new();
+            let points = fol
+                .steps
+                .iter()
+                .filter_map(|s| {
+                    let i = s.tracks.iter().position(|&x| x == t)?;
+                    if label.is_empty() {
+                        let at = &s.attractors[i];
+                        label = format!("track {t}: {}, ρ = {:.2}", at.label, at.rotation_number);
+                    }
+                    Some((s.value, s.fractions[i].fraction))
+                })
+                .collect();
+            crate::plotting::Series {
+                label,
+                points,
+                markers: true,
+                color: t,
+            }
+        })
+        .collect();
+    crate::plotting::LinePlot {
+        title: "Basin fractions of the attractors of P_T".into(),
+        x_label: "f [Hz]".into(),
+        y_label: "basin fraction (dimensionless)".into(),
+        series,
+        ..Default::default()
+    }
 }
