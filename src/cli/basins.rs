@@ -347,7 +347,11 @@ fn parse_values(s: &str) -> Result<Vec<f64>> {
     if n > 1000.0 {
         return Err(bad("more than 1000 values"));
     }
-    let values: Vec<f64> = (0..n as usize).map(|i| lo + i as f64 * step).collect();
+    // rounded to 12 digits so that 1.5 + 14 · 0.1 prints as 2.9
+    let round = |x: f64| (x * 1e12).round() / 1e12;
+    let values: Vec<f64> = (0..n as usize)
+        .map(|i| round(lo + i as f64 * step))
+        .collect();
     for &f in &values {
         check_frequency(f)?;
     }
