@@ -314,6 +314,16 @@ const CASES: &[(&str, &str)] = &[
     ("classify --f 1.3 --tol 0", "tol"),
     ("classify --f nan", "`f`"),
     ("classify --f 1.3 --eta -1", "eta"),
+    // basins
+    ("basins --quiet --f nan", "`f`"),
+    ("basins --quiet --f 2 --tol 0", "tol"),
+    ("basins --quiet --f 2 --cells-beta 0", "cells-beta"),
+    ("basins --quiet --f 2 --max-steps 3", "max-steps"),
+    ("basins --quiet --f 2 --omega-range 5:1", "range"),
+    ("basins --quiet --f 2 --kick-norm energy", "kick norm"),
+    ("basins --quiet --f 2 --kick-max -1", "max_kick"),
+    ("basins --quiet --f 2 --out {file}/b", "not a folder"),
+    ("basins --quiet --f 2 --f-values 1:2:0", "f-values"),
     // sweep
     ("sweep --quiet --rows theta:0:1e308:1e307", "theta_deg"),
     ("sweep --quiet --cols f:0:3:1", "`f`"),
@@ -591,6 +601,8 @@ fn extreme_numeric_flags_give_a_result_or_exit_2() {
         ("classify --settle 2 --record 1 --analysis 2 --f {}", "f"),
         ("classify --settle 2 --record 1 --analysis 2 --beta0-deg {}", "beta0_deg"),
         ("sweep --quiet --settle 1 --record 1 --analysis 0 --rows theta:0:10:10 --cols zeta:0:{}:1", "zeta"),
+        ("basins --quiet --cells-beta 2 --cells-omega 2 --samples 2 --no-kick --f {}", "f"),
+        ("basins --quiet --cells-beta 2 --cells-omega 2 --samples 2 --no-kick --f 2 --tol {}", "tol"),
     ];
     let root = std::env::temp_dir().join(format!("gearbif-fuzzcli-{}", std::process::id()));
     let mut failures = Vec::new();

@@ -3,6 +3,7 @@
 //! symmetry, rotation number, Lyapunov exponent; [`classify`], [`lyapunov`]), and the σ of a point
 //! located on a recorded gear from its model file's covariance ([`uncertainty`]).
 
+pub mod basins;
 pub mod classify;
 pub mod global_events;
 pub mod harmonic;

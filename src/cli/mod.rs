@@ -5,6 +5,7 @@
 //! units with angles in degrees; `--json` prints machine-readable output on stdout; errors go to
 //! stderr with exit code 2; output files are written atomically.
 
+mod basins;
 mod bench;
 mod boundary;
 mod campaign;
@@ -85,6 +86,9 @@ pub enum Command {
     /// The paper's figures (fig5 … fig10), orbit diagram, Lyapunov exponent: SVG and PNG (fig7 …
     /// fig10 with the event-driven DOP853; fig5, fig6, orbit and lyapunov with the DP5).
     Figure(figure::Args),
+    /// The attractors of P_T at one (Θ, f), their basin map (figure), basin fractions with
+    /// binomial σ and the minimal fatal kick (event-driven DOP853).
+    Basins(basins::Args),
 }
 
 /// Runs a parsed command line.
@@ -106,6 +110,7 @@ pub fn run(cli: Cli) -> crate::Result<()> {
         Command::Sweep(a) => sweep::run(a),
         Command::Report(a) => report::run(a),
         Command::Figure(a) => figure::run(a),
+        Command::Basins(a) => basins::run(a),
     }
 }
 

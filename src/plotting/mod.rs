@@ -5,6 +5,7 @@
 //! `.png`) and writes atomically (to a temporary file, then renamed).
 
 pub mod atlas;
+pub mod basins;
 pub mod branch;
 pub mod campaign;
 pub mod diagnosis;
