@@ -448,6 +448,7 @@ fn refit_sizes_are_unbiased_at_low_noise() {
         eta_static_excess: 0.0,
         tol: opts.tol,
         held_shapes: Vec::new(),
+        roughness: 0.0,
         session: Default::default(),
     };
     let sopts = ShootingOptions {
@@ -1192,6 +1193,7 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
             fit_latency: false,
             eta_static_excess: 0.0,
             held_shapes: Vec::new(),
+            roughness: 0.0,
             session: Default::default(),
         };
         let sopts = ShootingOptions {

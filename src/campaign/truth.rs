@@ -203,6 +203,45 @@ impl TruthModel {
         }
     }
 
+    /// The true curve in β that the diagnosis's curve of `kind` ([`crate::identification::curve`])
+    /// estimates, at the output angle `beta` (rad), s⁻²: for `friction` the Coulomb friction
+    /// η(1 + b exp(−d²/2w²)) of a bearing defect (η where there is none), for `torque` the static
+    /// torque Σ A_k sin(kβ − φ_k) with the direction asymmetry's constant −aη. `None` when the
+    /// truth's friction (or smooth force) depends on anything else besides β that such a curve
+    /// cannot hold (a load, a Stribeck excess, a warm-up, a friction growing with the torque, an
+    /// angle modulation; a coupling modulation or angle-dependent damping for the torque).
+    pub fn curve(&self, kind: &str, beta: f64) -> Option<f64> {
+        match kind {
+            "friction" => {
+                let other = self.load.is_some()
+                    || self.stribeck.is_some()
+                    || self.warming != 0.0
+                    || self.torque_friction != 0.0
+                    || self.angle_modulation != 0.0;
+                if other {
+                    return None;
+                }
+                let bump = self.friction_bump.map_or(0.0, |(b, b0, w)| {
+                    let d = (beta - b0 + PI).rem_euclid(2.0 * PI) - PI;
+                    b * (-d * d / (2.0 * w * w)).exp()
+                });
+                Some(self.eta * (1.0 + bump))
+            }
+            "torque" => {
+                if self.coupling_modulation.is_some() || self.zeta_relative != 0.0 {
+                    return None;
+                }
+                let t: f64 = self
+                    .harmonics
+                    .iter()
+                    .map(|&(k, amp, ph)| amp * (k as f64 * beta - ph).sin())
+                    .sum();
+                Some(t - self.friction_asymmetry * self.eta)
+            }
+            _ => None,
+        }
+    }
+
     /// Δ = cos Θ cos Φ − 2 sin Θ sin Φ.
     pub fn delta(&self) -> f64 {
         self.theta.cos() * self.phi.cos() - 2.0 * self.theta.sin() * self.phi.sin()

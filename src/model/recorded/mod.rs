@@ -8,6 +8,7 @@
 //!     + A sin β + B cos β + Σ_{k=2,3} (A_k sin kβ + B_k cos kβ)   (static_torque, lab-fixed)
 //!     − q (|β̇|/V)^p sgn β̇                                 (power_law_drag; V = 4 rad/s)
 //!     − c_r (β̇ − α̇)                                       (corotating_drag)
+//!     + τ(β)                                               (a curve, [`spline`])
 //! ```
 //! with α(t) = α₀ + α̇ t (α̇ = 0 for a ring-down) in the coupling replaced by the input magnet's
 //! true angle α + ε + χ τ_in (a drive offset ε and the quasi-static input compliance χ, with
@@ -23,6 +24,7 @@ use std::f64::consts::TAU;
 
 pub mod file;
 mod lens;
+pub mod spline;
 pub use lens::{ParamForces, RecordedModel, RecordedParam};
 #[cfg(test)]
 mod tests_lens;
@@ -178,6 +180,11 @@ pub struct Coefficients {
     pub drift_settling: Option<f64>,
     /// Terms of the sparse search (`unexplained`) with their coefficients.
     pub extra: [(ExtraTerm, f64); 4],
+    /// Coefficients of a torque curve τ(β) = Σ c_j B_j(β) ([`spline`]), s⁻² (all zero: none).
+    pub spline_torque: [f64; spline::SPLINE_KNOTS],
+    /// Coefficients of a friction curve Σ c_j B_j(β) added to the dry friction ρ
+    /// ([`spline`]), s⁻² (all zero: none).
+    pub spline_friction: [f64; spline::SPLINE_KNOTS],
 }
 
 /// The default shape δ of the Stribeck decay exp(−(|β̇|/w)^δ): 2, the Gaussian form of the
@@ -667,6 +674,11 @@ impl RecordedGear {
                 a_beta += m * (ak * co - bk * s);
             }
         }
+        if spline::active(&c.spline_torque) {
+            let (v, d) = spline::eval(&c.spline_torque, sb.atan2(cb));
+            a += v;
+            a_beta += d;
+        }
         for &(term, th) in &c.extra {
             if th == 0.0 {
                 continue;
@@ -691,7 +703,7 @@ impl RecordedGear {
         (a, a_beta, a_omega, a_alpha)
     }
     /// The dry friction before its floor, ρ = η + η_L L(α, β) + Σ θ_k (friction harmonics: cos β,
-    /// sin β, cos or sin(kα + lβ)) at (α, β), and, when `with_beta`, ∂ρ/∂β (the friction is
+    /// sin β, cos or sin(kα + lβ)) + Σ c_j B_j(β) (a friction curve, [`spline`]) at (α, β), and, when `with_beta`, ∂ρ/∂β (the friction is
     /// max(ρ, 0), [`Self::floored_friction`]); L the bearing load of [`load_shape`] (the `load_dependent_friction`
     /// family of docs/diagnosis.md, "The catalog as families"). α is the recorded input angle,
     /// not the input magnet's (the coupling's, [`Self::input_angle`]). `sc_beta` = (sin β,
@@ -725,12 +737,18 @@ impl RecordedGear {
                 r_beta += th * l as f64 * d;
             }
         }
+        if spline::active(&self.c.spline_friction) {
+            let (v, d) = spline::eval(&self.c.spline_friction, sc_beta.0.atan2(sc_beta.1));
+            r += v;
+            r_beta += d;
+        }
         (r, r_beta)
     }
     /// Whether the friction ρ of [`Self::friction`] varies with the angles (a load or friction
     /// harmonics): only then can its floor at 0 switch within a slip phase.
     fn friction_varies(&self) -> bool {
         self.c.eta_load != 0.0
+            || spline::active(&self.c.spline_friction)
             || self
                 .c
                 .extra
