@@ -110,6 +110,10 @@ pub struct CurveResult {
     /// ([`super::truth::TruthModel::curve`]); `None` when the truth has no such curve.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coverage: Option<f64>,
+    /// The largest |curve − truth|/σ on the grid and where (β in degrees); `None` without a
+    /// truth of its kind.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub worst: Option<[f64; 2]>,
 }
 
 /// The fraction of the grid a band must cover for a case's curve to count as covering

@@ -214,6 +214,10 @@ pub fn run_case(
                 .truth
                 .curve(&c.kind, 0.0)
                 .map(|_| c.coverage(|b| g.truth.curve(&c.kind, b).unwrap_or(f64::NAN))),
+            worst: g
+                .truth
+                .curve(&c.kind, 0.0)
+                .map(|_| c.worst(|b| g.truth.curve(&c.kind, b).unwrap_or(f64::NAN))),
         });
     let (forks, joints) = diag
         .as_ref()

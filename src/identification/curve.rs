@@ -51,9 +51,9 @@ pub const GRID_POINTS: usize = 180;
 /// Half-width of the reported band in σ (a two-sided 95 % band).
 pub const BAND_SIGMAS: f64 = 2.0;
 
-/// Levenberg–Marquardt patience of the curve's refits at each λ (each warm-started from the
-/// last: the pilot's, then the smoother curve's).
-const CURVE_PATIENCE: usize = 2;
+/// Levenberg–Marquardt patience of the curve's refits (the judge's, [`ShootingOptions`]'s
+/// default): each λ is warm-started from the last, the first from the pilot's refit.
+const CURVE_PATIENCE: usize = 1;
 
 /// One (kind, λ) tried (report key `curve.tried`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -137,6 +137,17 @@ impl Curve {
     }
 }
 
+impl Curve {
+    /// The largest |curve − truth(β)|/σ on the grid and the β (degrees) where it is.
+    pub fn worst(&self, truth: impl Fn(f64) -> f64) -> [f64; 2] {
+        self.grid_deg
+            .iter()
+            .zip(self.value.iter().zip(&self.sigma))
+            .map(|(x, (v, s))| [((truth(x.to_radians()) - v) / s).abs(), *x])
+            .fold([0.0, 0.0], |m, d| if d[0] > m[0] { d } else { m })
+    }
+}
+
 /// The terms of the base model with a curve of `kind`: the friction curve takes η's place.
 pub fn curve_terms(kind: SplineKind) -> Vec<Term> {
     let mut t: Vec<Term> = BASE_TERMS
@@ -158,21 +169,40 @@ struct Judged {
     relative: f64,
 }
 
-/// The stage (see the module): every kind and λ refitted and judged against the final model
-/// `fin` (its held-out errors `fin_held`), the best curve with its band; `None` when no curve
-/// model could be refitted. `base_theta` is the base model's refit (ζ, η, −g, gΔ), the start of
-/// the curve model's base coefficients; `weak` the weak form's options (the curve's start).
+/// The stage (see the module): a pilot of each kind, the kind whose pilot fits the judging
+/// windows better refitted at every λ and judged against the final model `fin` (its held-out
+/// errors `fin_held`), the best curve with its band; `None` when no curve model could be
+/// refitted. `base_theta` is the base model's refit (ζ, η, −g, gΔ), the start of the curve
+/// model's base coefficients; `weak` the weak form's options (the curve's start).
 pub fn fit_curve(
     ctx: &SelectCtx,
     weak: &WeakOptions,
     (fin, fin_held): (&ModelState, &HeldOut),
     base_theta: &[f64],
 ) -> Option<Curve> {
-    let mut judged: Vec<Judged> = Vec::new();
-    for kind in SplineKind::ALL {
-        judged.extend(judge_kind(ctx, weak, (fin, fin_held), base_theta, kind));
-    }
-    let m = judged.len();
+    let pilots: Vec<Pilot> = SplineKind::ALL
+        .iter()
+        .filter_map(|&kind| pilot(ctx, weak, fin, base_theta, kind))
+        .collect();
+    // the kind is chosen in sample, before any held-out prediction: the comparison that decides
+    // counts every (kind, λ) pair of the grid as tried
+    let chosen = pilots
+        .into_iter()
+        .map(|p| {
+            let chi2 = p.fit.window_chi2(&p.model, ctx.wins).0;
+            let gain = compare(
+                &in_sample(&fin_held.chi2_fit),
+                &in_sample(&chi2),
+                ctx.wins,
+                ctx.runs,
+            )
+            .gain;
+            (p, gain)
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))?
+        .0;
+    let judged = judge_grid(ctx, fin_held, chosen);
+    let m = SplineKind::ALL.len() * RELATIVE_LAMBDAS.len();
     let best = judged
         .iter()
         .max_by(|a, b| a.cmp.gain.total_cmp(&b.cmp.gain))?;
@@ -213,46 +243,73 @@ pub fn fit_curve(
     })
 }
 
-/// The curve of `kind` refitted at every λ of the grid (smoothest first, each warm-started from
-/// the last) and judged against the final model.
-fn judge_kind(
-    ctx: &SelectCtx,
+/// In-sample window χ² as the held-out errors [`compare`] reads.
+fn in_sample(chi2: &[Option<f64>]) -> HeldOut {
+    HeldOut {
+        chi2: chi2.to_vec(),
+        chi2_fit: Vec::new(),
+    }
+}
+
+/// A curve model's pilot refit without penalty, and the information I of a coefficient in it.
+struct Pilot<'a> {
+    kind: SplineKind,
+    model: SimModel<'a>,
+    fit: SimFit,
+    info: f64,
+}
+
+/// The pilot of `kind`: the curve model (the final model's latency when it fits one) refitted
+/// from the weak form's start by one Levenberg–Marquardt round without penalty.
+fn pilot<'a>(
+    ctx: &SelectCtx<'a>,
     weak: &WeakOptions,
-    (fin, fin_held): (&ModelState, &HeldOut),
+    fin: &ModelState,
     base_theta: &[f64],
     kind: SplineKind,
-) -> Vec<Judged> {
+) -> Option<Pilot<'a>> {
     let terms = curve_terms(kind);
     let mut model = SimModel::of_terms(ctx.runs, *ctx.geo, terms.clone(), ctx.tol);
     model.fit_latency = fin.fit_latency;
     model.latency = fin.latency();
-    let Some(mut theta) = start(ctx, weak, &terms, base_theta, model.latency) else {
-        return Vec::new();
-    };
+    let mut theta = start(ctx, weak, &terms, base_theta, model.latency)?;
     if model.fit_latency {
         theta.push(model.latency);
     }
-    let opts = ShootingOptions {
+    let fit = refit(&model, &theta, ctx.wins, &curve_options(ctx))?;
+    let info = information(&fit, &curve_columns(&terms));
+    (info.is_finite() && info > 0.0).then_some(Pilot {
+        kind,
+        model,
+        fit,
+        info,
+    })
+}
+
+/// The refit options of the curve's fits: one Levenberg–Marquardt round from a warm start (the
+/// judge's patience), the windows the start follows.
+fn curve_options(ctx: &SelectCtx) -> ShootingOptions {
+    ShootingOptions {
         patience: CURVE_PATIENCE,
         reselect: Reselect::Never,
         ..*ctx.shooting
-    };
-    let pilot = ShootingOptions {
-        patience: 1,
-        ..opts
-    };
-    let Some(p) = refit(&model, &theta, ctx.wins, &pilot) else {
-        return Vec::new();
-    };
-    let info = information(&p, &curve_columns(&terms));
-    if !(info.is_finite() && info > 0.0) {
-        return Vec::new();
     }
-    theta = p.theta.clone();
+}
+
+/// The curve of the pilot's kind refitted at every λ of the grid (smoothest first, each
+/// warm-started from the last) and judged against the final model.
+fn judge_grid(ctx: &SelectCtx, fin_held: &HeldOut, p: Pilot) -> Vec<Judged> {
+    let Pilot {
+        kind,
+        mut model,
+        fit,
+        info,
+    } = p;
+    let mut theta = fit.theta;
     let mut out = Vec::new();
     for rel in RELATIVE_LAMBDAS {
         model.roughness = rel * info;
-        let Some(fit) = refit(&model, &theta, ctx.wins, &opts) else {
+        let Some(fit) = refit(&model, &theta, ctx.wins, &curve_options(ctx)) else {
             continue;
         };
         theta = fit.theta.clone();
@@ -260,7 +317,7 @@ fn judge_kind(
         let cmp = compare(fin_held, &held, ctx.wins, ctx.runs);
         out.push(Judged {
             kind,
-            model_terms: terms.clone(),
+            model_terms: model.terms.clone(),
             fit,
             cmp,
             lambda: model.roughness,

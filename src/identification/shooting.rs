@@ -1191,6 +1191,44 @@ mod tests {
 
     use crate::identification::lm::tests::normals as noise;
 
+    /// The roughness penalty's rows are √λ times the cyclic second differences of each curve's
+    /// coefficients (wherever its terms sit in θ), zero on a constant curve,
+    /// and their Jacobian reproduces the rows exactly (the penalty is linear in θ); no rows
+    /// without a curve or with λ = 0.
+    #[test]
+    fn penalty_rows_are_the_scaled_second_differences() {
+        use crate::model::recorded::spline::{SplineKind, SPLINE_KNOTS};
+        let mut terms = super::super::regression::BASE_TERMS.to_vec();
+        terms.extend(
+            (0..SPLINE_KNOTS)
+                .rev()
+                .map(|j| Term::Spline(SplineKind::Friction, j as u8)),
+        );
+        let runs: [CleanRun; 0] = [];
+        let mut model = SimModel::of_terms(&runs, Geometry::new(0.5, 0.5), terms, 1e-8);
+        let theta: Vec<f64> = (0..model.terms.len())
+            .map(|k| (k as f64 * 0.9).sin())
+            .collect();
+        assert!(model.penalty_rows(&theta).0.is_empty());
+        model.roughness = 4.0;
+        let (r, j) = model.penalty_rows(&theta);
+        assert_eq!(
+            (r.len(), j.nrows(), j.ncols()),
+            (SPLINE_KNOTS, SPLINE_KNOTS, theta.len())
+        );
+        // coefficient of basis function m sits at θ index 4 + (15 − m)
+        let c = |m: usize| theta[4 + (SPLINE_KNOTS - 1 - (m % SPLINE_KNOTS))];
+        for m in 0..SPLINE_KNOTS {
+            let want = 2.0 * (c(m + SPLINE_KNOTS - 1) - 2.0 * c(m) + c(m + 1));
+            assert!((r[m] - want).abs() < 1e-12, "{m}: {} {want}", r[m]);
+            let jr: f64 = (0..theta.len()).map(|k| j[(m, k)] * theta[k]).sum();
+            assert!((jr - r[m]).abs() < 1e-12, "{m}");
+        }
+        let mut flat = theta.clone();
+        flat[4..].iter_mut().for_each(|v| *v = 7.0);
+        assert!(model.penalty_rows(&flat).0.iter().all(|v| v.abs() < 1e-12));
+    }
+
     /// A ring-down of the base model at θ = (ζ, η, −g, gΔ) from β = 1.2 rad, 200 frames at 50
     /// per second, camera noise 0.01 rad (seed 5), and its four windows of 50 frames.
     fn ringdown(theta: &[f64]) -> (Vec<CleanRun>, Vec<Win>) {

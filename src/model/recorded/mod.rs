@@ -180,11 +180,12 @@ pub struct Coefficients {
     pub drift_settling: Option<f64>,
     /// Terms of the sparse search (`unexplained`) with their coefficients.
     pub extra: [(ExtraTerm, f64); 4],
-    /// Coefficients of a torque curve τ(β) = Σ c_j B_j(β) ([`spline`]), s⁻² (all zero: none).
-    pub spline_torque: [f64; spline::SPLINE_KNOTS],
+    /// Coefficients of a torque curve τ(β) = Σ c_j B_j(β) ([`spline`]), s⁻² (all zero: none;
+    /// the length is [`spline::SPLINE_KNOTS`], written as a literal as for `extra`).
+    pub spline_torque: [f64; 16],
     /// Coefficients of a friction curve Σ c_j B_j(β) added to the dry friction ρ
     /// ([`spline`]), s⁻² (all zero: none).
-    pub spline_friction: [f64; spline::SPLINE_KNOTS],
+    pub spline_friction: [f64; 16],
 }
 
 /// The default shape δ of the Stribeck decay exp(−(|β̇|/w)^δ): 2, the Gaussian form of the
@@ -1070,6 +1071,31 @@ mod tests {
         let j = s2.forces_jet(0.1, 0.7, 1.0, false);
         assert!((j.r - (20.0 + 2.0 * 0.7f64.cos())).abs() < 1e-12);
         assert!((j.r_beta + 2.0 * 0.7f64.sin()).abs() < 1e-6);
+    }
+
+    /// The curves in β: the torque curve's value and β-derivative in the smooth force, the
+    /// friction curve's in the friction (against the spline's own evaluation and central
+    /// differences), a zero curve leaving the forces unchanged.
+    #[test]
+    fn spline_curves_enter_the_forces_with_their_derivatives() {
+        let base = Coefficients::base(300.0, 0.2, 1.0, 20.0);
+        let mut c = base;
+        for j in 0..spline::SPLINE_KNOTS {
+            c.spline_torque[j] = (j as f64 * 0.7).sin() * 3.0;
+            c.spline_friction[j] = 2.0 + (j as f64 * 1.3).cos();
+        }
+        let (sys, plain) = (driven_test_gear(c), driven_test_gear(base));
+        for k in 0..12 {
+            let (t, b, w) = (0.13 * k as f64, 0.77 * k as f64 - 4.0, 1.5 - 0.3 * k as f64);
+            assert_jet_matches_differences(&sys, t, b, w);
+            let (tau, _) = spline::eval(&c.spline_torque, b);
+            let (m, dm) = spline::eval(&c.spline_friction, b);
+            let (f, f0) = (sys.forces(t, b, w), plain.forces(t, b, w));
+            assert!((f.a - f0.a - tau).abs() < 1e-10, "{k}");
+            let j = sys.forces_jet(t, b, w, false);
+            assert!((j.r - (20.0 + m)).abs() < 1e-10, "{k}");
+            assert!((j.r_beta - dm).abs() < 1e-10, "{k}");
+        }
     }
 
     /// The gear without its floor's switching function: the integrator steps across the kinks

@@ -22,6 +22,9 @@ use std::f64::consts::TAU;
 /// of standard deviation h/√3 ≈ 13°).
 pub const SPLINE_KNOTS: usize = 16;
 
+// the coefficient arrays of `Coefficients` are written with the literal length
+const _: () = assert!(SPLINE_KNOTS == 16);
+
 /// What a curve in β adds to the model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SplineKind {
