@@ -342,7 +342,8 @@ pub struct Summary {
     /// a confident wrong name nor an error.
     pub out_of_catalog_honest: Rate,
     /// Curves whose band holds the true curve on at least [`CURVE_COVERAGE`] of their grid, over
-    /// the cases with a curve that stands and a truth of its kind ([`CurveResult::coverage`]).
+    /// the cases with a curve and a truth of its kind ([`CurveResult::coverage`]), whether the
+    /// curve stands or not.
     #[serde(default = "no_cases")]
     pub curve_coverage: Rate,
     /// Controls with a curve that stands, over the controls.
@@ -450,7 +451,7 @@ fn no_cases() -> Rate {
 fn curve_coverage(results: &[CaseResult]) -> Rate {
     let scored: Vec<f64> = results
         .iter()
-        .filter_map(|r| r.curve.as_ref().filter(|c| c.stands)?.coverage)
+        .filter_map(|r| r.curve.as_ref()?.coverage)
         .collect();
     Rate::new(
         scored.iter().filter(|&&c| c >= CURVE_COVERAGE).count(),

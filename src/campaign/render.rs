@@ -98,8 +98,8 @@ pub fn markdown(doc: &CampaignDoc) -> String {
         pct(&s.out_of_catalog_honest)
     ));
     o.push_str(&format!(
-        "\n## The curve of what remains\n\nCurves that stand whose ±2σ band holds the true curve \
-         of their kind on at least 90 % of their grid (cases whose truth has one): {}. Controls \
+        "\n## The curve of what remains\n\nCurves whose ±2σ band holds the true curve of their \
+         kind on at least 90 % of their grid (cases whose truth has one): {}. Controls \
          with a curve that stands: {}.\n",
         pct(&s.curve_coverage),
         pct(&s.curve_false_positive)

@@ -182,10 +182,10 @@ pub struct Coefficients {
     pub extra: [(ExtraTerm, f64); 4],
     /// Coefficients of a torque curve τ(β) = Σ c_j B_j(β) ([`spline`]), s⁻² (all zero: none;
     /// the length is [`spline::SPLINE_KNOTS`], written as a literal as for `extra`).
-    pub spline_torque: [f64; 16],
+    pub spline_torque: [f64; 24],
     /// Coefficients of a friction curve Σ c_j B_j(β) added to the dry friction ρ
     /// ([`spline`]), s⁻² (all zero: none).
-    pub spline_friction: [f64; 16],
+    pub spline_friction: [f64; 24],
 }
 
 /// The default shape δ of the Stribeck decay exp(−(|β̇|/w)^δ): 2, the Gaussian form of the

@@ -17,13 +17,14 @@
 
 use std::f64::consts::TAU;
 
-/// Knots (and basis functions) of a curve on the period: a spacing of 22.5°, fine enough for a
-/// Gaussian bump of 15° standard deviation (a cubic B-spline of spacing h is close to a Gaussian
-/// of standard deviation h/√3 ≈ 13°).
-pub const SPLINE_KNOTS: usize = 16;
+/// Knots (and basis functions) of a curve on the period: a spacing of 15°. The best fit of this
+/// basis to a Gaussian bump of 15° standard deviation is off by at most 1.2 % of the bump's
+/// height wherever the bump sits (8 % with 16 knots, 3.4 % with 20: least squares on a fine
+/// grid, the spacing against the bump's width).
+pub const SPLINE_KNOTS: usize = 24;
 
 // the coefficient arrays of `Coefficients` are written with the literal length
-const _: () = assert!(SPLINE_KNOTS == 16);
+const _: () = assert!(SPLINE_KNOTS == 24);
 
 /// What a curve in β adds to the model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
