@@ -14,16 +14,20 @@
 //! λ Σ_j (c_{j−1} − 2c_j + c_{j+1})² ([`super::shooting::SimModel::penalty_rows`]) and predicts the
 //! judging windows held out by fold ([`super::judge::heldout`]).
 //!
+//! - **Which kind.** A pilot of each kind, refitted without penalty from the weak form's start;
+//!   the kind whose pilot fits the judging windows better in sample (the paired gain against the
+//!   final model's in-sample χ²) goes on. No held-out prediction is used for the choice.
 //! - **λ by the held-out judge.** λ runs over [`RELATIVE_LAMBDAS`] times the mean information
-//!   I = mean_j Σ_i J_ij² of a curve coefficient in a pilot refit without penalty (so the grid is
-//!   in the data's own units); for every kind and λ the held-out comparison against the final
-//!   model ([`super::judge::compare`]) is computed, and the largest held-out gain Σ d_w is kept.
+//!   I = mean_j Σ_i J_ij² of a curve coefficient in the pilot (so the grid is in the data's own
+//!   units); at every λ the curve is refitted (warm-started from the last) and its held-out
+//!   comparison against the final model ([`super::judge::compare`]) computed; the largest
+//!   held-out gain Σ d_w is kept.
 //! - **Does the curve beat the findings?** The kept curve stands when it predicts the held-out
 //!   windows significantly better than the final model (the base model with every accepted
 //!   finding): [`Comparison::improves`] at the judge's family-wise threshold
-//!   [`z_threshold`]`(m)`, m the number of (kind, λ) pairs tried. Then the catalog's forms are
-//!   wrong for this set and the curve characterises what is missing (the verdict,
-//!   [`super::verdict`]); where it does not, the findings stand as they are.
+//!   [`z_threshold`]`(m)`, m the number of (kind, λ) pairs (both kinds count: one was chosen).
+//!   Then the catalog's forms are wrong for this set and the curve characterises what is missing
+//!   (the verdict, [`super::verdict`]); where it does not, the findings stand as they are.
 //! - **Band.** The curve on a grid of [`GRID_POINTS`] angles with σ(β) = √(b(β)ᵀ C b(β)), b the
 //!   basis functions at β and C the coefficients' block of the penalised refit's covariance
 //!   (window-clustered sandwich floored at s²(JᵀJ + λDᵀD)⁻¹, [`super::shooting`]); the report's
