@@ -83,6 +83,7 @@ fn bench(c: &mut Criterion) {
         eta_static_excess: 0.0,
         tol: DiagnoseOptions::default().tol,
         held_shapes: Vec::new(),
+        roughness: 0.0,
         session: Default::default(),
     };
     let wins = mask_windows(&model, &f.coef, &choose_windows(&all, so.max_windows));

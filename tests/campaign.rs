@@ -448,6 +448,7 @@ fn refit_sizes_are_unbiased_at_low_noise() {
         eta_static_excess: 0.0,
         tol: opts.tol,
         held_shapes: Vec::new(),
+        roughness: 0.0,
         session: Default::default(),
     };
     let sopts = ShootingOptions {
@@ -1198,6 +1199,7 @@ fn stribeck_size_covers_the_truth_on_generated_sets() {
             fit_latency: false,
             eta_static_excess: 0.0,
             held_shapes: Vec::new(),
+            roughness: 0.0,
             session: Default::default(),
         };
         let sopts = ShootingOptions {
@@ -1462,6 +1464,10 @@ fn the_screening_stops_only_candidates_the_judge_rejects() {
 /// name; and the verdict is honest (no catalog effect the truth does not contain, no error) in
 /// ≥ 90 % of the cases: more than `max_consistent_failures(n, 0.10, 0.01)` confident wrong names
 /// refute it at the 1 % level. Every finding that is not the verdict's carries the reason.
+///
+/// The curve of what remains (docs/verdict.md): where the truth has a curve of the fitted kind (the
+/// bearing defect's friction η(β)), the ±2σ bands hold the true curves on ≥ 90 % of their grid
+/// points, pooled over those cases; and on two controls (base model only) no curve stands.
 #[test]
 fn out_of_catalog_forms_get_honest_verdicts() {
     let forms = [
@@ -1476,6 +1482,29 @@ fn out_of_catalog_forms_get_honest_verdicts() {
         cases.extend(tiny_campaign(&format!("ooc{level}"), &forms, level, 1, 0).cases);
     }
     assert_eq!(cases.len(), forms.len() * 2);
+    let controls = tiny_campaign("ooc-none", &["none"], 1.0, 1, 2).cases;
+    assert_eq!(controls.len(), 2);
+    for c in &controls {
+        assert!(
+            c.curve.as_ref().is_none_or(|k| !k.stands),
+            "a control with a curve that stands: {c:?}"
+        );
+    }
+    let covered: Vec<(f64, String)> = cases
+        .iter()
+        .filter_map(|c| {
+            Some((
+                c.curve.as_ref()?.coverage?,
+                format!("{} ×{}", c.effect, c.level),
+            ))
+        })
+        .collect();
+    assert!(!covered.is_empty(), "no curve with a truth of its kind");
+    let pooled = covered.iter().map(|c| c.0).sum::<f64>() / covered.len() as f64;
+    assert!(
+        pooled >= 0.9,
+        "the bands hold the true curves on {pooled:.3} of their grids: {covered:?}"
+    );
     let mut lines = Vec::new();
     for c in &cases {
         lines.push(format!(

@@ -89,10 +89,36 @@ pub struct CaseResult {
     /// best named candidates were each significant on top of the other.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub joints: Vec<crate::identification::beam::Joint>,
+    /// The curve of what remains (report key `curve`; `None` when none was fitted).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub curve: Option<CurveResult>,
     /// The error, if the diagnosis failed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
 }
+
+/// A case's curve of what remains, scored against the truth.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CurveResult {
+    /// `friction` or `torque`.
+    pub kind: String,
+    /// Whether it predicts the held-out runs significantly better than the final model.
+    pub stands: bool,
+    /// The judge's z.
+    pub z: f64,
+    /// The fraction of its grid where its band holds the true curve of its kind
+    /// ([`super::truth::TruthModel::curve`]); `None` when the truth has no such curve.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coverage: Option<f64>,
+    /// The largest |curve − truth|/σ on the grid and where (β in degrees); `None` without a
+    /// truth of its kind.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub worst: Option<[f64; 2]>,
+}
+
+/// The fraction of the grid a band must cover for a case's curve to count as covering
+/// ([`Summary::curve_coverage`]).
+pub const CURVE_COVERAGE: f64 = 0.9;
 
 /// A confident wrong name: the verdict is a catalog effect (not `none`, `unexplained`,
 /// `partly_explained` or `error`) that is not among the `expected` ones. A control's verdict other
@@ -315,6 +341,14 @@ pub struct Summary {
     /// Honest verdicts on the out-of-catalog effects ([`super::cases::OUT_OF_CATALOG`]): neither
     /// a confident wrong name nor an error.
     pub out_of_catalog_honest: Rate,
+    /// Curves whose band holds the true curve on at least [`CURVE_COVERAGE`] of their grid, over
+    /// the cases with a curve and a truth of its kind ([`CurveResult::coverage`]), whether the
+    /// curve stands or not.
+    #[serde(default = "no_cases")]
+    pub curve_coverage: Rate,
+    /// Controls with a curve that stands, over the controls.
+    #[serde(default = "no_cases")]
+    pub curve_false_positive: Rate,
     /// Diagnoses that failed with an error (counted as wrong).
     pub errors: usize,
     /// Median wall time of a diagnosis, s.
@@ -395,9 +429,34 @@ pub fn summarize(results: &[CaseResult]) -> Summary {
         coverage: coverage(results),
         confident_wrong: Rate::new(wrong, effects.count()),
         out_of_catalog_honest: Rate::new(honest, ooc.len()),
+        curve_coverage: curve_coverage(results),
+        curve_false_positive: Rate::new(
+            nulls
+                .iter()
+                .filter(|r| r.curve.as_ref().is_some_and(|c| c.stands))
+                .count(),
+            nulls.len(),
+        ),
         errors: results.iter().filter(|r| r.error.is_some()).count(),
         median_seconds: secs.get(secs.len() / 2).copied().unwrap_or(0.0),
     }
+}
+
+/// A rate over no cases (the curve's rates in campaign files written without them).
+fn no_cases() -> Rate {
+    Rate::new(0, 0)
+}
+
+/// [`Summary::curve_coverage`].
+fn curve_coverage(results: &[CaseResult]) -> Rate {
+    let scored: Vec<f64> = results
+        .iter()
+        .filter_map(|r| r.curve.as_ref()?.coverage)
+        .collect();
+    Rate::new(
+        scored.iter().filter(|&&c| c >= CURVE_COVERAGE).count(),
+        scored.len(),
+    )
 }
 
 fn confusion(results: &[CaseResult]) -> Confusion {

@@ -97,6 +97,13 @@ pub fn markdown(doc: &CampaignDoc) -> String {
         pct(&s.confident_wrong),
         pct(&s.out_of_catalog_honest)
     ));
+    o.push_str(&format!(
+        "\n## The curve of what remains\n\nCurves whose ±2σ band holds the true curve of their \
+         kind on at least 90 % of their grid (cases whose truth has one): {}. Controls \
+         with a curve that stands: {}.\n",
+        pct(&s.curve_coverage),
+        pct(&s.curve_false_positive)
+    ));
     o.push_str("\n## Confusion matrix (rows: truth, columns: verdict)\n\n| truth \\ verdict |");
     for c in &s.confusion.cols {
         o.push_str(&format!(" `{c}` |"));

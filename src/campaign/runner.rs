@@ -6,7 +6,8 @@
 use super::cases::{build_case, effect, EffectSpec};
 use super::generator::SetSize;
 use super::metrics::{
-    confident_wrong, coverage_entries, named_right, summarize, CaseResult, FoundEffect, Summary,
+    confident_wrong, coverage_entries, named_right, summarize, CaseResult, CurveResult,
+    FoundEffect, Summary,
 };
 use super::rk4::Rk4Filippov;
 use crate::error::{Error, Result};
@@ -201,6 +202,23 @@ pub fn run_case(
         .and_then(|r| r.noise.as_ref())
         .and_then(|n| n.speed_noise.as_ref())
         .map(|s| [s.timing_var_s2, s.timing_var_sigma_s2]);
+    let curve = diag
+        .as_ref()
+        .ok()
+        .and_then(|d| d.report.curve.as_ref())
+        .map(|c| CurveResult {
+            kind: c.kind.clone(),
+            stands: c.stands,
+            z: c.z,
+            coverage: g
+                .truth
+                .curve(&c.kind, 0.0)
+                .map(|_| c.coverage(|b| g.truth.curve(&c.kind, b).unwrap_or(f64::NAN))),
+            worst: g
+                .truth
+                .curve(&c.kind, 0.0)
+                .map(|_| c.worst(|b| g.truth.curve(&c.kind, b).unwrap_or(f64::NAN))),
+        });
     let (forks, joints) = diag
         .as_ref()
         .map(|d| (d.report.selection_forks(), d.report.selection_joints()))
@@ -241,6 +259,7 @@ pub fn run_case(
         timing_jitter,
         forks,
         joints,
+        curve,
         error,
     })
 }

@@ -203,6 +203,42 @@ impl TruthModel {
         }
     }
 
+    /// The true curve in β that the diagnosis's curve of `kind` ([`crate::identification::curve`])
+    /// estimates, at the output angle `beta` (rad), s⁻², for a truth whose effect is a curve of
+    /// that kind and nothing else depends on the angles: for `friction` the Coulomb friction
+    /// η(1 + ε cos 2β)(1 + b exp(−d²/2w²)) of an angle-modulated friction or a bearing defect,
+    /// for `torque` the static torque Σ A_k sin(kβ − φ_k). `None` for any other truth (no curve
+    /// of the kind, or a load, a Stribeck excess, a warm-up, a torque-dependent friction, a
+    /// direction asymmetry, a coupling modulation or an angle-dependent damping beside it).
+    pub fn curve(&self, kind: &str, beta: f64) -> Option<f64> {
+        let others = self.load.is_some()
+            || self.stribeck.is_some()
+            || self.warming != 0.0
+            || self.torque_friction != 0.0
+            || self.friction_asymmetry != 0.0
+            || self.coupling_modulation.is_some()
+            || self.zeta_relative != 0.0;
+        let friction_curve = self.friction_bump.is_some() || self.angle_modulation != 0.0;
+        let torque_curve = !self.harmonics.is_empty();
+        match kind {
+            "friction" if friction_curve && !torque_curve && !others => {
+                let bump = self.friction_bump.map_or(0.0, |(b, b0, w)| {
+                    let d = (beta - b0 + PI).rem_euclid(2.0 * PI) - PI;
+                    b * (-d * d / (2.0 * w * w)).exp()
+                });
+                let modulation = 1.0 + self.angle_modulation * (2.0 * beta).cos();
+                Some(self.eta * modulation * (1.0 + bump))
+            }
+            "torque" if torque_curve && !friction_curve && !others => Some(
+                self.harmonics
+                    .iter()
+                    .map(|&(k, amp, ph)| amp * (k as f64 * beta - ph).sin())
+                    .sum(),
+            ),
+            _ => None,
+        }
+    }
+
     /// Δ = cos Θ cos Φ − 2 sin Θ sin Φ.
     pub fn delta(&self) -> f64 {
         self.theta.cos() * self.phi.cos() - 2.0 * self.theta.sin() * self.phi.sin()

@@ -343,6 +343,7 @@ pub fn fit_base(
             eta_static_excess: 0.0,
             tol: opts.tol,
             held_shapes: Vec::new(),
+            roughness: 0.0,
             session: Default::default(),
         };
         let chosen = choose_windows(&prep.runs, opts.shooting.max_windows);
@@ -405,6 +406,7 @@ pub fn diagnose(
     let mut final_state = base.state.clone();
     let mut excess = 0.0;
     let mut remains = None;
+    let mut curve = None;
     // the fraction of the base model's held-out excess each judged finding removed, in the
     // findings' order (the nominal consistency's findings, appended last, have none)
     let mut fractions: Vec<Option<(f64, f64)>> = Vec::new();
@@ -513,6 +515,16 @@ pub fn diagnose(
             }
             remains = Some(rem);
         }
+        // the nonparametric curve, where the selection named something or a significant
+        // remainder is left (a control the base model explains skips it)
+        let named = !fin.effects.is_empty() || excess > 0.0;
+        if named || remains.as_ref().is_some_and(|r| !r.within_noise) {
+            stage(
+                progress,
+                "a curve in the output angle (friction, torque), judged on held-out runs",
+            );
+            curve = super::curve::fit_curve(&sctx, &opts.weak, (&fin, &final_held), &b.fit.theta);
+        }
         final_state = Some(fin);
     }
     // nominal consistency of the base parameters
@@ -546,10 +558,12 @@ pub fn diagnose(
         progress,
     )?;
     super::verdict::set_standings(&mut d.report.findings, &fractions);
-    let (verdict, assessment) = super::verdict::decide(&mut d.report.findings, remains.as_ref());
+    let (verdict, assessment) =
+        super::verdict::decide(&mut d.report.findings, remains.as_ref(), curve.as_ref());
     d.report.verdict = verdict;
     d.report.assessment = Some(assessment);
     d.report.remaining = remains;
+    d.report.curve = curve;
     Ok(d)
 }
 
@@ -774,6 +788,7 @@ fn report(
         eta_static_excess: 0.0,
         tol: opts.tol,
         held_shapes: Vec::new(),
+        roughness: 0.0,
         session: Default::default(),
     };
     let base_pred: Vec<Prediction> = par_map(nr, |r| {
@@ -866,6 +881,7 @@ fn report(
             fits: Some(fits),
             remaining: None,
             assessment: None,
+            curve: None,
         },
         runs: prep.runs,
         files: prep.files,

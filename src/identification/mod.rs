@@ -9,12 +9,14 @@
 //! - [`spec`]: a model as terms and coefficients, mapped to the simulated gear ([`model`]).
 //! - [`predict`]: short-horizon predictions over windows.
 //! - [`profile`]: profiles of the families' shape parameters for the final model's sizes.
+//! - [`curve`]: the nonparametric model of what remains (a curve in β with its band).
 //! - [`synth`]: synthetic recording sets from a truth model with a chosen effect.
 
 pub mod backward;
 pub mod beam;
 pub mod breakaway;
 pub mod catalog;
+pub mod curve;
 pub mod diagnose;
 pub mod export;
 pub mod findings;

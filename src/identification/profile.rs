@@ -511,6 +511,7 @@ mod tests {
             eta_static_excess: 0.0,
             tol: 1e-8,
             held_shapes: Vec::new(),
+            roughness: 0.0,
             session: Default::default(),
         }
     }

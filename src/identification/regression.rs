@@ -15,6 +15,7 @@
 
 use super::model::{angle_harmonic, drag, force_shape, load_shape, stribeck, Geometry, Shape};
 use super::preprocess::CleanRun;
+use crate::model::recorded::spline::{basis_value, SplineKind};
 use crate::model::{GearParam, Parameter};
 use crate::numerics::least_squares::{weighted, LeastSquaresError, DEFAULT_RCOND};
 use nalgebra::DMatrix;
@@ -99,6 +100,10 @@ pub enum Term {
     /// (`drive_steps`: lost steps): column n(t)·(cos α cos β + Δ sin α sin β); coefficient
     /// −g·(offset per turn).
     DrivenOffsetRate,
+    /// Basis function j of a periodic cubic B-spline curve in β ([`crate::model::recorded::spline`]):
+    /// B_j(β) for a torque curve, −sgn β̇ · B_j(β) for a friction curve (the nonparametric model
+    /// of what remains, [`super::curve`]).
+    Spline(SplineKind, u8),
 }
 
 /// The base parameter that drifts in [`Term::Drift`]: one of the gear's lens parameters ζ, η, g
@@ -269,12 +274,20 @@ impl Term {
             Term::Compliance => "input_compliance".into(),
             Term::DrivenOffset => "driven_alpha_offset".into(),
             Term::DrivenOffsetRate => "driven_alpha_offset_per_turn".into(),
+            Term::Spline(SplineKind::Torque, j) => format!("tau_curve[{j}](beta)"),
+            Term::Spline(SplineKind::Friction, j) => format!("-sgn(dbeta)eta_curve[{j}](beta)"),
         }
     }
     /// Whether the term breaks the symmetry (α, β) → (α + π, β + π).
     pub fn breaks_symmetry(&self) -> bool {
         match self {
-            Term::SinB | Term::CosB | Term::VCosB | Term::VSinB | Term::SCosB | Term::SSinB => true,
+            Term::SinB
+            | Term::CosB
+            | Term::VCosB
+            | Term::VSinB
+            | Term::SCosB
+            | Term::SSinB
+            | Term::Spline(..) => true,
             Term::Cos(k, l) | Term::Sin(k, l) | Term::STrig(k, l, _) | Term::VTrig(k, l, _) => {
                 (k + l).rem_euclid(2) == 1
             }
@@ -486,6 +499,7 @@ fn term_value(term: Term, geo: &Geometry, ctx: &SampleCtx, al: f64, b: f64, v: f
         Term::VSinB => (-v * b.sin(), false),
         Term::SCosB => (b.cos(), true),
         Term::SSinB => (b.sin(), true),
+        Term::Spline(kind, j) => (basis_value(usize::from(j), b), kind == SplineKind::Friction),
         Term::VTrig(k, l, sin) => (-v * angle_harmonic(k, l, sin, al, b).0, false),
         Term::STrig(k, l, sin) => (angle_harmonic(k, l, sin, al, b).0, true),
     }

@@ -34,6 +34,10 @@ pub struct Report {
     /// ([`super::verdict::decide`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub assessment: Option<Assessment>,
+    /// Optional (added key): the nonparametric curve of what remains, with its band and its
+    /// held-out comparison against the final model ([`super::curve`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub curve: Option<super::curve::Curve>,
 }
 
 /// What the final model leaves of the held-out mismatch (report key `remaining`): the held-out
@@ -361,7 +365,65 @@ pub fn markdown(r: &Report, title: &str) -> String {
     if let Some(rem) = &r.remaining {
         s.push_str(&remainder_markdown(rem));
     }
+    if let Some(c) = &r.curve {
+        s.push_str(&curve_markdown(c));
+    }
     s
+}
+
+/// The paragraph of report.md on the curve of what remains ([`super::curve`]).
+fn curve_markdown(c: &super::curve::Curve) -> String {
+    let what = match c.kind.as_str() {
+        "friction" => {
+            "the dry friction η(β) as a function of the output angle (in place of the constant η)"
+        }
+        _ => "a lab-fixed torque τ(β) of the output angle",
+    };
+    let (imax, vmax) =
+        c.value.iter().enumerate().fold(
+            (0, f64::NEG_INFINITY),
+            |m, (i, &v)| if v > m.1 { (i, v) } else { m },
+        );
+    let (imin, vmin) =
+        c.value.iter().enumerate().fold(
+            (0, f64::INFINITY),
+            |m, (i, &v)| if v < m.1 { (i, v) } else { m },
+        );
+    let tried: Vec<String> = c
+        .tried
+        .iter()
+        .map(|t| {
+            format!(
+                "{} λ/I = {:.0e}: gain {:.1}, z = {:.2}",
+                t.kind, t.lambda_relative, t.heldout_gain, t.z
+            )
+        })
+        .collect();
+    format!(
+        "## The curve of what remains\n\nThe base model with {what}, a periodic cubic B-spline of \
+         {} knots with the roughness weight λ = {:.3e} chosen by the held-out judge ({}), \
+         {} the held-out runs significantly better than the final model ({}): held-out χ² gain {:.1} ± {:.1}, \
+         z = {:.2} against the threshold {:.2} over {} windows. The curve is largest at β = {:.0}° \
+         ({:.3} ± {:.3} s⁻²) and smallest at β = {:.0}° ({:.3} ± {:.3} s⁻²); the band of \
+         remainder_curve.svg is ± {} σ, σ(β) from the refit's penalised covariance.\n\n",
+        c.knots,
+        c.lambda,
+        tried.join("; "),
+        if c.stands { "predicts" } else { "does not predict" },
+        if c.against.is_empty() { "the base model".to_string() } else { format!("with {}", c.against.join(", ")) },
+        c.heldout_gain,
+        c.heldout_gain_sigma,
+        c.z,
+        c.z_crit,
+        c.windows,
+        c.grid_deg[imax],
+        vmax,
+        c.sigma[imax],
+        c.grid_deg[imin],
+        vmin,
+        c.sigma[imin],
+        c.band_sigmas,
+    )
 }
 
 impl Report {
@@ -627,6 +689,7 @@ mod tests {
             fits,
             remaining: None,
             assessment: None,
+            curve: None,
         }
     }
 

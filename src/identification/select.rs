@@ -46,6 +46,7 @@ impl ModelState {
             fit_latency: self.fit_latency,
             eta_static_excess: 0.0,
             held_shapes: Vec::new(),
+            roughness: 0.0,
             session: Default::default(),
             tol,
         }
@@ -238,6 +239,7 @@ fn evaluate_on(
         eta_static_excess: 0.0,
         tol: ctx.tol,
         held_shapes: Vec::new(),
+        roughness: 0.0,
         session: Default::default(),
     };
     let opts = ShootingOptions {

@@ -31,6 +31,7 @@ use super::predict::{
 use super::preprocess::CleanRun;
 use super::regression::{session_positions, SessionPosition, Term};
 use super::spec::{coefficients_for_run, simulable};
+use crate::model::recorded::spline::{second_differences, SplineKind};
 use crate::numerics::least_squares::{lstsq_determined, DEFAULT_RCOND};
 use faer::Mat;
 use nalgebra::{DMatrix, DVector};
@@ -124,6 +125,10 @@ pub struct SimModel<'a> {
     /// Shape parameters held at these values outside θ (a profile over a family's shape,
     /// [`super::profile`]; empty: every shape of the model is an entry of θ).
     pub held_shapes: Vec<(Shape, f64)>,
+    /// Weight λ of the roughness penalty of the model's curves ([`super::curve`]): the refit
+    /// minimises χ² + λ Σ (c_{j−1} − 2c_j + c_{j+1})² over each curve's coefficients c (s⁻²), as
+    /// rows appended after the windows' residuals ([`Self::penalty_rows`]; 0: no penalty).
+    pub roughness: f64,
     /// The runs' session positions (the clocks of the drift terms), computed at the first
     /// simulation that needs them ([`Self::session_position`]) and kept with the model.
     pub session: OnceLock<Vec<SessionPosition>>,
@@ -142,6 +147,7 @@ impl<'a> SimModel<'a> {
             eta_static_excess: 0.0,
             tol,
             held_shapes: Vec::new(),
+            roughness: 0.0,
             session: OnceLock::new(),
         }
     }
@@ -206,6 +212,31 @@ impl SimModel<'_> {
             }
             _ => false,
         })
+    }
+    /// The roughness penalty's residual rows at θ, √λ times the cyclic second differences of each
+    /// curve's coefficients, and their Jacobian (constant: the penalty is quadratic); empty
+    /// without a curve or with λ = 0.
+    pub fn penalty_rows(&self, theta: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        let curves = curve_columns(&self.terms);
+        let rows: usize = curves.iter().map(|c| c.len()).sum();
+        if self.roughness <= 0.0 || rows == 0 {
+            return (Vec::new(), DMatrix::zeros(0, theta.len()));
+        }
+        let w = self.roughness.sqrt();
+        let mut r = Vec::with_capacity(rows);
+        let mut j = DMatrix::zeros(rows, theta.len());
+        for cols in &curves {
+            let c: Vec<f64> = cols.iter().map(|&k| theta[k]).collect();
+            let n = cols.len();
+            for (i, d) in second_differences(&c).into_iter().enumerate() {
+                let row = r.len();
+                r.push(w * d);
+                j[(row, cols[(i + n - 1) % n])] += w;
+                j[(row, cols[i])] -= 2.0 * w;
+                j[(row, cols[(i + 1) % n])] += w;
+            }
+        }
+        (r, j)
     }
     /// θ from term coefficients and the latency.
     pub fn theta(&self, coef: &[f64], latency: f64) -> Vec<f64> {
@@ -518,6 +549,14 @@ impl SimFit {
                 rows.extend(row0..row0 + wins[wi].keep.len());
             }
         }
+        // the rows after the windows' are the roughness penalty's: always kept
+        let windows_end = self
+            .used
+            .iter()
+            .map(|&(wi, row0)| row0 + wins[wi].keep.len())
+            .max()
+            .unwrap_or(0);
+        rows.extend(windows_end..self.resid.len());
         if rows.len() <= p {
             return None;
         }
@@ -527,6 +566,27 @@ impl SimFit {
         let out: Vec<f64> = (0..p).map(|k| self.theta[k] + d[k]).collect();
         out.iter().all(|v| v.is_finite()).then_some(out)
     }
+}
+
+/// The θ indices of each curve's coefficients in `terms` ([`Term::Spline`], one list per kind in
+/// the order of the basis functions).
+pub fn curve_columns(terms: &[Term]) -> Vec<Vec<usize>> {
+    SplineKind::ALL
+        .iter()
+        .map(|&kind| {
+            let mut cols: Vec<(u8, usize)> = terms
+                .iter()
+                .enumerate()
+                .filter_map(|(k, t)| match t {
+                    Term::Spline(kk, j) if *kk == kind => Some((*j, k)),
+                    _ => None,
+                })
+                .collect();
+            cols.sort();
+            cols.into_iter().map(|c| c.1).collect::<Vec<usize>>()
+        })
+        .filter(|c| c.len() >= 3)
+        .collect()
 }
 
 /// Refits θ of `model` from `theta0` by multiple shooting over the windows `wins`. Windows whose
@@ -728,6 +788,7 @@ fn fit_windows(
             out.extend(res);
             new_states[k] = x0;
         }
+        out.extend(model.penalty_rows(theta).0);
         let chi2: f64 = out.iter().map(|v| v * v).sum();
         let mut g = warm.lock().ok()?;
         if chi2 <= g.best.0 {
@@ -749,8 +810,10 @@ fn fit_windows(
                 warm.lock().ok()?.states.clone()
             }
         };
-        Some(varpro_jacobian(
-            model, theta, wins, &used, &states, row, false,
+        Some(with_penalty(
+            model,
+            theta,
+            varpro_jacobian(model, theta, wins, &used, &states, row, false),
         ))
     };
     let r0 = residuals(theta0)?;
@@ -784,7 +847,8 @@ fn fit_windows(
         // valley along it
         residuals(&sol.p)?;
         let states = warm.lock().ok()?.states.clone();
-        sol.jac = varpro_jacobian(model, &sol.p, wins, &used, &states, row, true);
+        let jac = varpro_jacobian(model, &sol.p, wins, &used, &states, row, true);
+        sol.jac = with_penalty(model, &sol.p, jac);
         sol.cov = scaled_cov(&sol.jac, sol.rss);
     }
     let samples: usize = used.iter().map(|&(wi, _)| wins[wi].kept()).sum();
@@ -808,6 +872,20 @@ fn fit_windows(
         inflation,
         converged: sol.converged,
     })
+}
+
+/// The Jacobian `jac` of the windows' residuals with the rows of the roughness penalty
+/// appended ([`SimModel::penalty_rows`]; `jac` itself without a penalty).
+fn with_penalty(model: &SimModel, theta: &[f64], jac: DMatrix<f64>) -> DMatrix<f64> {
+    let (r, jp) = model.penalty_rows(theta);
+    if r.is_empty() {
+        return jac;
+    }
+    let (m, n) = (jac.nrows(), jac.ncols());
+    let mut out = DMatrix::zeros(m + r.len(), n);
+    out.view_mut((0, 0), (m, n)).copy_from(&jac);
+    out.view_mut((m, 0), (r.len(), n)).copy_from(&jp);
+    out
 }
 
 /// The window states projected at the last θ whose residuals were evaluated (the warm starts of
@@ -1112,6 +1190,44 @@ mod tests {
     use super::*;
 
     use crate::identification::lm::tests::normals as noise;
+
+    /// The roughness penalty's rows are √λ times the cyclic second differences of each curve's
+    /// coefficients (wherever its terms sit in θ), zero on a constant curve,
+    /// and their Jacobian reproduces the rows exactly (the penalty is linear in θ); no rows
+    /// without a curve or with λ = 0.
+    #[test]
+    fn penalty_rows_are_the_scaled_second_differences() {
+        use crate::model::recorded::spline::{SplineKind, SPLINE_KNOTS};
+        let mut terms = super::super::regression::BASE_TERMS.to_vec();
+        terms.extend(
+            (0..SPLINE_KNOTS)
+                .rev()
+                .map(|j| Term::Spline(SplineKind::Friction, j as u8)),
+        );
+        let runs: [CleanRun; 0] = [];
+        let mut model = SimModel::of_terms(&runs, Geometry::new(0.5, 0.5), terms, 1e-8);
+        let theta: Vec<f64> = (0..model.terms.len())
+            .map(|k| (k as f64 * 0.9).sin())
+            .collect();
+        assert!(model.penalty_rows(&theta).0.is_empty());
+        model.roughness = 4.0;
+        let (r, j) = model.penalty_rows(&theta);
+        assert_eq!(
+            (r.len(), j.nrows(), j.ncols()),
+            (SPLINE_KNOTS, SPLINE_KNOTS, theta.len())
+        );
+        // coefficient of basis function m sits at θ index 4 + (15 − m)
+        let c = |m: usize| theta[4 + (SPLINE_KNOTS - 1 - (m % SPLINE_KNOTS))];
+        for m in 0..SPLINE_KNOTS {
+            let want = 2.0 * (c(m + SPLINE_KNOTS - 1) - 2.0 * c(m) + c(m + 1));
+            assert!((r[m] - want).abs() < 1e-12, "{m}: {} {want}", r[m]);
+            let jr: f64 = (0..theta.len()).map(|k| j[(m, k)] * theta[k]).sum();
+            assert!((jr - r[m]).abs() < 1e-12, "{m}");
+        }
+        let mut flat = theta.clone();
+        flat[4..].iter_mut().for_each(|v| *v = 7.0);
+        assert!(model.penalty_rows(&flat).0.iter().all(|v| v.abs() < 1e-12));
+    }
 
     /// A ring-down of the base model at θ = (ζ, η, −g, gΔ) from β = 1.2 rad, 200 frames at 50
     /// per second, camera noise 0.01 rad (seed 5), and its four windows of 50 frames.

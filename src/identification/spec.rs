@@ -5,6 +5,7 @@
 
 use super::model::{Coefficients, ExtraTerm, Shape};
 use super::regression::{grid_weight, load_grid_term, Clock, DriftParam, SessionPosition, Term};
+use crate::model::recorded::spline::SplineKind;
 
 /// A fitted model's θ as the refit by simulation left it: its terms, whether the last entry is
 /// the latency, θ and its covariance (an infinite variance: a held entry). What model.json's
@@ -217,6 +218,15 @@ pub fn coefficients(terms: &[Term], coef: &[f64]) -> Coefficients {
             Term::DrivenOffset => offset = v,
             Term::DrivenOffsetRate => offset_rate = v,
             Term::Drift(..) => {}
+            Term::Spline(kind, j) => {
+                let curve = match kind {
+                    SplineKind::Torque => &mut c.spline_torque,
+                    SplineKind::Friction => &mut c.spline_friction,
+                };
+                if let Some(x) = curve.get_mut(usize::from(j)) {
+                    *x = v;
+                }
+            }
             other if torque_harmonic(other).is_some() => {
                 if let Some((k, sin)) = torque_harmonic(other) {
                     if sin {

@@ -19,11 +19,19 @@
 //! | no, but findings that do not stand | no | `unexplained` |
 //! | none at all | no | `none` |
 //!
+//! A third question can overrule the table: **does a curve beat the findings?** Where the
+//! nonparametric curve in β ([`super::curve`]) predicts the held-out runs significantly better
+//! than the base model with every accepted finding, the findings' catalog forms are wrong for
+//! this set: the verdict is `unexplained` whatever the remainder, the findings are listed as
+//! partial, and the curve is what characterises the missing physics. A curve that does not beat
+//! them leaves the verdict of the table.
+//!
 //! A catalog name is therefore never the verdict while the diagnosis's own remainder test says
 //! that a significant mismatch is left: the report then says how much each standing finding
 //! removed (the fraction of the base model's held-out excess, [`Standing::fraction_removed`]),
 //! how much is left and where ([`super::report::Remainder::dependence`]).
 
+use super::curve::Curve;
 use super::model::Shape;
 use super::report::{EffectSize, Finding, Remainder};
 use serde::{Deserialize, Serialize};
@@ -110,6 +118,10 @@ pub struct Assessment {
     /// Whether the remainder is above the floor (absent when not measured).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub remainder_above_floor: Option<bool>,
+    /// Whether the curve of what remains predicts the held-out runs significantly better than the
+    /// final model (absent when no curve was fitted; report key `curve`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub curve_beats_findings: Option<bool>,
     /// The sentence report.md prints under the verdict.
     pub statement: String,
 }
@@ -290,9 +302,14 @@ fn stands(f: &Finding) -> bool {
 }
 
 /// Orders `findings` so that the standing ones come first (otherwise in their order) and returns
-/// the verdict with its assessment, from the standings already set on each finding and the
-/// remainder `rem` (`None` when it was not measured).
-pub fn decide(findings: &mut [Finding], rem: Option<&Remainder>) -> (String, Assessment) {
+/// the verdict with its assessment, from the standings already set on each finding, the
+/// remainder `rem` (`None` when it was not measured) and the curve of what remains (`None` when
+/// none was fitted).
+pub fn decide(
+    findings: &mut [Finding],
+    rem: Option<&Remainder>,
+    curve: Option<&Curve>,
+) -> (String, Assessment) {
     // stable: standing findings first, each group in the selection's order
     findings.sort_by_key(|f| !stands(f));
     let explained_by: Vec<String> = findings
@@ -310,7 +327,9 @@ pub fn decide(findings: &mut [Finding], rem: Option<&Remainder>) -> (String, Ass
     let dynamical = findings
         .iter()
         .any(|f| stands(f) && f.class != NOMINAL_CLASS);
+    let beaten = curve.is_some_and(|c| c.stands);
     let kind = match (explained_by.is_empty(), above == Some(true)) {
+        _ if beaten => Kind::Unexplained,
         (false, true) if !dynamical => Kind::Unexplained,
         (false, false) => Kind::Explained,
         (false, true) => Kind::PartlyExplained,
@@ -324,7 +343,10 @@ pub fn decide(findings: &mut [Finding], rem: Option<&Remainder>) -> (String, Ass
         Kind::Unexplained => UNEXPLAINED.into(),
         Kind::Nothing => NONE.into(),
     };
-    let statement = statement(kind, findings, rem);
+    let mut statement = statement(kind, findings, rem);
+    if let Some(c) = curve {
+        statement.push_str(&curve_words(c));
+    }
     (
         verdict,
         Assessment {
@@ -333,6 +355,7 @@ pub fn decide(findings: &mut [Finding], rem: Option<&Remainder>) -> (String, Ass
             not_standing,
             remainder_z: rem.map(|r| r.excess_chi2_per_dof / r.excess_sigma),
             remainder_above_floor: above,
+            curve_beats_findings: curve.map(|c| c.stands),
             statement,
         },
     )
@@ -386,6 +409,46 @@ fn statement(kind: Kind, findings: &[Finding], rem: Option<&Remainder>) -> Strin
         ));
     }
     out
+}
+
+/// What the curve of the remainder says: whether it beats the findings, and its shape.
+fn curve_words(c: &Curve) -> String {
+    let what = match c.kind.as_str() {
+        "friction" => "the dry friction as a curve η(β) of the output angle",
+        _ => "a torque curve τ(β) of the output angle",
+    };
+    let against = if c.against.is_empty() {
+        "the base model".to_string()
+    } else {
+        format!("the base model with `{}`", c.against.join("`, `"))
+    };
+    let cmp = format!(
+        "held-out gain {} ± {} χ², z = {:.1}, threshold {:.2}",
+        sig(c.heldout_gain, c.heldout_gain_sigma),
+        sig(c.heldout_gain_sigma, c.heldout_gain_sigma),
+        c.z,
+        c.z_crit
+    );
+    if !c.stands {
+        return format!(
+            " A curve in β ({what}) does not predict the held-out runs significantly better than \
+             {against} ({cmp})."
+        );
+    }
+    let (imax, vmax) =
+        c.value.iter().enumerate().fold(
+            (0, f64::NEG_INFINITY),
+            |m, (i, &v)| if v > m.1 { (i, v) } else { m },
+        );
+    let vmin = c.value.iter().copied().fold(f64::INFINITY, f64::min);
+    format!(
+        " The catalog's forms are wrong for this set: {what} predicts the held-out runs \
+         significantly better than {against} ({cmp}); it is largest at β = {:.0}° ({} s⁻², \
+         {} s⁻² at its smallest; report key `curve`, figure remainder_curve.svg).",
+        c.grid_deg[imax],
+        sig(vmax, c.sigma[imax]),
+        sig(vmin, c.sigma[imax]),
+    )
 }
 
 /// " Left: E ± σ χ²/dof above the noise floor (zσ), …" with where the remainder depends most.
@@ -531,7 +594,7 @@ mod tests {
     fn decided(mut f: Vec<Finding>, rem: Option<&Remainder>) -> (String, Assessment, Vec<Finding>) {
         let n = f.len();
         set_standings(&mut f, &vec![Some((0.5, 0.05)); n]);
-        let (v, a) = decide(&mut f, rem);
+        let (v, a) = decide(&mut f, rem, None);
         (v, a, f)
     }
 

@@ -1,8 +1,9 @@
 //! Figures of a diagnosis: residual fingerprints before/after, recording vs base vs augmented
 //! model, κ(α0).
 
-use super::{save, LinePlot, Series};
+use super::{save, Band, LinePlot, Series};
 use crate::error::Result;
+use crate::identification::curve::Curve;
 use crate::identification::diagnose::Diagnosis;
 use std::f64::consts::TAU;
 use std::path::{Path, PathBuf};
@@ -148,6 +149,11 @@ pub fn write_figures(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>> {
         save(&plot, &p)?;
         out.push(p);
     }
+    if let Some(c) = &d.report.curve {
+        let p = dir.join("remainder_curve.svg");
+        save(&curve_plot(c, d.augmented.eta), &p)?;
+        out.push(p);
+    }
     if let Some(k) = &d.kappa {
         let pts: Vec<(f64, f64)> = d
             .ringdowns
@@ -191,4 +197,69 @@ pub fn write_figures(d: &Diagnosis, dir: &Path) -> Result<Vec<PathBuf>> {
         out.push(p);
     }
     Ok(out)
+}
+
+/// The curve of what remains ([`Curve`]) with its band ± `band_sigmas` σ, the zero line and, for
+/// a friction curve, the final model's constant η (`eta`).
+pub fn curve_plot(c: &Curve, eta: f64) -> LinePlot {
+    let (name, symbol) = match c.kind.as_str() {
+        "friction" => ("dry friction", "η(β)"),
+        _ => ("torque", "τ(β)"),
+    };
+    let closed = |v: &[f64]| -> Vec<(f64, f64)> {
+        let mut pts: Vec<(f64, f64)> = c.grid_deg.iter().copied().zip(v.iter().copied()).collect();
+        if let Some(&(_, y)) = pts.first() {
+            pts.push((360.0, y));
+        }
+        pts
+    };
+    let curve = closed(&c.value);
+    let mut band: Vec<(f64, f64, f64)> = c
+        .value
+        .iter()
+        .zip(&c.sigma)
+        .zip(&c.grid_deg)
+        .map(|((v, s), x)| (*x, v - c.band_sigmas * s, v + c.band_sigmas * s))
+        .collect();
+    if let Some(&(_, l, u)) = band.first() {
+        band.push((360.0, l, u));
+    }
+    let mut series = vec![Series {
+        label: format!("{symbol}, {} knots, λ = {:.3e}", c.knots, c.lambda),
+        points: curve,
+        markers: false,
+        color: 1,
+    }];
+    series.push(Series {
+        label: "zero".into(),
+        points: vec![(0.0, 0.0), (360.0, 0.0)],
+        markers: false,
+        color: 7,
+    });
+    if c.kind == "friction" {
+        series.push(Series {
+            label: format!("final model's constant η = {eta:.3} s⁻²"),
+            points: vec![(0.0, eta), (360.0, eta)],
+            markers: false,
+            color: 0,
+        });
+    }
+    LinePlot {
+        title: format!(
+            "{name} curve of what remains: held-out gain {:.0} χ², z = {:.1} (threshold {:.2}){}",
+            c.heldout_gain,
+            c.z,
+            c.z_crit,
+            if c.stands { "" } else { ", not significant" }
+        ),
+        x_label: "output angle β [deg]".into(),
+        y_label: format!("{symbol} [s⁻²]"),
+        series,
+        bands: vec![Band {
+            label: format!("± {} σ band", c.band_sigmas),
+            points: band,
+            color: 1,
+        }],
+        ..Default::default()
+    }
 }

@@ -155,6 +155,19 @@ pub struct LinePlot {
     /// Marker shape of the k-th marker series (by order among the series with `markers`);
     /// [`MarkerShape::nth`] where missing.
     pub marker_shapes: Vec<MarkerShape>,
+    /// Shaded bands, drawn below the series (a confidence band about a curve).
+    pub bands: Vec<Band>,
+}
+
+/// A shaded band of a [`LinePlot`] between two curves on the same abscissae.
+#[derive(Debug, Clone)]
+pub struct Band {
+    /// Legend label.
+    pub label: String,
+    /// (x, lower, upper).
+    pub points: Vec<(f64, f64, f64)>,
+    /// Palette index.
+    pub color: usize,
 }
 
 /// One series of a [`LinePlot`].
@@ -371,15 +384,26 @@ impl Figure for LinePlot {
             self.series
                 .iter()
                 .flat_map(|s| s.points.iter().copied())
+                .chain(
+                    self.bands
+                        .iter()
+                        .flat_map(|b| b.points.iter().flat_map(|&(x, l, u)| [(x, l), (x, u)])),
+                )
                 .filter(|p| self.visible(p))
         };
         let (x0, x1) = finite_range(pts().map(|p| p.0), self.log_x).unwrap_or((0.0, 1.0));
         let (y0, mut y1) = finite_range(pts().map(|p| p.1), self.log_y).unwrap_or((0.0, 1.0));
         // the legend: the emptiest corner, or room made above the data
-        let labelled: Vec<&Series> = self.series.iter().filter(|s| !s.label.is_empty()).collect();
+        let labelled: Vec<&str> = self
+            .series
+            .iter()
+            .map(|s| s.label.as_str())
+            .chain(self.bands.iter().map(|b| b.label.as_str()))
+            .filter(|l| !l.is_empty())
+            .collect();
         let chars = labelled
             .iter()
-            .map(|s| s.label.chars().count())
+            .map(|s| s.chars().count())
             .max()
             .unwrap_or(0);
         let (w, h) = root.dim_in_pixel();
@@ -420,6 +444,21 @@ impl Figure for LinePlot {
                     .axis_desc_style(("sans-serif", 15))
                     .draw()
                     .map_err(plot_err)?;
+                for band in &self.bands {
+                    let c = Palette99::pick(band.color).to_rgba();
+                    let mut ring: Vec<(f64, f64)> =
+                        band.points.iter().map(|&(x, _, u)| (x, u)).collect();
+                    ring.extend(band.points.iter().rev().map(|&(x, l, _)| (x, l)));
+                    let fill = c.mix(0.25).filled();
+                    let anno = chart
+                        .draw_series(std::iter::once(Polygon::new(ring, fill)))
+                        .map_err(plot_err)?;
+                    if !band.label.is_empty() {
+                        anno.label(band.label.as_str()).legend(move |(x, y)| {
+                            Rectangle::new([(x, y - 5), (x + 18, y + 5)], c.mix(0.25).filled())
+                        });
+                    }
+                }
                 let mut k = 0;
                 for s in &self.series {
                     let c = Palette99::pick(s.color).to_rgba();
