@@ -255,19 +255,9 @@ pub fn inverse_gram(a: &Mat<f64>, rcond: f64) -> Result<DMatrix<f64>, LeastSquar
     Ok(factor(a, rcond)?.cov_unit())
 }
 
-/// Rows per block of [`weighted`]'s streaming reduction.
-const BLOCK_ROWS: usize = 4096;
-
 /// Weighted least squares: min Σ wᵢ (yᵢ − Σⱼ xᵢⱼ θⱼ)² over the rows `rows`, with the design given
 /// as a function `x(i, j)`. Returns the solution of the √w-scaled problem (its `resid` is
 /// √wᵢ(yᵢ − xᵢθ), its `cov_unit` (XᵀWX)⁻¹).
-///
-/// The tall matrix [√W X | √W y] is never held whole: it is reduced block by block
-/// ([`BLOCK_ROWS`] rows) to the triangular factor R of its QR factorisation (each block stacked
-/// under the R so far and factorised again, [`thin_r`]). With [√W X | √W y] = Q [R₁ c; 0 ρ],
-/// XᵀWX = R₁ᵀR₁ and the problem min ‖R₁ θ − c‖ has the same solution, (XᵀWX)⁻¹, column norms
-/// (hence equilibration and pivoting) and rank as the tall one, so it is solved by [`lstsq`]. The
-/// memory is that of one block, not of one row per sample.
 pub fn weighted(
     rows: &[usize],
     cols: usize,
@@ -276,42 +266,10 @@ pub fn weighted(
     w: impl Fn(usize) -> f64,
     rcond: f64,
 ) -> Result<LinearSolution, LeastSquaresError> {
-    if rows.len() < cols {
-        return Err(LeastSquaresError::TooFewRows {
-            rows: rows.len(),
-            cols,
-        });
-    }
-    let sw = |i: usize| w(i).max(0.0).sqrt();
-    let mut r = Mat::<f64>::zeros(0, cols + 1);
-    for block in rows.chunks(BLOCK_ROWS) {
-        let k0 = r.nrows();
-        let stacked = Mat::from_fn(k0 + block.len(), cols + 1, |k, j| {
-            if k < k0 {
-                r[(k, j)]
-            } else {
-                let i = block[k - k0];
-                sw(i) * if j < cols { x(i, j) } else { y(i) }
-            }
-        });
-        if (k0..stacked.nrows()).any(|k| (0..=cols).any(|j| !stacked[(k, j)].is_finite())) {
-            return Err(LeastSquaresError::NonFinite);
-        }
-        r = thin_r(stacked);
-    }
-    let p = r.nrows();
-    let r1 = Mat::from_fn(p, cols, |i, j| r[(i, j)]);
-    let c: Vec<f64> = (0..p).map(|i| r[(i, cols)]).collect();
-    let small = lstsq(&r1, &c, rcond)?;
-    let resid = rows
-        .iter()
-        .map(|&i| sw(i) * (y(i) - (0..cols).map(|j| x(i, j) * small.x[j]).sum::<f64>()))
-        .collect();
-    Ok(LinearSolution {
-        x: small.x,
-        cov_unit: small.cov_unit,
-        resid,
-    })
+    let sw: Vec<f64> = rows.iter().map(|&i| w(i).max(0.0).sqrt()).collect();
+    let a = Mat::from_fn(rows.len(), cols, |k, j| sw[k] * x(rows[k], j));
+    let b: Vec<f64> = rows.iter().zip(&sw).map(|(&i, s)| s * y(i)).collect();
+    lstsq(&a, &b, rcond)
 }
 
 #[cfg(test)]
@@ -461,50 +419,5 @@ mod tests {
             ),
             Err(LeastSquaresError::NonFinite)
         ));
-    }
-
-    /// The streaming reduction of `weighted` agrees with the dense factorisation of the whole
-    /// √w-scaled matrix (several blocks, uneven weights, a badly scaled column), and finds the
-    /// same dependent column.
-    #[test]
-    fn weighted_by_blocks_matches_the_dense_solution() {
-        let m = 3 * BLOCK_ROWS + 123;
-        let rows: Vec<usize> = (0..m).collect();
-        let t = |i: usize| i as f64 / m as f64;
-        let x = |i: usize, j: usize| match j {
-            0 => 1.0,
-            1 => 1e6 * t(i),
-            2 => (7.0 * t(i)).sin(),
-            _ => t(i) * t(i),
-        };
-        let y = |i: usize| {
-            0.3 + 2e-6 * t(i) - 0.7 * (7.0 * t(i)).sin() + ((i * 7919) % 13) as f64 * 1e-3
-        };
-        let w = |i: usize| 0.5 + (i % 5) as f64;
-        let s = weighted(&rows, 4, x, y, w, DEFAULT_RCOND).unwrap();
-        let a = Mat::from_fn(m, 4, |i, j| w(i).sqrt() * x(i, j));
-        let b: Vec<f64> = (0..m).map(|i| w(i).sqrt() * y(i)).collect();
-        let d = lstsq(&a, &b, DEFAULT_RCOND).unwrap();
-        for j in 0..4 {
-            let scale = d.cov_unit[(j, j)].sqrt();
-            assert!(
-                (s.x[j] - d.x[j]).abs() < 1e-9 * scale,
-                "θ{j}: {} vs {}",
-                s.x[j],
-                d.x[j]
-            );
-            for k in 0..4 {
-                let c = d.cov_unit[(j, k)];
-                assert!((s.cov_unit[(j, k)] - c).abs() < 1e-9 * c.abs().max(scale * scale));
-            }
-        }
-        for i in 0..m {
-            assert!((s.resid[i] - d.resid[i]).abs() < 1e-9, "row {i}");
-        }
-        // a column equal to 2 × column 0 is dependent in both
-        let x2 = |i: usize, j: usize| if j == 3 { 2.0 } else { x(i, j) };
-        let e = weighted(&rows, 4, x2, y, w, DEFAULT_RCOND).unwrap_err();
-        let a2 = Mat::from_fn(m, 4, |i, j| w(i).sqrt() * x2(i, j));
-        assert_eq!(e, lstsq(&a2, &b, DEFAULT_RCOND).unwrap_err());
     }
 }
