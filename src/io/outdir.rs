@@ -135,14 +135,7 @@ impl StagedDir {
         }
         clean_killed(target);
         let created = create_missing(parent_of(target))?;
-        let staging = sibling(target, "tmp", std::process::id())?;
-        let _ = std::fs::remove_dir_all(&staging);
-        if let Err(e) = std::fs::create_dir(&staging) {
-            if let Some(c) = &created {
-                let _ = std::fs::remove_dir_all(c);
-            }
-            return Err(Error::file("create", &staging, e));
-        }
+        let staging = fresh_staging(target, created.as_deref())?;
         Ok(Self {
             target: target.to_path_buf(),
             staging,
@@ -179,14 +172,7 @@ impl StagedDir {
         }
         let created = create_missing(target)?;
         clean_killed(&target.join(label));
-        let staging = sibling(&target.join(label), "tmp", std::process::id())?;
-        let _ = std::fs::remove_dir_all(&staging);
-        if let Err(e) = std::fs::create_dir(&staging) {
-            if let Some(c) = &created {
-                let _ = std::fs::remove_dir_all(c);
-            }
-            return Err(Error::file("create", &staging, e));
-        }
+        let staging = fresh_staging(&target.join(label), created.as_deref())?;
         Ok(Self {
             target: target.to_path_buf(),
             staging,
@@ -302,6 +288,20 @@ impl Drop for StagedDir {
             }
         }
     }
+}
+
+/// Creates the empty staging folder `.NAME.tmp-PID` beside `path` (an earlier one of this process
+/// removed); on failure removes the folders `created` for the plan and names the staging folder.
+fn fresh_staging(path: &Path, created: Option<&Path>) -> Result<PathBuf> {
+    let staging = sibling(path, "tmp", std::process::id())?;
+    let _ = std::fs::remove_dir_all(&staging);
+    if let Err(e) = std::fs::create_dir(&staging) {
+        if let Some(c) = created {
+            let _ = std::fs::remove_dir_all(c);
+        }
+        return Err(Error::file("create", &staging, e));
+    }
+    Ok(staging)
 }
 
 #[cfg(test)]
