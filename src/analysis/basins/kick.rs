@@ -128,10 +128,17 @@ pub fn minimal_fatal_kick<S: DrivenOscillator + ?Sized>(
             dirs.iter().map(move |d| (phase, *d))
         })
         .collect();
-    let y0 = a.points[0];
+    let ctx = KickContext {
+        sys,
+        set,
+        target,
+        y0: a.points[0],
+        kopts,
+        opts,
+    };
     let all = run_rows(cases.len(), |i| {
         let (phase, d) = cases[i];
-        along(sys, set, target, y0, phase, d, kopts, opts)
+        ctx.along(phase, d)
     })
     .into_iter()
     .collect::<Result<Vec<_>>>()?;
@@ -165,54 +172,64 @@ fn directions(k: &KickOptions, omega_weight: f64) -> Vec<[f64; 2]> {
     }
 }
 
-/// Scan and bisection along one direction at one phase.
-#[allow(clippy::too_many_arguments)]
-fn along<S: DrivenOscillator + ?Sized>(
-    sys: &S,
-    set: &AttractorSet,
+/// What every kick of one search shares: the system, the attractors, the kicked attractor
+/// `target` and the cycle point `y0` it is kicked from, and the options.
+struct KickContext<'a, S: ?Sized> {
+    sys: &'a S,
+    set: &'a AttractorSet,
     target: usize,
     y0: [f64; 2],
-    phase: f64,
-    d: [f64; 2],
-    k: &KickOptions,
-    opts: &BasinOptions,
-) -> Result<DirectionKick> {
-    let lands = |s: f64| -> Result<Option<usize>> {
-        let x = kicked(sys, set, y0, phase, [s * d[0], s * d[1]], opts)?;
-        Ok(recognise(sys, set, x, opts).index())
-    };
-    let mut out = DirectionKick {
-        phase,
-        direction: d,
-        size: None,
-        safe: k.max_kick,
-        lands_on: None,
-    };
-    let step = k.max_kick / k.scan as f64;
-    let Some((i, mut to)) = (1..=k.scan)
-        .map(|i| lands(i as f64 * step).map(|l| (i, l)))
-        .find(|r| !matches!(r, Ok((_, Some(l))) if *l == target))
-        .transpose()?
-    else {
-        return Ok(out);
-    };
-    let (mut lo, mut hi) = ((i - 1) as f64 * step, i as f64 * step);
-    while hi - lo > k.rel_tol * hi {
-        let mid = 0.5 * (lo + hi);
-        match lands(mid)? {
-            Some(l) if l == target => lo = mid,
-            l => {
-                hi = mid;
-                to = l;
-            }
-        }
-    }
-    out.size = Some(hi);
-    out.safe = lo;
-    out.lands_on = to;
-    Ok(out)
+    kopts: &'a KickOptions,
+    opts: &'a BasinOptions,
 }
 
+impl<S: DrivenOscillator + ?Sized> KickContext<'_, S> {
+    /// Scan and bisection along direction `d` at phase `phase`.
+    fn along(&self, phase: f64, d: [f64; 2]) -> Result<DirectionKick> {
+        let (sys, set, target, y0, k, opts) = (
+            self.sys,
+            self.set,
+            self.target,
+            self.y0,
+            self.kopts,
+            self.opts,
+        );
+        let lands = |s: f64| -> Result<Option<usize>> {
+            let x = kicked(sys, set, y0, phase, [s * d[0], s * d[1]], opts)?;
+            Ok(recognise(sys, set, x, opts).index())
+        };
+        let mut out = DirectionKick {
+            phase,
+            direction: d,
+            size: None,
+            safe: k.max_kick,
+            lands_on: None,
+        };
+        let step = k.max_kick / k.scan as f64;
+        let Some((i, mut to)) = (1..=k.scan)
+            .map(|i| lands(i as f64 * step).map(|l| (i, l)))
+            .find(|r| !matches!(r, Ok((_, Some(l))) if *l == target))
+            .transpose()?
+        else {
+            return Ok(out);
+        };
+        let (mut lo, mut hi) = ((i - 1) as f64 * step, i as f64 * step);
+        while hi - lo > k.rel_tol * hi {
+            let mid = 0.5 * (lo + hi);
+            match lands(mid)? {
+                Some(l) if l == target => lo = mid,
+                l => {
+                    hi = mid;
+                    to = l;
+                }
+            }
+        }
+        out.size = Some(hi);
+        out.safe = lo;
+        out.lands_on = to;
+        Ok(out)
+    }
+}
 /// The state on the section t ≡ 0 after a kick `dx` at phase φ on the orbit through `y0`: the
 /// orbit integrated to φT, kicked, integrated to T (φ = 0: y0 + dx itself).
 fn kicked<S: DrivenOscillator + ?Sized>(
