@@ -18,7 +18,7 @@
 #   artifacts of `cargo test`.
 #
 # The built library is loaded from $target/python-ext; the venv lives in the target directory
-# ($GEARBIF_VENV overrides it) and gets numpy, pytest and matplotlib from PyPI. `pip install .`
+# ($GEARBIF_VENV overrides it) and gets numpy, pytest, matplotlib and pandas from PyPI. `pip install .`
 # (maturin) is the way to install the package; this script is the test loop.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -29,7 +29,7 @@ python="${PYTHON:-python3}"
 if [ ! -x "$venv/bin/python" ]; then
     "$python" -m venv "$venv"
 fi
-"$venv/bin/python" -m pip install --quiet --disable-pip-version-check numpy pytest matplotlib
+"$venv/bin/python" -m pip install --quiet --disable-pip-version-check numpy pytest matplotlib pandas
 start=$(date +%s)
 export PYO3_PYTHON="$venv/bin/python" PYO3_BUILD_EXTENSION_MODULE=1 CARGO_TARGET_DIR="$target"
 case "${GEARBIF_PY_BUILD:-workspace}" in
@@ -38,11 +38,18 @@ case "${GEARBIF_PY_BUILD:-workspace}" in
     alone) cargo build --manifest-path python/Cargo.toml --lib ;;
     *) echo "GEARBIF_PY_BUILD must be alone or workspace" >&2; exit 2 ;;
 esac
+# the package as maturin lays it out: python/gearbif/ (Python sources, stubs) with the extension
+# inside as gearbif/_core<suffix>; assembled beside the old one and swapped in
 ext="$target/python-ext"
 mkdir -p "$ext"
+rm -rf "$ext/gearbif.new" "$ext/gearbif.old"
+cp -r python/gearbif "$ext/gearbif.new"
 suffix="$("$venv/bin/python" -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')"
-cp "$target/debug/libgearbif_py.so" "$ext/gearbif.tmp"
-mv "$ext/gearbif.tmp" "$ext/gearbif$suffix"
+cp "$target/debug/libgearbif_py.so" "$ext/gearbif.new/_core$suffix"
+rm -f "$ext"/gearbif.*.so
+if [ -d "$ext/gearbif" ]; then mv "$ext/gearbif" "$ext/gearbif.old"; fi
+mv "$ext/gearbif.new" "$ext/gearbif"
+rm -rf "$ext/gearbif.old"
 echo "== extension built in $(($(date +%s) - start)) s"
 # the tests cross-check against the CLI binary that `cargo test` built in the same target directory
 PYTHONPATH="$ext${PYTHONPATH:+:$PYTHONPATH}" "$venv/bin/python" -m pytest -q python/tests "$@"

@@ -1,14 +1,17 @@
 #!/usr/bin/env python3
-"""Run the command-line blocks of docs/tutorial.md and compare what they print with the page.
+"""Run the command-line and Python blocks of docs/tutorial.md and compare what they print with the page.
 
-A checked block is a ```sh block preceded by a marker line
+A checked block is a ```sh or ```python block preceded by a marker line
 
     <!-- check: tol=1e-6 [quick] -->
 
-and followed (after blank lines only) by the ```text block of its printed output. The commands of
-every checked block run in order in one temporary folder (so a later block can read what an
-earlier one wrote), with `gearbif` replaced by the binary given with --bin; their stdout and stderr
-are taken together, as a terminal shows them. The printed text and the page's text must agree
+and followed (after blank lines only) by the ```text block of its printed output. Every checked
+block runs in page order in one temporary folder (so a later block can read what an earlier one
+wrote). The commands of a ```sh block run with `gearbif` replaced by the binary given with --bin;
+the ```python blocks run in one interpreter given with --python, one after the other in one
+namespace, as a reader pastes them into one session (a later block uses the imports of an earlier
+one). Blocks of a language whose runner is not given are skipped. stdout and stderr are taken
+together, as a terminal shows them. The printed text and the page's text must agree
 word for word, and every number within the block's relative tolerance `tol`; the elapsed-time
 prefixes of progress lines ("[  12.3 s]") are ignored. `quick` marks the blocks cheap enough for
 the test suite (tests/tutorial_docs.rs runs them with --quick).
@@ -17,9 +20,11 @@ Exit status 0 when every block agrees, 1 with a list of the differences otherwis
 
     python3 scripts/check_tutorial.py --bin target/release/gearbif            # every checked block
     python3 scripts/check_tutorial.py --bin target/release/gearbif --quick    # the quick ones
+    python3 scripts/check_tutorial.py --python PYTHON --quick                 # the quick Python ones
 """
 
 import argparse
+import json
 import os
 import re
 import shlex
@@ -52,15 +57,17 @@ def blocks(page):
             else:
                 sys.exit(f"line {where}: unknown check option {word!r}")
         i += 1
-        if i >= len(lines) or lines[i].strip() != "```sh":
-            sys.exit(f"line {where}: a check marker must be followed by a ```sh block")
-        cmds, i = fenced(lines, i)
+        lang = lines[i].strip()[3:] if i < len(lines) else ""
+        if lang not in ("sh", "python"):
+            sys.exit(f"line {where}: a check marker must be followed by a ```sh or ```python block")
+        body, i = fenced(lines, i)
         while i < len(lines) and not lines[i].strip():
             i += 1
         if i >= len(lines) or lines[i].strip() != "```text":
-            sys.exit(f"line {where}: the checked ```sh block must be followed by a ```text block")
+            sys.exit(f"line {where}: the checked ```{lang} block must be followed by a ```text block")
         text, i = fenced(lines, i)
-        out.append((where, opts, join_continuations(cmds), "\n".join(text)))
+        code = join_continuations(body) if lang == "sh" else "\n".join(body)
+        out.append((where, opts, lang, code, "\n".join(text)))
     return out
 
 
@@ -111,35 +118,82 @@ def compare(expected, got, tol):
     return bad
 
 
+# The Python session: reads one JSON string (a block's code) per line, runs it in one namespace
+# and answers with one JSON string, what it printed (a traceback where it raised).
+SESSION = r"""
+import contextlib, io, json, sys, traceback
+ns = {"__name__": "__main__"}
+for line in sys.stdin:
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(buf):
+        try:
+            exec(compile(json.loads(line), "<block>", "exec"), ns)
+        except Exception:
+            traceback.print_exc(file=buf)
+    sys.__stdout__.write(json.dumps(buf.getvalue()) + "\n")
+    sys.__stdout__.flush()
+"""
+
+
+def run_sh(cmds, binary, cwd):
+    """What the commands print (stdout and stderr), with the exit status of a failing one."""
+    got = ""
+    for c in cmds:
+        argv = shlex.split(c)
+        if argv and argv[0] == "gearbif":
+            argv[0] = binary
+        r = subprocess.run(argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        got += r.stdout
+        if r.returncode != 0:
+            got += f"\n(exit status {r.returncode})"
+    return got
+
+
+def run_python(session, code):
+    """What the block prints in the session."""
+    session.stdin.write(json.dumps(code) + "\n")
+    session.stdin.flush()
+    return json.loads(session.stdout.readline())
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--bin", required=True, help="the gearbif binary to run")
+    ap.add_argument("--bin", help="the gearbif binary that runs the command-line blocks")
+    ap.add_argument("--python", help="the Python interpreter (with gearbif importable) that runs the Python blocks")
     ap.add_argument("--page", default=os.path.join(os.path.dirname(__file__), "..", "docs", "tutorial.md"))
     ap.add_argument("--quick", action="store_true", help="only the blocks marked quick")
     a = ap.parse_args()
-    binary = os.path.abspath(a.bin)
+    if not (a.bin or a.python):
+        sys.exit("give --bin (the command-line blocks), --python (the Python blocks) or both")
     page = open(a.page, encoding="utf-8").read()
-    todo = [b for b in blocks(page) if b[1]["quick"] or not a.quick]
+    runnable = {"sh": bool(a.bin), "python": bool(a.python)}
+    todo = [b for b in blocks(page) if (b[1]["quick"] or not a.quick) and runnable[b[2]]]
     if not todo:
         sys.exit("no checked blocks found")
     failures = 0
     with tempfile.TemporaryDirectory() as tmp:
-        for where, opts, cmds, expected in todo:
-            got = ""
-            for c in cmds:
-                argv = shlex.split(c)
-                if argv and argv[0] == "gearbif":
-                    argv[0] = binary
-                r = subprocess.run(argv, cwd=tmp, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-                got += r.stdout
-                if r.returncode != 0:
-                    got += f"\n(exit status {r.returncode})"
+        session = None
+        if a.python:
+            python = os.path.abspath(a.python) if os.sep in a.python else a.python
+            session = subprocess.Popen(
+                [python, "-c", SESSION], cwd=tmp, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+            )
+        for where, opts, lang, code, expected in todo:
+            if lang == "sh":
+                got = run_sh(code, os.path.abspath(a.bin), tmp)
+                title = " && ".join(code)
+            else:
+                got = run_python(session, code)
+                title = "python: " + code.strip().split("\n")[0]
             bad = compare(expected, got, opts["tol"])
             status = "ok" if not bad else "DIFFERS"
-            print(f"{a.page}:{where}: {' && '.join(cmds)}: {status}")
+            print(f"{a.page}:{where}: {title}: {status}")
             for b in bad[:10]:
                 print("  " + b)
             failures += bool(bad)
+        if session is not None:
+            session.stdin.close()
+            session.wait()
     if failures:
         print(f"{failures} of {len(todo)} checked blocks differ from the page")
         return 1

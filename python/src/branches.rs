@@ -363,9 +363,8 @@ fn start_state(
         (Some(x), None) => state(x, "x0"),
         (None, Some(which)) => {
             let System::Gear(g) = sys else {
-                return Err(crate::errors::UnsupportedError::new_err(
-                    "lock= is the gear's analytic lock orbit; give x0 for other systems",
-                ));
+                return Err(crate::errors::Kind::Unsupported
+                    .err("lock= is the gear's analytic lock orbit; give x0 for other systems"));
             };
             let lb = g.lock_branch().py()?;
             match which {

@@ -1,6 +1,6 @@
 //! Conversions between Python objects and the library's types.
 
-use crate::errors::{invalid, GearbifIOError};
+use crate::errors::{invalid, Kind};
 use numpy::{Complex64, PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyAny;
@@ -29,7 +29,7 @@ pub fn state(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<[f64; 2]> {
 
 /// Any serialisable value as Python objects (dicts, lists, floats), through JSON.
 pub fn to_python<'py, T: serde::Serialize>(py: Python<'py>, v: &T) -> PyResult<Bound<'py, PyAny>> {
-    let s = serde_json::to_string(v).map_err(|e| GearbifIOError::new_err(e.to_string()))?;
+    let s = serde_json::to_string(v).map_err(|e| Kind::Io.err(e.to_string()))?;
     py.import("json")?.call_method1("loads", (s,))
 }
 

@@ -710,9 +710,8 @@ pub fn system(obj: &Bound<'_, PyAny>) -> PyResult<System> {
 pub fn gear(obj: &Bound<'_, PyAny>) -> PyResult<Gear> {
     match system(obj)? {
         System::Gear(g) => Ok(g),
-        _ => Err(crate::errors::UnsupportedError::new_err(
-            "this function is implemented for the gear (gearbif.Gear) only",
-        )),
+        _ => Err(crate::errors::Kind::Unsupported
+            .err("this function is implemented for the gear (gearbif.Gear) only")),
     }
 }
 
