@@ -50,6 +50,7 @@ class GearParams:
     @staticmethod
     def paper(theta_deg: float = 0.0) -> GearParams: ...
     def driven(self, f: float, alpha0_deg: float = 0.0, convention: Convention = "physical") -> Gear: ...
+    def to_dict(self) -> Dict[str, float]: ...
     @property
     def m1(self) -> float: ...
     @property
@@ -149,7 +150,7 @@ class ForcedPendulum(_System):
 class UserSystem(_System):
     def __init__(
         self,
-        forces: Callable[[float, float, float, Dict[str, float]], Tuple[float, float]],
+        forces: Union[Callable[[float, float, float, Dict[str, float]], Tuple[float, float]], Tuple[str, str]],
         params: Dict[str, float],
         *,
         jacobian: Optional[Callable[..., Any]] = None,

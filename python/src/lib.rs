@@ -12,6 +12,7 @@ mod branches;
 mod convert;
 mod dynamics;
 mod errors;
+mod expression;
 mod systems;
 mod user;
 

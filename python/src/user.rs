@@ -9,9 +9,12 @@
 //! driven with period T = 1/f, f the parameter named `f` [Hz]. The derivatives the variational
 //! equations need (∂a/∂β, ∂a/∂ω, ∂r/∂β, ∂r/∂ω and the parameter columns ∂a/∂p_k, ∂r/∂p_k at fixed
 //! t) come from the user's `jacobian` function if given, else from central differences of `forces`
-//! (step 1e-6 relative: about 1e-10 relative accuracy for smooth forces).
+//! (step 1e-6 relative: about 1e-10 relative accuracy for smooth forces). Forces given as two
+//! expressions instead of a function are compiled once ([`crate::expression`]): evaluated in Rust,
+//! with symbolic derivatives.
 
 use crate::errors::{invalid, IntoPyResult};
+use crate::expression::{Compiled, Constants};
 use gearbif::model::{
     Column, DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry, Parameter, Parametrised,
     MAX_PARAMS,
@@ -49,10 +52,20 @@ struct Callbacks {
     error: Mutex<Option<PyErr>>,
 }
 
-/// A driven oscillator with dry friction whose forces are a Python function.
+/// Where a user system's forces come from.
+#[derive(Clone)]
+enum Source {
+    /// Python functions, called at every evaluation.
+    Python(Arc<Callbacks>),
+    /// Two expressions compiled once, evaluated in Rust, with the values of their terms that read
+    /// the parameters only (recomputed when a parameter changes).
+    Expressions(Arc<Compiled>, Box<Constants>),
+}
+
+/// A driven oscillator with dry friction whose forces are a Python function or two expressions.
 #[derive(Clone)]
 pub struct UserSystem {
-    callbacks: Arc<Callbacks>,
+    source: Source,
     /// Parameter names (leaked once per constructed system: the trait hands out `&'static str`).
     names: Arc<[&'static str]>,
     values: [f64; MAX_PARAMS],
@@ -87,11 +100,16 @@ impl UserSystem {
     }
     /// Takes (and clears) the first error a callback raised.
     pub fn take_error(&self) -> Option<PyErr> {
-        self.callbacks.error.lock().ok()?.take()
+        match &self.source {
+            Source::Python(c) => c.error.lock().ok()?.take(),
+            Source::Expressions(..) => None,
+        }
     }
     fn record(&self, e: PyErr) {
-        if let Ok(mut slot) = self.callbacks.error.lock() {
-            slot.get_or_insert(e);
+        if let Source::Python(c) = &self.source {
+            if let Ok(mut slot) = c.error.lock() {
+                slot.get_or_insert(e);
+            }
         }
     }
     /// Calls `f(t, x, v, p)` with p the dict of parameters, expecting `len` floats back.
@@ -122,8 +140,14 @@ impl UserSystem {
         })
     }
     fn forces_with(&self, values: &[f64; MAX_PARAMS], t: f64, x: f64, v: f64) -> (f64, f64) {
-        let r = self.call(&self.callbacks.forces, values, [t, x, v], 2);
-        (r[0], r[1])
+        match &self.source {
+            Source::Python(c) => {
+                let r = self.call(&c.forces, values, [t, x, v], 2);
+                (r[0], r[1])
+            }
+            Source::Expressions(c, k) if values == &self.values => c.forces(values, k, t, x, v),
+            Source::Expressions(c, _) => c.forces(values, &c.constants(values), t, x, v),
+        }
     }
 }
 
@@ -174,6 +198,9 @@ impl Parametrised for UserSystem {
         };
         let mut s = self.clone();
         s.values[k] = value;
+        if let Source::Expressions(c, constants) = &mut s.source {
+            **constants = c.constants(&s.values);
+        }
         Ok(s)
     }
     fn column(&self, p: UserParam) -> Option<Column> {
@@ -217,7 +244,19 @@ impl DrivenOscillator for UserSystem {
     }
     fn forces_jet(&self, t: f64, beta: f64, omega: f64, params: bool) -> ForcesJet {
         let n = self.n();
-        if let Some(jac) = &self.callbacks.jacobian {
+        let callbacks = match &self.source {
+            Source::Expressions(c, k) => {
+                let e = c.jet((&self.values, k), t, beta, omega, params);
+                let mut j = ForcesJet::new(e.a, e.r);
+                [j.a_beta, j.a_omega] = e.a_state;
+                [j.r_beta, j.r_omega] = e.r_state;
+                j.a_p = e.a_p;
+                j.r_p = e.r_p;
+                return j;
+            }
+            Source::Python(c) => c,
+        };
+        if let Some(jac) = &callbacks.jacobian {
             // (a, a_beta, a_omega, r, r_beta, r_omega, a_p[0..n], r_p[0..n])
             let v = self.call(jac, &self.values, [t, beta, omega], 6 + 2 * n);
             let mut j = ForcesJet::new(v[0], v[3]);
@@ -269,7 +308,11 @@ impl DrivenOscillator for UserSystem {
 /// UserSystem(forces, params, *, jacobian=None, symmetry=None, angular=True)
 ///
 /// forces(t, beta, omega, p) → (a, r): the smooth acceleration a and the dry-friction magnitude r
-/// (per unit inertia), p the dict {name: value} of the parameters. params: dict {name: value}, at
+/// (per unit inertia), p the dict {name: value} of the parameters. Or forces = (a, r), two
+/// expressions in t [s], x (= β), v (= ω) and the parameters by name, e.g.
+/// ("A*cos(2*PI*f*t) - gamma*v - w0^2*sin(x)", "mu"): parsed once and evaluated in Rust, with
+/// symbolic derivatives (operators + - * / ^, functions sin cos tan exp log sqrt abs tanh …,
+/// constants PI and E); as fast as a system written in Rust within a small factor. params: dict {name: value}, at
 /// most 8, one of them `f`, the drive frequency [Hz] (period T = 1/f; the forces must be
 /// T-periodic in t). jacobian(t, beta, omega, p) → (a, ∂a/∂β, ∂a/∂ω, r, ∂r/∂β, ∂r/∂ω,
 /// ∂a/∂p (n values), ∂r/∂p (n values)) at fixed t, in the order of params; without it the
@@ -296,8 +339,20 @@ impl PyUserSystem {
         symmetry: Option<(f64, f64)>,
         angular: bool,
     ) -> PyResult<Self> {
-        if !forces.is_callable() || jacobian.as_ref().is_some_and(|j| !j.is_callable()) {
-            return Err(invalid("forces and jacobian must be callable"));
+        let expressions: Option<(String, String)> = if forces.is_callable() {
+            None
+        } else {
+            Some(forces.extract().map_err(|_| {
+                invalid("forces must be a function (t, x, v, p) -> (a, r) or a pair of expressions (a, r)")
+            })?)
+        };
+        if jacobian.as_ref().is_some_and(|j| !j.is_callable()) {
+            return Err(invalid("jacobian must be callable"));
+        }
+        if expressions.is_some() && jacobian.is_some() {
+            return Err(invalid(
+                "forces given as expressions are differentiated symbolically: give no jacobian",
+            ));
         }
         if params.len() > MAX_PARAMS {
             return Err(invalid(format!("at most {MAX_PARAMS} parameters")));
@@ -337,13 +392,21 @@ impl PyUserSystem {
                 )))
             }
         };
+        let source = match expressions {
+            Some((a, r)) => {
+                let c = Compiled::new(&a, &r, &names).map_err(invalid)?;
+                let constants = Box::new(c.constants(&values));
+                Source::Expressions(Arc::new(c), constants)
+            }
+            None => Source::Python(Arc::new(Callbacks {
+                forces: forces.unbind(),
+                jacobian: jacobian.map(Bound::unbind),
+                error: Mutex::new(None),
+            })),
+        };
         Ok(Self {
             inner: UserSystem {
-                callbacks: Arc::new(Callbacks {
-                    forces: forces.unbind(),
-                    jacobian: jacobian.map(Bound::unbind),
-                    error: Mutex::new(None),
-                }),
+                source,
                 names: names.into(),
                 values,
                 f_index,

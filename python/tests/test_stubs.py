@@ -119,3 +119,17 @@ def test_class_members_match(cname, member):
     else:
         runtime = runtime_params(getattr(cls, member.name))
     assert same(stub_params(member, method="staticmethod" not in decorators), runtime)
+
+
+@pytest.mark.parametrize(
+    "cname", [n for n, d in DEFS.items() if isinstance(d, ast.ClassDef) and n not in TYPING_ONLY]
+)
+def test_every_public_member_of_a_class_has_a_stub(cname):
+    cls = getattr(gearbif, cname)
+    node = DEFS[cname]
+    stubbed = {m.name for m in node.body if isinstance(m, (ast.FunctionDef,))}
+    stubbed |= {m.target.id for m in node.body if isinstance(m, ast.AnnAssign)}
+    if any(isinstance(b, ast.Name) and b.id == "_System" for b in node.bases):
+        stubbed |= {m.name for m in DEFS["_System"].body if isinstance(m, ast.FunctionDef)}
+    own = {n for n in vars(cls) if not n.startswith("_")}
+    assert own - stubbed == set()

@@ -27,14 +27,24 @@ def pendulum_jacobian(t, th, v, p):
     return a, -p["omega0"] ** 2 * math.cos(th), -p["gamma"], r, 0.0, 0.0, a_p, r_p
 
 
+# the same forces as two expressions, compiled once (symbolic derivatives, evaluated in Rust)
+EXPRESSIONS = ("amplitude*cos(2*PI*f*t) - gamma*v - omega0^2*sin(x)", "mu")
+
+
 def user(jacobian=None):
+    if jacobian == "expressions":
+        return gearbif.UserSystem(EXPRESSIONS, dict(P), symmetry=(-1.0, 0.0))
     return gearbif.UserSystem(pendulum_forces, dict(P), jacobian=jacobian, symmetry=(-1.0, 0.0))
 
 
 BUILTIN = gearbif.ForcedPendulum(**P)
 
 
-@pytest.mark.parametrize("jacobian, rtol", [(None, 1e-6), (pendulum_jacobian, 1e-9)], ids=["differences", "analytic"])
+@pytest.mark.parametrize(
+    "jacobian, rtol",
+    [(None, 1e-6), (pendulum_jacobian, 1e-9), ("expressions", 1e-9)],
+    ids=["differences", "analytic", "expressions"],
+)
 def test_map_and_jacobians_equal_the_builtin_pendulum(jacobian, rtol):
     u = user(jacobian)
     assert u.param_names == list(P) and u.period == pytest.approx(1 / 0.7, rel=1e-15)
@@ -105,3 +115,24 @@ def test_user_errors_are_raised_and_bad_definitions_rejected():
         u.with_param("f", 0.0)
     with pytest.raises(gearbif.UnsupportedError):  # no half-period symmetry declared
         gearbif.shoot(u, [0.0, 0.0], section="half_period")
+
+
+def test_expressions_give_the_forces_and_refuse_what_they_cannot_compile():
+    u = user("expressions")
+    t, th, v = 0.3, 0.5, -1.2
+    assert u.forces(t, th, v) == pytest.approx(pendulum_forces(t, th, v, P), rel=1e-14)
+    # the expressions' continuation is the built-in one's
+    x = gearbif.simulate(BUILTIN, [0.1, 0.0], 100 * BUILTIN.period, samples_per_period=1)["x_end"]
+    kw = dict(param="omega0", range=(2.8, 3.0), ds=-0.05, max_steps=10)
+    bu, bb = gearbif.continuation(u, x, **kw), gearbif.continuation(BUILTIN, x, **kw)
+    assert np.allclose(bu.param, bb.param, atol=1e-10) and np.allclose(bu.x, bb.x, atol=1e-9)
+    with pytest.raises(ValueError, match="`k`"):
+        gearbif.UserSystem(("k*x", "mu"), dict(P))
+    with pytest.raises(ValueError, match="may not be called"):
+        gearbif.UserSystem(("x", "0"), dict(f=1.0, v=2.0))
+    with pytest.raises(ValueError):
+        gearbif.UserSystem(("x +* 2", "0"), dict(f=1.0))
+    with pytest.raises(ValueError, match="no jacobian"):
+        gearbif.UserSystem(EXPRESSIONS, dict(P), jacobian=pendulum_jacobian)
+    with pytest.raises(ValueError, match="pair of expressions"):
+        gearbif.UserSystem(42, dict(P))
