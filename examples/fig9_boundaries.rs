@@ -411,10 +411,12 @@ fn main() -> gearbif::Result<()> {
     }
     marks.push(("analytic f_c at Δ = ±1".into(), 0.0, fc));
     marks.push(("analytic f_c at Δ = ±1".into(), th_rev, fc));
+    // f from below 1 Hz to 40 Hz: a log axis keeps the curves below 3 Hz apart
     let full = BoundaryPlot {
         title: "Fig. 9 regimes over Θ: lock-loss folds, T-window boundary, stick onset".into(),
         curves: curves.clone(),
         marks: marks.clone(),
+        log_y: true,
     };
     gearbif::plotting::save(&full, dir.join("fig9_boundaries.png"))?;
     gearbif::plotting::save(&full, dir.join("fig9_boundaries.svg"))?;
@@ -422,6 +424,7 @@ fn main() -> gearbif::Result<()> {
         title: "f ≤ 3 Hz: T window (between the SB curve's branches), grazing curves".into(),
         curves: below(&curves, 3.0),
         marks: marks.into_iter().filter(|m| m.2 <= 3.0).collect(),
+        ..Default::default()
     };
     gearbif::plotting::save(&zoom, dir.join("fig9_boundaries_zoom.png"))?;
     gearbif::plotting::save(&zoom, dir.join("fig9_boundaries_zoom.svg"))?;

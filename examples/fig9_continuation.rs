@@ -249,7 +249,7 @@ fn main() -> gearbif::Result<()> {
         let bp = BoundaryPlot {
             title: "symmetry-breaking curves in (Θ, f): T/2 outside, T between".into(),
             curves,
-            marks: vec![],
+            ..Default::default()
         };
         gearbif::plotting::save(&bp, dir.join("fig9_sb_curves.svg"))?;
         gearbif::plotting::save(&bp, dir.join("fig9_sb_curves.png"))?;

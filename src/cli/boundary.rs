@@ -259,6 +259,7 @@ fn emit<S: Parametrised + serde::Serialize>(
             },
             curves: curves.to_vec(),
             marks,
+            ..Default::default()
         };
         crate::plotting::save(&fig, files.path(p))?;
     }

@@ -445,9 +445,13 @@ fn emit<S: Parametrised + serde::Serialize>(
     if let Some(p) = &a.common.out {
         crate::io::write_json_atomic(files.path(p), &tagged)?;
     }
+    let what = match branches {
+        [one] => crate::plotting::branch::branch_label(one),
+        many => format!("{} branches", many.len()),
+    };
     a.common.save_plot(
         &files,
-        format!("continuation in {}", param.name()),
+        format!("continuation in {}: {what}", param.name()),
         branches,
     )?;
     if let Some(p) = &a.plot_multipliers {

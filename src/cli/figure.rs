@@ -185,6 +185,16 @@ pub fn make(
     Ok(out)
 }
 
+/// THD_F for a title: three decimals, or "≫ 1 (no component at f)" where the fundamental is
+/// nearly absent (a T/2 orbit has none: the ratio is then the rounding of a vanishing amplitude).
+fn thd_text(thd: f64) -> String {
+    if thd.is_finite() && thd < 100.0 {
+        format!("{thd:.3}")
+    } else {
+        "≫ 1: no component at f".into()
+    }
+}
+
 /// Fig. 5: δ over α with the 7-harmonic fit at Θ = 31° for the chaotic, T/2 and T windows
 /// (1.65, 1.48, 1.33 Hz), one file pair each; appends the files written to `out`.
 fn fit_windows(p: &GearParams, dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
@@ -193,13 +203,13 @@ fn fit_windows(p: &GearParams, dir: &Path, out: &mut Vec<PathBuf>) -> Result<()>
         let r = window(&g, x0, 90)?;
         let s = r.samples.clone().unwrap_or_default();
         let title = format!(
-            "Θ = 31°, {f} Hz: flowchart {} (RMS_fit {:.2}°, THD {:.3}), rigorous {}",
+            "Θ = 31°, {f} Hz: flowchart {} (RMS_fit {:.2}°, THD {}), rigorous {}",
             r.paper.class.label(),
             r.paper.rms_fit_deg,
-            r.paper.thd,
+            thd_text(r.paper.thd),
             r.rigorous.as_ref().map(|c| c.label.as_str()).unwrap_or("")
         );
-        let y = "δ = β − α [deg] (physical convention)";
+        let y = "δ = β − α [deg] (physical), within ±180° of its mean";
         save_both(&fit_plot(&title, y, &s, &r.paper.fit), dir, stem, out)?;
     }
     Ok(())

@@ -418,16 +418,23 @@ impl Figure for Landscape {
     }
 }
 
-/// δ over α (mod 360°) with the harmonic fit (paper Fig. 5); `y_label` names δ's convention.
+/// δ over α (mod 360°) with the harmonic fit (paper Fig. 5), δ shown within ±180° of its mean (a
+/// slip wraps); `y_label` names δ's convention.
 pub fn fit_plot(
     title: &str,
     y_label: &str,
     samples: &[WindowSample],
     fit: &HarmonicFit,
 ) -> LinePlot {
+    // δ of a window with slips runs over many turns: shown within ±180° of its mean, so that a
+    // slip is a wrap and not a line off the page (the fit is drawn as fitted)
+    let mean = samples.iter().map(|w| w.delta_deg).sum::<f64>() / samples.len().max(1) as f64;
     let data = samples
         .iter()
-        .map(|w| (w.alpha.to_degrees().rem_euclid(360.0), w.delta_deg))
+        .map(|w| {
+            let d = mean + (w.delta_deg - mean + 180.0).rem_euclid(360.0) - 180.0;
+            (w.alpha.to_degrees().rem_euclid(360.0), d)
+        })
         .collect();
     let curve = (0..=360)
         .map(|k| (k as f64, fit.eval((k as f64).to_radians())))

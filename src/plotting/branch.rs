@@ -452,6 +452,9 @@ pub struct BoundaryPlot<S: Parametrised = Gear> {
     /// Extra reference points (label, x, y), e.g. analytic values, drawn as black dots and listed
     /// in the legend.
     pub marks: Vec<(String, f64, f64)>,
+    /// A logarithmic axis for the free parameter (curves spanning decades, e.g. f from 1 to
+    /// 40 Hz); its values must be > 0.
+    pub log_y: bool,
 }
 
 impl<S: Parametrised> Default for BoundaryPlot<S> {
@@ -460,6 +463,7 @@ impl<S: Parametrised> Default for BoundaryPlot<S> {
             title: String::new(),
             curves: Vec::new(),
             marks: Vec::new(),
+            log_y: false,
         }
     }
 }
@@ -487,10 +491,12 @@ impl<S: Parametrised> Figure for BoundaryPlot<S> {
                 mark_labels.push(l);
             }
         }
+        // positions as fractions of the axes (of log y on a log axis), for the legend's corner
+        let fy = |y: f64| if self.log_y { y.ln() } else { y };
         let frac: Vec<(f64, f64)> = all()
             .map(|p| (p.along, p.free))
             .chain(self.marks.iter().map(|m| (m.1, m.2)))
-            .map(|(x, y)| ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0)))
+            .map(|(x, y)| ((x - x0) / (x1 - x0), (fy(y) - fy(y0)) / (fy(y1) - fy(y0))))
             .collect();
         let chars = labels
             .iter()
@@ -500,66 +506,80 @@ impl<S: Parametrised> Figure for BoundaryPlot<S> {
             .unwrap_or(0);
         let (pos, headroom) =
             super::legend_corner(&frac, labels.len() + mark_labels.len(), chars, (780, 480));
-        let y1 = y1 + headroom * (y1 - y0);
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, ("sans-serif", 20))
+        let y1 = if self.log_y {
+            y1 * (y1 / y0).powf(headroom)
+        } else {
+            y1 + headroom * (y1 - y0)
+        };
+        let mut b = ChartBuilder::on(root);
+        b.caption(&self.title, ("sans-serif", 20))
             .margin(15)
             .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(plot_err)?;
-        chart
-            .configure_mesh()
-            .x_desc(xl)
-            .y_desc(yl)
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 15))
-            .draw()
-            .map_err(plot_err)?;
-        for (label, c) in &self.curves {
-            let i = labels.iter().position(|l| l == label).unwrap_or(0);
-            // skip the palette's yellow (index 2), unreadable on white
-            let col = Palette99::pick(if i >= 2 { i + 1 } else { i }).to_rgba();
-            let anno = chart
-                .draw_series(LineSeries::new(
-                    c.points.iter().map(|p| (p.along, p.free)),
-                    col.stroke_width(2),
-                ))
-                .map_err(plot_err)?;
-            // one legend entry per label: on its first curve
-            if self.curves.iter().position(|(l, _)| l == label)
-                == self.curves.iter().position(|x| std::ptr::eq(&x.1, c))
-            {
-                anno.label(label.as_str()).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(3))
-                });
-            }
+            .y_label_area_size(80);
+        macro_rules! body {
+            ($chart:expr) => {{
+                let mut chart = $chart;
+                chart
+                    .configure_mesh()
+                    .x_desc(xl)
+                    .y_desc(yl)
+                    .label_style(("sans-serif", 14))
+                    .axis_desc_style(("sans-serif", 15))
+                    .draw()
+                    .map_err(plot_err)?;
+                for (label, c) in &self.curves {
+                    let i = labels.iter().position(|l| l == label).unwrap_or(0);
+                    // skip the palette's yellow (index 2), unreadable on white
+                    let col = Palette99::pick(if i >= 2 { i + 1 } else { i }).to_rgba();
+                    let anno = chart
+                        .draw_series(LineSeries::new(
+                            c.points.iter().map(|p| (p.along, p.free)),
+                            col.stroke_width(2),
+                        ))
+                        .map_err(plot_err)?;
+                    // one legend entry per label: on its first curve
+                    if self.curves.iter().position(|(l, _)| l == label)
+                        == self.curves.iter().position(|x| std::ptr::eq(&x.1, c))
+                    {
+                        anno.label(label.as_str()).legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 18, y)], col.stroke_width(3))
+                        });
+                    }
+                }
+                // one colour per kind of mark: black first, then distinct dark colours
+                let mark_colours = [
+                    BLACK,
+                    RGBColor(200, 30, 30),
+                    RGBColor(30, 30, 200),
+                    RGBColor(0, 140, 0),
+                    RGBColor(160, 0, 160),
+                    RGBColor(200, 120, 0),
+                ];
+                for (k, ml) in mark_labels.iter().enumerate() {
+                    let pts: Vec<(f64, f64)> = self
+                        .marks
+                        .iter()
+                        .filter(|m| m.0 == *ml)
+                        .map(|m| (m.1, m.2))
+                        .collect();
+                    let col = mark_colours[k % mark_colours.len()];
+                    chart
+                        .draw_series(pts.into_iter().map(|p| Circle::new(p, 5, col.filled())))
+                        .map_err(plot_err)?
+                        .label(*ml)
+                        .legend(move |(x, y)| Circle::new((x + 9, y), 5, col.filled()));
+                }
+                if !self.curves.is_empty() || !self.marks.is_empty() {
+                    super::draw_legend(&mut chart, pos)?;
+                }
+            }};
         }
-        // one colour per kind of mark: black first, then distinct dark colours
-        let mark_colours = [
-            BLACK,
-            RGBColor(200, 30, 30),
-            RGBColor(30, 30, 200),
-            RGBColor(0, 140, 0),
-            RGBColor(160, 0, 160),
-            RGBColor(200, 120, 0),
-        ];
-        for (k, ml) in mark_labels.iter().enumerate() {
-            let pts: Vec<(f64, f64)> = self
-                .marks
-                .iter()
-                .filter(|m| m.0 == *ml)
-                .map(|m| (m.1, m.2))
-                .collect();
-            let col = mark_colours[k % mark_colours.len()];
-            chart
-                .draw_series(pts.into_iter().map(|p| Circle::new(p, 5, col.filled())))
-                .map_err(plot_err)?
-                .label(*ml)
-                .legend(move |(x, y)| Circle::new((x + 9, y), 5, col.filled()));
-        }
-        if !self.curves.is_empty() || !self.marks.is_empty() {
-            super::draw_legend(&mut chart, pos)?;
+        if self.log_y {
+            body!(b
+                .build_cartesian_2d(x0..x1, (y0..y1).log_scale())
+                .map_err(plot_err)?)
+        } else {
+            body!(b.build_cartesian_2d(x0..x1, y0..y1).map_err(plot_err)?)
         }
         Ok(())
     }

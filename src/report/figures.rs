@@ -73,6 +73,7 @@ pub fn bifurcations(d: &ReportData, b: &Bifurcations, dir: &Path) -> Result<Link
             title: "lock-loss boundary f_c(Θ) (fold of the lock)".into(),
             curves: curves.clone(),
             marks,
+            ..Default::default()
         };
         save_pair(&fig, dir, "fc_theta", "lock-loss boundary f_c(Θ)", &mut out)?;
     }
