@@ -1,14 +1,16 @@
 //! The event-driven Taylor method against independent answers: agreement with the event-driven
 //! DOP853 at tight tolerance (states, event sequence and times, state Jacobians, samples),
 //! convergence in tolerance against one reference, the state Jacobian against central finite
-//! differences through crossings and stick phases, the analytic lock branch at Θ = 0, and Den
-//! Hartog's closed-form steady state of the Coulomb oscillator.
+//! differences through crossings and stick phases, the analytic lock branch at Θ = 0, Den
+//! Hartog's closed-form steady state of the Coulomb oscillator, and the default method (Taylor's
+//! for the gear) locating the orbits the DOP853 locates.
 
 use gearbif::integrator::{
-    EventDriven853, EventKind, Flow, FlowMethod, FlowOptions, Sensitivity, Taylor,
+    EventDriven853, EventKind, Fastest, Flow, FlowMethod, FlowOptions, Sensitivity, Taylor,
+    DEFAULT_METHOD,
 };
 use gearbif::model::den_hartog::non_stop_orbit;
-use gearbif::model::{CoulombOscillator, DrivenOscillator, Gear};
+use gearbif::model::{CoulombOscillator, DrivenOscillator, ForcedPendulum, Gear};
 use std::f64::consts::{PI, TAU};
 
 fn opts(tol: f64) -> FlowOptions {
@@ -244,5 +246,56 @@ fn coulomb_oscillator_closed_form() {
             .events
             .iter()
             .all(|e| matches!(e.kind, EventKind::Crossing { .. })));
+    }
+}
+
+/// The second-method check of the default: [`DEFAULT_METHOD`] integrates the gear by Taylor's
+/// method (one expansion per step) and a system without a jet (the forced pendulum) by the
+/// DOP853, and
+/// the orbits it locates (a slipping symmetric orbit found from a simulation, a stick/slip orbit
+/// with one stick phase per half period, the same orbit on P_T) are those the DOP853 locates:
+/// states to 1e-8, the same events, multipliers to 1e-6.
+#[test]
+fn default_method_locates_the_dop853_orbits() {
+    use gearbif::orbits::{orbit_from_simulation, shoot, shoot_with, OrbitSpec, ShootingOptions};
+    assert_eq!(DEFAULT_METHOD, Fastest);
+    let gear = Gear::paper(25.0, 2.7).unwrap();
+    let o = FlowOptions::with_tol(1e-9);
+    let fl = DEFAULT_METHOD
+        .flow(&gear, 0.0, [0.5, 2.0], 1.0, &o)
+        .unwrap();
+    assert_eq!(fl.stats.steps, fl.stats.rhs_evals);
+    let rk = EventDriven853
+        .flow(&gear, 0.0, [0.5, 2.0], 1.0, &o)
+        .unwrap();
+    assert!(rk.stats.rhs_evals > 5 * rk.stats.steps);
+    let pendulum = ForcedPendulum::new(6.0, 0.3, 0.5, 20.0, 1.2).unwrap();
+    let (a, b) = (
+        DEFAULT_METHOD
+            .flow(&pendulum, 0.0, [0.5, 2.0], 2.0, &o)
+            .unwrap(),
+        EventDriven853
+            .flow(&pendulum, 0.0, [0.5, 2.0], 2.0, &o)
+            .unwrap(),
+    );
+    assert_eq!((a.x, a.stats), (b.x, b.stats));
+    let so = ShootingOptions::default();
+    let sym = orbit_from_simulation(&gear, [3.0, 15.0], 100, 2, true, &so).unwrap();
+    let slow = Gear::paper(25.0, 1.61).unwrap();
+    let cases = [
+        (&gear, sym.spec, sym.x),
+        (&gear, OrbitSpec::stroboscopic(1, 1), sym.x),
+        (&slow, OrbitSpec::symmetric(-1), [0.309, -0.5]),
+    ];
+    for (g, spec, guess) in cases {
+        let a = shoot(g, &spec, guess, &so).unwrap();
+        let b = shoot_with(&EventDriven853, g, &spec, guess, &so).unwrap();
+        let gap = (a.x[0] - b.x[0]).abs().max((a.x[1] - b.x[1]).abs());
+        assert!(gap < 1e-8, "{spec:?}: {:?} vs {:?}", a.x, b.x);
+        assert_eq!(a.events, b.events, "{spec:?}");
+        for (ma, mb) in a.floquet.multipliers.iter().zip(&b.floquet.multipliers) {
+            let d = (ma[0] - mb[0]).hypot(ma[1] - mb[1]);
+            assert!(d < 1e-6, "{spec:?}: {ma:?} vs {mb:?}");
+        }
     }
 }

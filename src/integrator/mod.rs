@@ -23,6 +23,7 @@ mod bernstein;
 mod dop853;
 mod dopri5;
 mod event_driven;
+mod fastest;
 mod fixed_step;
 #[cfg(feature = "diffsol-check")]
 mod regularised;
@@ -33,21 +34,26 @@ pub use dop853::EventDriven853;
 pub use dopri5::EventDriven;
 pub use taylor::Taylor;
 
+pub use fastest::Fastest;
+
 /// The method of the library's entry points that take none (`maps::stroboscopic`,
 /// `maps::half_period`, single shooting `orbits::shoot` and its relatives, one-parameter
 /// continuation `Continuation::new`, `switch_branch`, `diagram`, multiple shooting,
 /// `two_param::locate_augmented` and `follow`, the lock-loss curves, the classification of
-/// `sweep::hysteresis`) and of the CLI's `--method` default: the event-driven Dormand–Prince
-/// 8(5,3). It is faster than the DP5 at every tolerance of the work-precision table in
-/// docs/performance.md (P_T with the state Jacobian at tol 1e-10: 20.6 µs against 52.2 µs, errors
-/// 4.9e-11 against 9.6e-11). The global events (`analysis::global_events`) and the
-/// identification's ring-down fits, stick windows and synthesis use [`EventDriven`] (the DP5);
-/// docs/performance.md, "Which method is the default where", has the full table. The `_with`
-/// variants take any [`FlowMethod`].
-pub type DefaultMethod = EventDriven853;
+/// `sweep::hysteresis`, the CLI's `locate`, `boundary` and `classify`): [`Fastest`], Taylor's
+/// method for the systems that provide their Taylor coefficients (the gear, the Coulomb
+/// oscillator) and the event-driven Dormand–Prince 8(5,3) for the others. Taylor's method is
+/// several times faster than the DOP853 on the gear at every tolerance of docs/tables/peers.md,
+/// and the DOP853 is faster than the DP5 at every tolerance of the work-precision table in
+/// docs/performance.md. The CLI's `--method` default stays `dop853` (it also serves recorded
+/// models, which have no Taylor coefficients). The global events (`analysis::global_events`) and
+/// the identification's ring-down fits, stick windows and synthesis use [`EventDriven`] (the
+/// DP5); docs/performance.md, "Which method is the default where", has the full table. The
+/// `_with` variants take any [`FlowMethod`].
+pub type DefaultMethod = Fastest;
 
 /// The value of [`DefaultMethod`].
-pub const DEFAULT_METHOD: DefaultMethod = EventDriven853;
+pub const DEFAULT_METHOD: DefaultMethod = Fastest;
 pub use fixed_step::FixedStep;
 #[cfg(feature = "diffsol-check")]
 pub use regularised::{ImplicitMethod, Regularised};

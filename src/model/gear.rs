@@ -482,6 +482,10 @@ impl Gear {
 }
 
 impl DrivenOscillator for Gear {
+    /// Taylor's method applies (the recurrences below).
+    fn as_taylor(&self) -> Option<&dyn TaylorOscillator> {
+        Some(self)
+    }
     #[inline]
     fn period(&self) -> f64 {
         1.0 / self.f
@@ -594,6 +598,8 @@ impl DrivenOscillator for Gear {
 /// ((Δ + 1)/2) cos v, so F = −ζω − sη + σ g τ (σ the convention's sign) needs only the sin/cos
 /// recurrences of u and v (u̇ = ω + 2πf, v̇ = ω − 2πf): four Cauchy sums per order, and ∂F/∂β comes
 /// with them at no cost; ∂F/∂ω = −ζ.
+/// The recurrences run with the processor's widest vector instructions
+/// ([`simd_arch`](super::taylor::simd_arch)).
 impl TaylorOscillator for Gear {
     fn taylor_expand(
         &self,
@@ -603,6 +609,48 @@ impl TaylorOscillator for Gear {
         x: &mut TaylorSeries,
         linearised: bool,
     ) {
+        super::taylor::simd_arch().dispatch(GearJet {
+            gear: self,
+            t0,
+            side,
+            order,
+            x,
+            linearised,
+        });
+    }
+}
+
+/// One call of the gear's [`TaylorOscillator::taylor_expand`] as an operation that `pulp`
+/// compiles for each instruction set.
+struct GearJet<'a> {
+    gear: &'a Gear,
+    t0: f64,
+    side: f64,
+    order: usize,
+    x: &'a mut TaylorSeries,
+    linearised: bool,
+}
+
+impl pulp::WithSimd for GearJet<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<V: pulp::Simd>(self, _: V) {
+        let GearJet {
+            gear,
+            t0,
+            side,
+            order,
+            x,
+            linearised,
+        } = self;
+        gear.jet(t0, side, order, x, linearised);
+    }
+}
+
+impl Gear {
+    /// The recurrences of the gear's Taylor coefficients (the impl's docs).
+    #[inline(always)]
+    fn jet(&self, t0: f64, side: f64, order: usize, x: &mut TaylorSeries, linearised: bool) {
         let nu = TAU * self.f;
         let half_g = 0.5 * self.convention.sign() * self.g;
         let (ku, kv) = (half_g * (self.delta - 1.0), half_g * (self.delta + 1.0));

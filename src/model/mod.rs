@@ -319,6 +319,14 @@ pub trait DrivenOscillator: Send + Sync {
     fn co_rotation(&self) -> f64 {
         0.0
     }
+
+    /// This system as a [`TaylorOscillator`] when it provides the Taylor coefficients of its
+    /// slip solutions, so that the default method
+    /// ([`Fastest`](crate::integrator::Fastest)) integrates it by Taylor's method; `None` (the
+    /// default) otherwise.
+    fn as_taylor(&self) -> Option<&dyn TaylorOscillator> {
+        None
+    }
 }
 
 /// The release function G(t) = |a(t, β, 0)| − r_s(t, β): the output at rest slips once G ≥ 0.

@@ -132,6 +132,10 @@ impl TaylorOscillator for CoulombOscillator {
 }
 
 impl DrivenOscillator for CoulombOscillator {
+    /// Taylor's method applies (the recurrences below).
+    fn as_taylor(&self) -> Option<&dyn TaylorOscillator> {
+        Some(self)
+    }
     fn period(&self) -> f64 {
         1.0 / self.f
     }

@@ -37,6 +37,15 @@ pub const INV: [f64; TAYLOR_LEN] = {
     v
 };
 
+/// The widest vector instructions of this processor, detected once: the recurrences are compiled
+/// for them as well as for the baseline (`pulp`), and run with the widest. Without fused
+/// multiply–add contraction (Rust does not contract) AVX2 performs the same IEEE operations in the
+/// same order as the baseline: the same coefficients to the bit, in wider registers.
+pub(crate) fn simd_arch() -> pulp::Arch {
+    static ARCH: std::sync::OnceLock<pulp::Arch> = std::sync::OnceLock::new();
+    *ARCH.get_or_init(pulp::Arch::new)
+}
+
 /// Taylor coefficients of one slip solution about t₀ (fixed-size arrays: no heap traffic).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TaylorSeries {

@@ -98,7 +98,7 @@ impl<'a, S: TaylorOscillator + ?Sized, const N: usize> Solver<'a, S, N> {
             if let Some(tau) = first_crossing(&self.ex.x.omega, self.ex.order, hs, s) {
                 let tc = t + tau;
                 self.samples_poly(t, tc, false);
-                let mut yc = self.ex.state(tau);
+                let mut yc = self.ex.state(tc - t);
                 yc[1] = 0.0;
                 guard.record(
                     tc,
