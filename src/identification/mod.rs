@@ -35,6 +35,7 @@ pub mod report;
 pub mod ringdown;
 pub mod select;
 pub mod shooting;
+pub mod smoothing;
 pub mod spec;
 pub mod synth;
 pub mod verdict;

@@ -404,8 +404,10 @@ fn curve_markdown(c: &super::curve::Curve) -> String {
          {} knots with the roughness weight λ = {:.3e} chosen by the held-out judge ({}), \
          {} the held-out runs significantly better than the final model ({}): held-out χ² gain {:.1} ± {:.1}, \
          z = {:.2} against the threshold {:.2} over {} windows. The curve is largest at β = {:.0}° \
-         ({:.3} ± {:.3} s⁻²) and smallest at β = {:.0}° ({:.3} ± {:.3} s⁻²); the band of \
-         remainder_curve.svg is ± {} σ, σ(β) from the refit's penalised covariance.\n\n",
+         ({:.3} ± {:.3} s⁻²) and smallest at β = {:.0}° ({:.3} ± {:.3} s⁻²), at the band's \
+         λ = {:.3e} chosen by generalised cross-validation on the refit linearised at its \
+         solution ({}); the band of remainder_curve.svg is ± {} σ, σ(β) from the Bayesian \
+         covariance floored by the window-clustered sandwich.\n\n",
         c.knots,
         c.lambda,
         tried.join("; "),
@@ -422,6 +424,10 @@ fn curve_markdown(c: &super::curve::Curve) -> String {
         c.grid_deg[imin],
         vmin,
         c.sigma[imin],
+        c.band_lambda,
+        c.band_edf.map_or("the refit's own covariance".to_string(), |e| format!(
+            "{e:.1} effective parameters"
+        )),
         c.band_sigmas,
     )
 }
