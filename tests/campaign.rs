@@ -65,7 +65,7 @@ type Based = (
 fn cached_base(id: &str, level: f64, seed: u64) -> &'static Based {
     type Cells = Mutex<HashMap<(String, u64, u64), &'static OnceLock<Based>>>;
     static CELLS: OnceLock<Cells> = OnceLock::new();
-    let cell: &'static OnceLock<Based> = *CELLS
+    let cell: &'static OnceLock<Based> = CELLS
         .get_or_init(Default::default)
         .lock()
         .unwrap_or_else(|e| e.into_inner())
