@@ -70,13 +70,12 @@ pub fn judge(
                 .unwrap_or_else(|| st.fit.theta.clone())
         })
         .collect();
-    let excess: Vec<f64> = (0..folds.k)
-        .map(|f| {
-            profile_on(runs, st, &thetas[f], geo, &|r| folds.of_run[r] != f, tol)
-                .map(|x| x.s * x.eta)
-                .unwrap_or(0.0)
-        })
-        .collect();
+    // each fold's profile on the other folds' runs, the folds side by side
+    let excess: Vec<f64> = par_map(folds.k, |f| {
+        profile_on(runs, st, &thetas[f], geo, &|r| folds.of_run[r] != f, tol)
+            .map(|x| x.s * x.eta)
+            .unwrap_or(0.0)
+    });
     let warm = st.fit.warm_starts(wins.len());
     let chi2: Vec<Option<f64>> = par_map(wins.len(), |k| {
         let w = &wins[k];

@@ -119,9 +119,11 @@ pub fn heldout_after(
     judge: &ShootingOptions,
     (chi2_fit, warm): (Vec<Option<f64>>, Vec<Option<[f64; 2]>>),
 ) -> HeldOut {
-    let thetas: Vec<Vec<f64>> = (0..folds.k)
-        .map(|f| theta_without(model, fit, wins, |run| folds.of_run[run] == f, judge))
-        .collect();
+    // the folds side by side: a fold whose one-step refit is implausible refits by
+    // Levenberg–Marquardt while the others take their step
+    let thetas: Vec<Vec<f64>> = par_map(folds.k, |f| {
+        theta_without(model, fit, wins, |run| folds.of_run[run] == f, judge)
+    });
     let chi2: Vec<Option<f64>> = par_map(wins.len(), |k| {
         let w = &wins[k];
         let th = &thetas[folds.of_run[w.run]];
