@@ -44,7 +44,9 @@
 use super::judge::{compare, heldout, z_threshold, Comparison, HeldOut};
 use super::regression::{build, Term, WeakOptions, BASE_TERMS};
 use super::select::{ModelState, SelectCtx};
-use super::shooting::{curve_columns, refit, Reselect, ShootingOptions, SimFit, SimModel};
+use super::shooting::{
+    curve_columns, par_map, refit, Reselect, ShootingOptions, SimFit, SimModel,
+};
 use super::smoothing::{add_penalty, gcv_refine, Linearised, Smoothed};
 use crate::model::recorded::spline::{basis, SplineKind, SPLINE_KNOTS};
 use nalgebra::{DMatrix, DVector};
@@ -199,10 +201,13 @@ pub fn fit_curve(
     (fin, fin_held): (&ModelState, &HeldOut),
     base_theta: &[f64],
 ) -> Option<Curve> {
-    let pilots: Vec<Pilot> = SplineKind::ALL
-        .iter()
-        .filter_map(|&kind| pilot(ctx, weak, fin, base_theta, kind))
-        .collect();
+    // the kinds' pilots are independent refits: side by side (each result as computed alone)
+    let pilots: Vec<Pilot> = par_map(SplineKind::ALL.len(), |k| {
+        pilot(ctx, weak, fin, base_theta, SplineKind::ALL[k])
+    })
+    .into_iter()
+    .flatten()
+    .collect();
     // the kind is chosen in sample, before any held-out prediction: the comparison that decides
     // counts every (kind, λ) pair of the grid as tried
     let chosen = pilots
