@@ -11,6 +11,7 @@ mod branches;
 mod convert;
 mod dynamics;
 mod errors;
+mod located;
 mod systems;
 mod user;
 

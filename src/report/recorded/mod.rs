@@ -21,7 +21,7 @@ use crate::continuation::two_param::{locate_augmented_with, CurvePoint};
 use crate::continuation::{Continuation, ContinuationOptions, SpecialKind, StepOutcome};
 use crate::error::{Error, Result};
 use crate::integrator::DEFAULT_METHOD;
-use crate::model::recorded::file::ModelFile;
+use crate::model::recorded::file::{Covariance, ModelFile};
 use crate::model::recorded::{RecordedModel, RecordedParam};
 use crate::model::Parametrised;
 use crate::orbits::{orbit_from_simulation, OrbitSpec, ShootingOptions};
@@ -82,6 +82,9 @@ pub struct LocatedLimit {
     /// Why there is no σ.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub no_sigma: Option<String>,
+    /// The parameter contributing most to σ, with |∂f/∂p| σ_p, Hz.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub main_source: Option<(String, f64)>,
     /// The sentence when it lies far outside the recorded range.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outside: Option<String>,
@@ -201,12 +204,17 @@ fn lock_branch(file: &ModelFile, o: &RecordedReportOptions) -> Result<(LockBranc
         open = p.stable;
     }
     let found = b.specials.iter().map(|s| (s.kind, s.param, s.x)).collect();
+    let stop = if b.specials.iter().any(|s| s.kind == SpecialKind::Fold) {
+        "the lock loss (a fold)".to_string()
+    } else {
+        b.stop.to_string()
+    };
     Ok((
         LockBranch {
             spec: b.spec,
             points: b.points.len(),
             stable_hz,
-            stop: b.stop.to_string(),
+            stop,
             map_evaluations: b.map_evaluations,
         },
         found,
@@ -258,6 +266,7 @@ fn locate_limit(
             (p, Some(s), None)
         }
     };
+    let main_source = sigma.as_ref().and_then(|s| main_source(s, &file.covariance));
     Ok(LocatedLimit {
         kind,
         name,
@@ -265,8 +274,20 @@ fn locate_limit(
         point,
         sigma,
         no_sigma,
+        main_source,
         outside,
     })
+}
+
+/// The parameter of the largest |∂λ/∂p| σ_p (σ_p from the covariance's diagonal) and that product.
+fn main_source(s: &LocatedSigma, cov: &Covariance) -> Option<(String, f64)> {
+    s.gradient
+        .iter()
+        .filter_map(|d| {
+            let i = cov.names.iter().position(|n| n == d.name)?;
+            Some((d.name.to_string(), (d.derivative * cov.matrix[i][i].max(0.0).sqrt()).abs()))
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
 }
 
 /// A nonsmooth point as the continuation located it (its Floquet data at the state found).

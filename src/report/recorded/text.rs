@@ -6,10 +6,15 @@ use super::{LocatedLimit, RecordedReportData};
 use crate::report::{Report, ReportSection};
 
 /// "v ± σ" with σ to two significant digits and v to the same decimal; without a usable σ, v to
-/// six significant digits.
+/// six significant digits. Below 1e-3 the pair shares a power of ten: "(v ± σ)e-7".
 pub fn with_sigma(v: f64, sigma: f64) -> String {
     if !(sigma.is_finite() && sigma > 0.0) || !v.is_finite() {
-        return format!("{}", sig(v, 6));
+        return sig(v, 6);
+    }
+    if v.abs().max(sigma) < 1e-3 {
+        let e = v.abs().max(sigma).log10().floor() as i32;
+        let k = 10f64.powi(e);
+        return format!("({})e{e}", with_sigma(v / k, sigma / k));
     }
     let dec = (1 - sigma.log10().floor() as i32).max(0) as usize;
     format!("{v:.dec$} ± {sigma:.dec$}")
@@ -115,9 +120,10 @@ fn limits(ls: &[LocatedLimit]) -> String {
         return "No special point on the lock branch.\n".into();
     }
     let mut s = String::from(
-        "Every special point found on the locked orbit, located again with its σ; the largest \
-         contributions to σ are the parameters whose derivative times their own σ is largest.\n\n\
-         | point | f [Hz] | what happens there | note |\n|---|---|---|---|\n",
+        "Every special point found on the locked orbit, located again with its σ, and the \
+         parameter whose own σ moves it most (|∂f/∂p| σ_p). Only the locked orbit's branch is \
+         followed: attractors that coexist with it are not in this report.\n\n\
+         | point | f [Hz] | what happens there | largest source of σ | note |\n|---|---|---|---|---|\n",
     );
     for l in ls {
         let what = match l.kind {
@@ -125,14 +131,19 @@ fn limits(ls: &[LocatedLimit]) -> String {
             crate::continuation::SpecialKind::Flip => "the period doubles",
             crate::continuation::SpecialKind::SymmetryBreaking => "the half-period symmetry breaks",
             crate::continuation::SpecialKind::NeimarkSacker => "a slow modulation sets in",
-            crate::continuation::SpecialKind::Nonsmooth => "the output starts or stops sticking",
+            crate::continuation::SpecialKind::Nonsmooth => {
+                "the output's pattern of sticking and crossings changes"
+            }
         };
         let note = [l.outside.clone(), l.no_sigma.clone()]
             .into_iter()
             .flatten()
             .collect::<Vec<_>>()
             .join("; ");
-        s += &format!("| {} | {} | {what} | {note} |\n", l.name, value(l));
+        let source = l.main_source.as_ref().map_or(String::new(), |(p, v)| {
+            format!("{p} ({} Hz)", sig(*v, 2))
+        });
+        s += &format!("| {} | {} | {what} | {source} | {note} |\n", l.name, value(l));
     }
     s
 }
@@ -176,5 +187,6 @@ mod tests {
         assert_eq!(with_sigma(39.83967, 0.0123), "39.840 ± 0.012");
         assert_eq!(with_sigma(-1.2345, 0.5), "-1.23 ± 0.50");
         assert_eq!(with_sigma(2.5, 0.0), "2.50000");
+        assert_eq!(with_sigma(-1.29e-7, 3.5e-8), "(-1.29 ± 0.35)e-7");
     }
 }
