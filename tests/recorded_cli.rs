@@ -378,7 +378,7 @@ fn diagram_on_a_model_file_and_conflicting_flags() {
 
 /// The paper's model file with a quadratic drag q (|β̇|/4)² (effect `quadratic_drag`), a
 /// covariance over (g, ζ, η, q) and the recorded drive frequencies 1–2.5 Hz.
-fn with_drag(q: f64, cov: &[[f64; 4]; 4]) -> PathBuf {
+fn with_drag(q: f64, cov: &[[f64; 4]; 4], drive_hz: [f64; 2]) -> PathBuf {
     let text = std::fs::read_to_string(asset("paper_gear.model.json")).unwrap();
     let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
     for p in doc["parameters"].as_array_mut().unwrap() {
@@ -389,8 +389,12 @@ fn with_drag(q: f64, cov: &[[f64; 4]; 4]) -> PathBuf {
     doc["effects"] = serde_json::json!(["quadratic_drag"]);
     doc["covariance"] =
         serde_json::json!({ "names": ["g", "zeta", "eta", "drag_q"], "matrix": cov });
-    doc["recorded"] = serde_json::json!({ "drive_hz": [1.0, 2.5] });
-    let p = std::env::temp_dir().join(format!("gearbif-drag-{}.json", std::process::id()));
+    doc["recorded"] = serde_json::json!({ "drive_hz": drive_hz });
+    let p = std::env::temp_dir().join(format!(
+        "gearbif-drag-{}-{}.json",
+        drive_hz[1],
+        std::process::id()
+    ));
     std::fs::write(&p, serde_json::to_string(&doc).unwrap()).unwrap();
     p
 }
@@ -411,7 +415,7 @@ fn report_on_a_model_file_is_the_closed_forms_effect_table() {
         [1.0, 0.0, 1.0, 0.0],
         [0.0, 0.0, 0.0, 1e-6],
     ];
-    let file = with_drag(q, &cov);
+    let file = with_drag(q, &cov, [1.0, 2.5]);
     let m = file.to_str().unwrap();
     let out = std::env::temp_dir().join(format!("gearbif-report-model-{}", std::process::id()));
     let run = gearbif(&["report", "--model", m, "--out", out.to_str().unwrap(), "--quiet"]);
@@ -461,6 +465,24 @@ fn report_on_a_model_file_is_the_closed_forms_effect_table() {
         md.contains("lies outside the recorded 1.00–2.50 Hz: an extrapolation of the drag law"),
         "{md}"
     );
+    // locate and boundary say so too, in f (not in η), and not inside the recorded range
+    let loc = |file: &str, f: &str| {
+        json(&gearbif(&[
+            "locate", "--model", file, "--f", f, "--kind", "fold", "--section", "strob",
+            "--state-rad", "1.5708,222", "--json",
+        ]))
+    };
+    let out_of = |v: &serde_json::Value| v["outside_recorded"].to_string();
+    assert!(out_of(&loc(m, "35")).contains("f = 35.4 Hz lies outside the recorded 1.00–2.50 Hz: an extrapolation of the drag law"));
+    let curve = json(&gearbif(&[
+        "boundary", "--model", m, "--free", "f", "--along", "eta", "--range", "23.1:23.6",
+        "--step", "0.5", "--start-free", "35", "--start-state-rad", "1.5708,222", "--section",
+        "strob", "--method", "natural", "--json",
+    ]));
+    assert!(out_of(&curve).contains("(2 of 2 points of the curve lie that far out)"), "{curve}");
+    let near = with_drag(q, &cov, [20.0, 30.0]);
+    assert!(loc(near.to_str().unwrap(), "35")["outside_recorded"].is_null());
+    std::fs::remove_file(&near).ok();
     // the conflicting flags: exit 2, the flag and the file's option named
     for args in [
         vec!["report", "--model", m, "--zeta", "2"],
