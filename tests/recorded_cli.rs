@@ -418,8 +418,19 @@ fn report_on_a_model_file_is_the_closed_forms_effect_table() {
     let file = with_drag(q, &cov, [1.0, 2.5]);
     let m = file.to_str().unwrap();
     let out = std::env::temp_dir().join(format!("gearbif-report-model-{}", std::process::id()));
-    let run = gearbif(&["report", "--model", m, "--out", out.to_str().unwrap(), "--quiet"]);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let run = gearbif(&[
+        "report",
+        "--model",
+        m,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     let section = |id: &str| {
@@ -437,7 +448,13 @@ fn report_on_a_model_file_is_the_closed_forms_effect_table() {
     let f0 = (g - eta) / (tau * zeta);
     let grad = |f: f64, q: f64| {
         let h1 = tau * zeta + 2.0 * q * (tau / 4.0).powi(2) * f;
-        [1.0, -tau * f, -1.0, -(tau * f / 4.0).powi(2) * (q != 0.0) as u8 as f64].map(|v| v / h1)
+        [
+            1.0,
+            -tau * f,
+            -1.0,
+            -(tau * f / 4.0).powi(2) * (q != 0.0) as u8 as f64,
+        ]
+        .map(|v| v / h1)
     };
     let (gq, g0) = (grad(fq, q), grad(f0, 0.0));
     let d: Vec<f64> = (0..4).map(|i| gq[i] - g0[i]).collect();
@@ -452,14 +469,27 @@ fn report_on_a_model_file_is_the_closed_forms_effect_table() {
         .iter()
         .find(|l| l["name"] == "f_c")
         .expect("the lock loss is located");
-    assert!((fc["f_hz"].as_f64().unwrap() - fq).abs() < 1e-7, "{fc} {fq}");
+    assert!(
+        (fc["f_hz"].as_f64().unwrap() - fq).abs() < 1e-7,
+        "{fc} {fq}"
+    );
     let shifts = section("effects");
     let row = &shifts[0];
     assert_eq!(row["off"], serde_json::json!(["quadratic_drag"]));
-    assert!((row["without_hz"].as_f64().unwrap() - f0).abs() < 1e-7, "{row}");
-    assert!((row["delta_hz"].as_f64().unwrap() - (fq - f0)).abs() < 1e-7, "{row}");
+    assert!(
+        (row["without_hz"].as_f64().unwrap() - f0).abs() < 1e-7,
+        "{row}"
+    );
+    assert!(
+        (row["delta_hz"].as_f64().unwrap() - (fq - f0)).abs() < 1e-7,
+        "{row}"
+    );
     let s = row["sigma_hz"].as_f64().unwrap();
-    assert!((s / var.sqrt() - 1.0).abs() < 1e-4, "σ {s}, closed form {}", var.sqrt());
+    assert!(
+        (s / var.sqrt() - 1.0).abs() < 1e-4,
+        "σ {s}, closed form {}",
+        var.sqrt()
+    );
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(
         md.contains("lies outside the recorded 1.00–2.50 Hz: an extrapolation of the drag law"),
@@ -468,18 +498,50 @@ fn report_on_a_model_file_is_the_closed_forms_effect_table() {
     // locate and boundary say so too, in f (not in η), and not inside the recorded range
     let loc = |file: &str, f: &str| {
         json(&gearbif(&[
-            "locate", "--model", file, "--f", f, "--kind", "fold", "--section", "strob",
-            "--state-rad", "1.5708,222", "--json",
+            "locate",
+            "--model",
+            file,
+            "--f",
+            f,
+            "--kind",
+            "fold",
+            "--section",
+            "strob",
+            "--state-rad",
+            "1.5708,222",
+            "--json",
         ]))
     };
     let out_of = |v: &serde_json::Value| v["outside_recorded"].to_string();
-    assert!(out_of(&loc(m, "35")).contains("f = 35.4 Hz lies outside the recorded 1.00–2.50 Hz: an extrapolation of the drag law"));
+    assert!(out_of(&loc(m, "35")).contains(
+        "f = 35.4 Hz lies outside the recorded 1.00–2.50 Hz: an extrapolation of the drag law"
+    ));
     let curve = json(&gearbif(&[
-        "boundary", "--model", m, "--free", "f", "--along", "eta", "--range", "23.1:23.6",
-        "--step", "0.5", "--start-free", "35", "--start-state-rad", "1.5708,222", "--section",
-        "strob", "--method", "natural", "--json",
+        "boundary",
+        "--model",
+        m,
+        "--free",
+        "f",
+        "--along",
+        "eta",
+        "--range",
+        "23.1:23.6",
+        "--step",
+        "0.5",
+        "--start-free",
+        "35",
+        "--start-state-rad",
+        "1.5708,222",
+        "--section",
+        "strob",
+        "--method",
+        "natural",
+        "--json",
     ]));
-    assert!(out_of(&curve).contains("(2 of 2 points of the curve lie that far out)"), "{curve}");
+    assert!(
+        out_of(&curve).contains("(2 of 2 points of the curve lie that far out)"),
+        "{curve}"
+    );
     let near = with_drag(q, &cov, [20.0, 30.0]);
     assert!(loc(near.to_str().unwrap(), "35")["outside_recorded"].is_null());
     std::fs::remove_file(&near).ok();
@@ -489,7 +551,15 @@ fn report_on_a_model_file_is_the_closed_forms_effect_table() {
         vec!["sweep", "--model", m, "--theta-deg", "3"],
         vec!["figure", "orbit", "--model", m, "--eta", "3"],
         vec!["figure", "fig5", "--model", m],
-        vec!["sweep", "--model", m, "--rows", "theta:0:10:10", "--cols", "f:1:2:1"],
+        vec![
+            "sweep",
+            "--model",
+            m,
+            "--rows",
+            "theta:0:10:10",
+            "--cols",
+            "f:1:2:1",
+        ],
     ] {
         let o = gearbif(&args);
         assert_eq!(o.status.code(), Some(2), "{args:?}");
@@ -519,15 +589,29 @@ fn sweep_and_figure_on_a_model_file() {
     let m = m.to_str().unwrap();
     let out = std::env::temp_dir().join(format!("gearbif-sweep-model-{}", std::process::id()));
     let grid = [
-        "--rows", "eta:20:25:5", "--cols", "f:1:2:1", "--settle", "100", "--record", "4",
-        "--analysis", "6", "--quiet", "--out",
+        "--rows",
+        "eta:20:25:5",
+        "--cols",
+        "f:1:2:1",
+        "--settle",
+        "100",
+        "--record",
+        "4",
+        "--analysis",
+        "6",
+        "--quiet",
+        "--out",
     ];
     let (a, b) = (out.join("model"), out.join("gear"));
     let mut args = vec!["sweep", "--model", m];
     args.extend(grid);
     args.push(a.to_str().unwrap());
     let run = gearbif(&args);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let mut args = vec!["sweep", "--theta-deg", "0"];
     args.extend(grid);
     args.push(b.to_str().unwrap());
@@ -537,7 +621,10 @@ fn sweep_and_figure_on_a_model_file() {
         std::fs::read_to_string(b.join("points.csv")).unwrap(),
     );
     assert!(ca.starts_with("row,col,eta,f,"), "{ca}");
-    for (x, y) in [("delta_avg_deg", "delta_avg_deg"), ("lyapunov_per_period", "lyapunov")] {
+    for (x, y) in [
+        ("delta_avg_deg", "delta_avg_deg"),
+        ("lyapunov_per_period", "lyapunov"),
+    ] {
         let (u, v) = (column(&ca, x), column(&cb, y));
         assert_eq!(u.len(), 4);
         assert_eq!(u.len(), v.len());
@@ -547,10 +634,23 @@ fn sweep_and_figure_on_a_model_file() {
     }
     let fig = out.join("fig");
     let run = gearbif(&[
-        "figure", "lyapunov", "--model", m, "--f-range", "1:2", "--points", "2", "--out",
-        fig.to_str().unwrap(), "--quiet",
+        "figure",
+        "lyapunov",
+        "--model",
+        m,
+        "--f-range",
+        "1:2",
+        "--points",
+        "2",
+        "--out",
+        fig.to_str().unwrap(),
+        "--quiet",
     ]);
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     assert!(fig.join("lyapunov.svg").is_file());
     std::fs::remove_dir_all(&out).ok();
 }

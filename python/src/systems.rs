@@ -398,7 +398,10 @@ impl PyModel {
     /// The model file's covariance: (names, matrix as a list of rows).
     #[getter]
     fn covariance(&self) -> (Vec<String>, Vec<Vec<f64>>) {
-        (self.covariance.names.clone(), self.covariance.matrix.clone())
+        (
+            self.covariance.names.clone(),
+            self.covariance.matrix.clone(),
+        )
     }
     /// Every parameter as a dict {name: value}.
     #[getter]

@@ -183,7 +183,13 @@ fn outside_notes(
         .copied()
         .max_by(|a, b| dist(*a).total_cmp(&dist(*b)))
         .and_then(|f| r.statement("f", f, file.has_drag()))
-        .map(|s| format!("{s} ({} of {} points of the curve lie that far out)", far.len(), points.len()))
+        .map(|s| {
+            format!(
+                "{s} ({} of {} points of the curve lie that far out)",
+                far.len(),
+                points.len()
+            )
+        })
         .into_iter()
         .collect()
 }

@@ -2,11 +2,11 @@
 //! diagram and the Lyapunov exponent against f, as SVG and PNG in an output folder.
 
 use super::common::{output_dir, GearArgs};
+use super::model_arg::ModelArgs;
 use super::sweep::Progress;
 use crate::analysis::classify::WindowSample;
 use crate::analysis::{classify_point, paper_fig6_start, ClassifyOptions};
 use crate::integrator::EventDriven;
-use super::model_arg::ModelArgs;
 use crate::model::recorded::file::ModelFile;
 use crate::model::recorded::RecordedModel;
 use crate::model::{Convention, DrivenOscillator, Gear, GearParams};
@@ -439,7 +439,13 @@ where
 }
 
 /// The figure `name` (orbit or Lyapunov) of a scan, titled `title`.
-fn draw_scan(name: Name, scan: &Scan, title: &str, dir: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
+fn draw_scan(
+    name: Name,
+    scan: &Scan,
+    title: &str,
+    dir: &Path,
+    out: &mut Vec<PathBuf>,
+) -> Result<()> {
     if name == Name::Orbit {
         save_both(&orbit_diagram(title, &scan.0, false), dir, "orbit", out)
     } else {
@@ -471,7 +477,9 @@ fn recorded_frequencies(a: &Args, file: &ModelFile) -> Result<Vec<f64>> {
     super::common::frequency("f_range", hi)?;
     super::common::count("points", a.points, 2, 10_000)?;
     let n = a.points - 1;
-    Ok((0..=n).map(|i| lo + (hi - lo) * i as f64 / n as f64).collect())
+    Ok((0..=n)
+        .map(|i| lo + (hi - lo) * i as f64 / n as f64)
+        .collect())
 }
 
 /// The scan of the recorded gear of `file` over `fs`, fresh start from the locked input's

@@ -88,7 +88,10 @@ fn run_recorded(a: &Args, file: &ModelFile) -> Result<()> {
     if o.f_max <= o.f_start {
         return Err(Error::inconsistent(
             "--f-start, --f-max",
-            format!("--f-max {} must exceed the start frequency {}", o.f_max, o.f_start),
+            format!(
+                "--f-max {} must exceed the start frequency {}",
+                o.f_max, o.f_start
+            ),
         ));
     }
     output_dir("--out", &a.out)?;

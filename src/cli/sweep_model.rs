@@ -3,10 +3,10 @@
 //! gear's sweep is not resumable, and --fig8, --shard and --max-rows are refused).
 
 use super::model_arg::ModelArgs;
-use crate::integrator::{EventDriven853, FixedStep, FlowMethod};
 use super::sweep::{Args, Progress, ProtocolArg};
 use crate::analysis::{ClassifyOptions, PointResult};
 use crate::error::{Error, Result};
+use crate::integrator::{EventDriven853, FixedStep, FlowMethod};
 use crate::model::recorded::file::ModelFile;
 use crate::model::recorded::{RecordedModel, RecordedParam};
 use crate::model::{Parameter, Parametrised};
@@ -85,7 +85,10 @@ pub fn run(a: &Args, m: &ModelArgs, file: &ModelFile, opts: &ClassifyOptions) ->
     eprintln!(
         "done: {} points of {} in {:.1} s; wrote {}/points.csv",
         rows.1.len() * cols.1.len(),
-        m.model.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
+        m.model
+            .as_ref()
+            .map(|p| p.display().to_string())
+            .unwrap_or_default(),
         t.elapsed().as_secs_f64(),
         a.out.display()
     );

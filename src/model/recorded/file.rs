@@ -101,11 +101,7 @@ impl RecordedRange {
                 round_sig(f, 3),
                 round_sig(lo, 3),
                 round_sig(hi, 3),
-                if drag {
-                    "drag law"
-                } else {
-                    "fitted model"
-                }
+                if drag { "drag law" } else { "fitted model" }
             )
         })
     }
@@ -257,7 +253,10 @@ impl ModelFile {
 
     /// This file with the recorded range `r`.
     pub fn with_recorded(self, r: Option<RecordedRange>) -> Self {
-        Self { recorded: r, ..self }
+        Self {
+            recorded: r,
+            ..self
+        }
     }
 
     /// The accepted effects as [`Effect`]s (checked by [`Self::read`]).
@@ -692,7 +691,11 @@ mod tests {
                 "must be 3 × 3",
             ),
             (
-                Box::new(|m| m.recorded = Some(RecordedRange { drive_hz: [2.0, 1.0] })),
+                Box::new(|m| {
+                    m.recorded = Some(RecordedRange {
+                        drive_hz: [2.0, 1.0],
+                    })
+                }),
                 "recorded.drive_hz",
             ),
         ];

@@ -129,7 +129,11 @@ pub struct RecordedReportData {
 }
 
 /// Computes the report of the model file `file` (named `name` in the text).
-pub fn compute(file: &ModelFile, name: &str, o: &RecordedReportOptions) -> Result<RecordedReportData> {
+pub fn compute(
+    file: &ModelFile,
+    name: &str,
+    o: &RecordedReportOptions,
+) -> Result<RecordedReportData> {
     let clock = std::time::Instant::now();
     let (branch, specials) = lock_branch(file, o)?;
     let mut limits = Vec::new();
@@ -183,7 +187,11 @@ fn lock_branch(file: &ModelFile, o: &RecordedReportOptions) -> Result<(LockBranc
     };
     let mut c = Continuation::from_orbit(m, RecordedParam::F, &orbit, opts)?;
     while let StepOutcome::Point(_) = c.step()? {
-        if c.branch().specials.iter().any(|s| s.kind == SpecialKind::Fold) {
+        if c.branch()
+            .specials
+            .iter()
+            .any(|s| s.kind == SpecialKind::Fold)
+        {
             break;
         }
     }
@@ -252,7 +260,16 @@ fn locate_limit(
             Some("a nonsmooth point (change of the event sequence) has no first-order σ".into()),
         ),
         _ => {
-            let p = locate_augmented_with(&DEFAULT_METHOD, &m, spec, kind, RecordedParam::F, x, f, &opts)?;
+            let p = locate_augmented_with(
+                &DEFAULT_METHOD,
+                &m,
+                spec,
+                kind,
+                RecordedParam::F,
+                x,
+                f,
+                &opts,
+            )?;
             let s = located_sigma(
                 &DEFAULT_METHOD,
                 &m,
@@ -266,7 +283,9 @@ fn locate_limit(
             (p, Some(s), None)
         }
     };
-    let main_source = sigma.as_ref().and_then(|s| main_source(s, &file.covariance));
+    let main_source = sigma
+        .as_ref()
+        .and_then(|s| main_source(s, &file.covariance));
     Ok(LocatedLimit {
         kind,
         name,
@@ -285,7 +304,10 @@ fn main_source(s: &LocatedSigma, cov: &Covariance) -> Option<(String, f64)> {
         .iter()
         .filter_map(|d| {
             let i = cov.names.iter().position(|n| n == d.name)?;
-            Some((d.name.to_string(), (d.derivative * cov.matrix[i][i].max(0.0).sqrt()).abs()))
+            Some((
+                d.name.to_string(),
+                (d.derivative * cov.matrix[i][i].max(0.0).sqrt()).abs(),
+            ))
         })
         .max_by(|a, b| a.1.total_cmp(&b.1))
 }

@@ -93,11 +93,20 @@ fn shift(
     };
     let opts = o.shooting();
     let off = file.scaled(set, 0.0);
-    let followed = follow(file, set, spec, l.kind, &l.point, o.homotopy_steps, &opts)
-        .and_then(|p| {
+    let followed =
+        follow(file, set, spec, l.kind, &l.point, o.homotopy_steps, &opts).and_then(|p| {
             let m = driven(&off, p.free)?;
             let cov = &file.covariance;
-            let s = located_sigma(&DEFAULT_METHOD, &m, cov, spec, l.kind, (RecordedParam::F, None), &p, &opts)?;
+            let s = located_sigma(
+                &DEFAULT_METHOD,
+                &m,
+                cov,
+                spec,
+                l.kind,
+                (RecordedParam::F, None),
+                &p,
+                &opts,
+            )?;
             Ok((p, s))
         });
     match (followed, &l.sigma) {
@@ -132,7 +141,16 @@ fn follow(
     for k in (0..steps).rev() {
         let s = k as f64 / steps as f64;
         let m = driven(&file.scaled(set, s), p.free)?;
-        p = locate_augmented_with(&DEFAULT_METHOD, &m, spec, kind, RecordedParam::F, p.x, p.free, opts)?;
+        p = locate_augmented_with(
+            &DEFAULT_METHOD,
+            &m,
+            spec,
+            kind,
+            RecordedParam::F,
+            p.x,
+            p.free,
+            opts,
+        )?;
     }
     Ok(p)
 }

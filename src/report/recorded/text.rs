@@ -34,7 +34,13 @@ fn sig(x: f64, n: i32) -> String {
 pub fn report(d: &RecordedReportData) -> Report {
     let range = d.recorded_hz.map_or(
         "The file does not say which drive frequencies were recorded.".to_string(),
-        |[lo, hi]| format!("The recordings drove the gear at {} to {} Hz.", sig(lo, 3), sig(hi, 3)),
+        |[lo, hi]| {
+            format!(
+                "The recordings drove the gear at {} to {} Hz.",
+                sig(lo, 3),
+                sig(hi, 3)
+            )
+        },
     );
     let effects = if d.effects.is_empty() {
         "none (the base model)".to_string()
@@ -53,19 +59,36 @@ pub fn report(d: &RecordedReportData) -> Report {
         ),
         sections: vec![],
     };
-    rep.sections.push(section("lock", "Lock range and f_c", lock(d), &d.branch));
-    rep.sections.push(section("limits", "Operating limits with σ", limits(&d.limits), &d.limits));
-    rep.sections.push(section("effects", "What each found effect does to the limits", shifts(&d.shifts), &d.shifts));
+    rep.sections
+        .push(section("lock", "Lock range and f_c", lock(d), &d.branch));
+    rep.sections.push(section(
+        "limits",
+        "Operating limits with σ",
+        limits(&d.limits),
+        &d.limits,
+    ));
+    rep.sections.push(section(
+        "effects",
+        "What each found effect does to the limits",
+        shifts(&d.shifts),
+        &d.shifts,
+    ));
     rep
 }
 
-fn section<T: serde::Serialize>(id: &str, title: &str, markdown: String, data: &T) -> ReportSection {
+fn section<T: serde::Serialize>(
+    id: &str,
+    title: &str,
+    markdown: String,
+    data: &T,
+) -> ReportSection {
     ReportSection {
         id: id.into(),
         title: title.into(),
         markdown,
         figures: vec![],
-        data: serde_json::to_value(data).unwrap_or_else(|e| serde_json::json!({ "error": e.to_string() })),
+        data: serde_json::to_value(data)
+            .unwrap_or_else(|e| serde_json::json!({ "error": e.to_string() })),
     }
 }
 
@@ -140,10 +163,15 @@ fn limits(ls: &[LocatedLimit]) -> String {
             .flatten()
             .collect::<Vec<_>>()
             .join("; ");
-        let source = l.main_source.as_ref().map_or(String::new(), |(p, v)| {
-            format!("{p} ({} Hz)", sig(*v, 2))
-        });
-        s += &format!("| {} | {} | {what} | {source} | {note} |\n", l.name, value(l));
+        let source = l
+            .main_source
+            .as_ref()
+            .map_or(String::new(), |(p, v)| format!("{p} ({} Hz)", sig(*v, 2)));
+        s += &format!(
+            "| {} | {} | {what} | {source} | {note} |\n",
+            l.name,
+            value(l)
+        );
     }
     s
 }
@@ -171,7 +199,11 @@ fn shifts(rows: &[Shift]) -> String {
             (_, _, Some(e)) => ("not followed".to_string(), e.clone()),
             _ => ("—".to_string(), "—".to_string()),
         };
-        s += &format!("| {off} | {} | {} | {without} | {delta} |\n", r.limit, sig(r.with_hz, 6));
+        s += &format!(
+            "| {off} | {} | {} | {without} | {delta} |\n",
+            r.limit,
+            sig(r.with_hz, 6)
+        );
     }
     s
 }
