@@ -8,7 +8,7 @@ use crate::report::{Report, ReportSection};
 /// "v ± σ" with σ to two significant digits and v to the same decimal; without a usable σ, v to
 /// six significant digits. Below 1e-3 the pair shares a power of ten: "(v ± σ)e-7".
 pub fn with_sigma(v: f64, sigma: f64) -> String {
-    if !(sigma.is_finite() && sigma > 0.0) || !v.is_finite() {
+    if !(sigma.is_finite() && sigma > 0.0 && v.is_finite()) {
         return sig(v, 6);
     }
     if v.abs().max(sigma) < 1e-3 {
