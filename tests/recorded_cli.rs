@@ -375,3 +375,282 @@ fn diagram_on_a_model_file_and_conflicting_flags() {
         );
     }
 }
+
+/// The paper's model file with a quadratic drag q (|β̇|/4)² (effect `quadratic_drag`), a
+/// covariance over (g, ζ, η, q) and the recorded drive frequencies 1–2.5 Hz.
+fn with_drag(q: f64, cov: &[[f64; 4]; 4], drive_hz: [f64; 2]) -> PathBuf {
+    let text = std::fs::read_to_string(asset("paper_gear.model.json")).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for p in doc["parameters"].as_array_mut().unwrap() {
+        if p["name"] == "drag_q" {
+            p["value"] = serde_json::json!(q);
+        }
+    }
+    doc["effects"] = serde_json::json!(["quadratic_drag"]);
+    doc["covariance"] =
+        serde_json::json!({ "names": ["g", "zeta", "eta", "drag_q"], "matrix": cov });
+    doc["recorded"] = serde_json::json!({ "drive_hz": drive_hz });
+    let p = std::env::temp_dir().join(format!(
+        "gearbif-drag-{}-{}.json",
+        drive_hz[1],
+        std::process::id()
+    ));
+    std::fs::write(&p, serde_json::to_string(&doc).unwrap()).unwrap();
+    p
+}
+
+/// report --model on a gear with a quadratic drag at Θ = 0, against the closed form: the locked
+/// orbit turns uniformly, so its fold is where the coupling's largest torque g meets the braking,
+/// h(f) = 2πζ f + η + q (2πf/4)² − g = 0. f_c, its shift by the drag Δ = f_c(q) − f_c(0) and the
+/// σ of Δ from the gradient of the difference, d = ∇f_c(q) − ∇f_c(0) (∇f_c = (1, −2πf, −1,
+/// −(2πf/4)²)/h′(f) over (g, ζ, η, q), the last entry 0 without the drag) are the report's to
+/// 1e-7 Hz and 1e-4 relative; f_c far above the recorded 1–2.5 Hz is said to extrapolate the
+/// drag law. The recorded range and conflicting flags of sweep, report and figure exit 2.
+#[test]
+fn report_on_a_model_file_is_the_closed_forms_effect_table() {
+    let (g, zeta, eta, q) = (G, 1.1, 23.1, 0.01);
+    let cov = [
+        [4.0, 0.0, 1.0, 0.0],
+        [0.0, 4e-4, 0.0, 0.0],
+        [1.0, 0.0, 1.0, 0.0],
+        [0.0, 0.0, 0.0, 1e-6],
+    ];
+    let file = with_drag(q, &cov, [1.0, 2.5]);
+    let m = file.to_str().unwrap();
+    let out = std::env::temp_dir().join(format!("gearbif-report-model-{}", std::process::id()));
+    let run = gearbif(&[
+        "report",
+        "--model",
+        m,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let section = |id: &str| {
+        doc["sections"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|s| s["id"] == id)
+            .unwrap()["data"]
+            .clone()
+    };
+    let tau = std::f64::consts::TAU;
+    let a = q * (tau / 4.0).powi(2);
+    let fq = (-tau * zeta + ((tau * zeta).powi(2) - 4.0 * a * (eta - g)).sqrt()) / (2.0 * a);
+    let f0 = (g - eta) / (tau * zeta);
+    let grad = |f: f64, q: f64| {
+        let h1 = tau * zeta + 2.0 * q * (tau / 4.0).powi(2) * f;
+        [
+            1.0,
+            -tau * f,
+            -1.0,
+            -(tau * f / 4.0).powi(2) * (q != 0.0) as u8 as f64,
+        ]
+        .map(|v| v / h1)
+    };
+    let (gq, g0) = (grad(fq, q), grad(f0, 0.0));
+    let d: Vec<f64> = (0..4).map(|i| gq[i] - g0[i]).collect();
+    let var: f64 = (0..4)
+        .flat_map(|i| (0..4).map(move |j| (i, j)))
+        .map(|(i, j)| d[i] * cov[i][j] * d[j])
+        .sum();
+    let limits = section("limits");
+    let fc = limits
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|l| l["name"] == "f_c")
+        .expect("the lock loss is located");
+    assert!(
+        (fc["f_hz"].as_f64().unwrap() - fq).abs() < 1e-7,
+        "{fc} {fq}"
+    );
+    let shifts = section("effects");
+    let row = &shifts[0];
+    assert_eq!(row["off"], serde_json::json!(["quadratic_drag"]));
+    assert!(
+        (row["without_hz"].as_f64().unwrap() - f0).abs() < 1e-7,
+        "{row}"
+    );
+    assert!(
+        (row["delta_hz"].as_f64().unwrap() - (fq - f0)).abs() < 1e-7,
+        "{row}"
+    );
+    let s = row["sigma_hz"].as_f64().unwrap();
+    assert!(
+        (s / var.sqrt() - 1.0).abs() < 1e-4,
+        "σ {s}, closed form {}",
+        var.sqrt()
+    );
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        md.contains("lies outside the recorded 1.00–2.50 Hz: an extrapolation of the drag law"),
+        "{md}"
+    );
+    // locate and boundary say so too, in f (not in η), and not inside the recorded range
+    let loc = |file: &str, f: &str| {
+        json(&gearbif(&[
+            "locate",
+            "--model",
+            file,
+            "--f",
+            f,
+            "--kind",
+            "fold",
+            "--section",
+            "strob",
+            "--state-rad",
+            "1.5708,222",
+            "--json",
+        ]))
+    };
+    let out_of = |v: &serde_json::Value| v["outside_recorded"].to_string();
+    assert!(out_of(&loc(m, "35")).contains(
+        "f = 35.4 Hz lies outside the recorded 1.00–2.50 Hz: an extrapolation of the drag law"
+    ));
+    let curve = json(&gearbif(&[
+        "boundary",
+        "--model",
+        m,
+        "--free",
+        "f",
+        "--along",
+        "eta",
+        "--range",
+        "23.1:23.6",
+        "--step",
+        "0.5",
+        "--start-free",
+        "35",
+        "--start-state-rad",
+        "1.5708,222",
+        "--section",
+        "strob",
+        "--method",
+        "natural",
+        "--json",
+    ]));
+    assert!(
+        out_of(&curve).contains("(2 of 2 points of the curve lie that far out)"),
+        "{curve}"
+    );
+    let near = with_drag(q, &cov, [20.0, 30.0]);
+    assert!(loc(near.to_str().unwrap(), "35")["outside_recorded"].is_null());
+    std::fs::remove_file(&near).ok();
+    // the conflicting flags: exit 2, the flag and the file's option named
+    for args in [
+        vec!["report", "--model", m, "--zeta", "2"],
+        vec!["sweep", "--model", m, "--theta-deg", "3"],
+        vec!["figure", "orbit", "--model", m, "--eta", "3"],
+        vec!["figure", "fig5", "--model", m],
+        vec![
+            "sweep",
+            "--model",
+            m,
+            "--rows",
+            "theta:0:10:10",
+            "--cols",
+            "f:1:2:1",
+        ],
+    ] {
+        let o = gearbif(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains("--model"), "{args:?}: {err}");
+    }
+    std::fs::remove_dir_all(&out).ok();
+    std::fs::remove_file(&file).ok();
+}
+
+/// The column `name` of a CSV text (lines starting with `#` skipped).
+fn column(csv: &str, name: &str) -> Vec<f64> {
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let k = head.iter().position(|h| *h == name).unwrap();
+    lines
+        .map(|l| l.split(',').nth(k).unwrap().parse().unwrap())
+        .collect()
+}
+
+/// sweep --model on the paper's model file, a tiny grid in (η, f) at Θ = 0: the same mean lag
+/// δ_avg and Lyapunov exponent at every point as the paper's gear's own sweep; figure --model
+/// writes its files.
+#[test]
+fn sweep_and_figure_on_a_model_file() {
+    let m = asset("paper_gear.model.json");
+    let m = m.to_str().unwrap();
+    let out = std::env::temp_dir().join(format!("gearbif-sweep-model-{}", std::process::id()));
+    let grid = [
+        "--rows",
+        "eta:20:25:5",
+        "--cols",
+        "f:1:2:1",
+        "--settle",
+        "100",
+        "--record",
+        "4",
+        "--analysis",
+        "6",
+        "--quiet",
+        "--out",
+    ];
+    let (a, b) = (out.join("model"), out.join("gear"));
+    let mut args = vec!["sweep", "--model", m];
+    args.extend(grid);
+    args.push(a.to_str().unwrap());
+    let run = gearbif(&args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let mut args = vec!["sweep", "--theta-deg", "0"];
+    args.extend(grid);
+    args.push(b.to_str().unwrap());
+    assert!(gearbif(&args).status.success());
+    let (ca, cb) = (
+        std::fs::read_to_string(a.join("points.csv")).unwrap(),
+        std::fs::read_to_string(b.join("points.csv")).unwrap(),
+    );
+    assert!(ca.starts_with("row,col,eta,f,"), "{ca}");
+    for (x, y) in [
+        ("delta_avg_deg", "delta_avg_deg"),
+        ("lyapunov_per_period", "lyapunov"),
+    ] {
+        let (u, v) = (column(&ca, x), column(&cb, y));
+        assert_eq!(u.len(), 4);
+        assert_eq!(u.len(), v.len());
+        for (p, q) in u.iter().zip(&v) {
+            assert!((p - q).abs() < 1e-6, "{x}: {p} {q}");
+        }
+    }
+    let fig = out.join("fig");
+    let run = gearbif(&[
+        "figure",
+        "lyapunov",
+        "--model",
+        m,
+        "--f-range",
+        "1:2",
+        "--points",
+        "2",
+        "--out",
+        fig.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(fig.join("lyapunov.svg").is_file());
+    std::fs::remove_dir_all(&out).ok();
+}

@@ -13,6 +13,7 @@ mod convert;
 mod dynamics;
 mod errors;
 mod expression;
+mod located;
 mod systems;
 mod user;
 

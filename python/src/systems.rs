@@ -6,7 +6,7 @@ use crate::errors::{invalid, IntoPyResult};
 use crate::user::{PyUserSystem, UserParam, UserSystem};
 use gearbif::model::gear::GearParam;
 use gearbif::model::params::{Parameter, Parametrised};
-use gearbif::model::recorded::file::ModelFile;
+use gearbif::model::recorded::file::{Covariance, ModelFile};
 use gearbif::model::recorded::{RecordedModel, RecordedParam};
 use gearbif::model::{
     Convention, CoulombOscillator, DrivenOscillator, ForcedPendulum, Gear, GearParams,
@@ -338,6 +338,8 @@ impl PyGear {
 #[derive(Clone)]
 pub struct PyModel {
     pub inner: RecordedModel,
+    /// The model file's covariance (empty for a model a computation handed back).
+    pub covariance: Covariance,
 }
 
 #[pymethods]
@@ -349,13 +351,57 @@ impl PyModel {
         let file = ModelFile::read(&path).py()?;
         Ok(Self {
             inner: file.model(f).py()?,
+            covariance: file.covariance,
         })
     }
-    /// A copy with one parameter changed (by its name).
+    /// A copy with one parameter changed (by its name); the covariance is kept.
     fn with_param(&self, name: &str, value: f64) -> PyResult<Self> {
         Ok(Self {
             inner: with_named_param(&self.inner, name, value)?,
+            covariance: self.covariance.clone(),
         })
+    }
+    /// Locates a special point (kind "fold", "flip", "sb" or "ns") in the parameter `param`
+    /// (its current value the guess) from the state guess x = (β [rad], ω [rad/s]), on the orbit
+    /// problem section/period/winding, and gives its σ from the model file's covariance to first
+    /// order (the implicit-function theorem on the augmented system, docs/recorded_gear.md).
+    ///
+    /// locate(kind, x, *, param="f", section="stroboscopic", period=1, winding=1, tol=1e-11)
+    ///
+    /// Returns a dict: kind, param, value, x, multipliers, precision, sigma, gradient
+    /// {name: dvalue/dname}, omitted (covariance names not in σ: the parameter itself, the
+    /// latency, the load weights).
+    #[pyo3(signature = (kind, x, *, param="f", section="stroboscopic", period=1, winding=1, tol=1e-11))]
+    #[allow(clippy::too_many_arguments)]
+    fn locate<'py>(
+        &self,
+        py: Python<'py>,
+        kind: &str,
+        x: &Bound<'py, PyAny>,
+        param: &str,
+        section: &str,
+        period: i64,
+        winding: i32,
+        tol: f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let x = crate::convert::state(x, "x")?;
+        crate::located::locate(
+            py,
+            &self.inner,
+            &self.covariance,
+            kind,
+            x,
+            (param, section, period, winding),
+            tol,
+        )
+    }
+    /// The model file's covariance: (names, matrix as a list of rows).
+    #[getter]
+    fn covariance(&self) -> (Vec<String>, Vec<Vec<f64>>) {
+        (
+            self.covariance.names.clone(),
+            self.covariance.matrix.clone(),
+        )
     }
     /// Every parameter as a dict {name: value}.
     #[getter]
@@ -539,6 +585,7 @@ impl PySystem for RecordedModel {
             py,
             PyModel {
                 inner: self.clone(),
+                covariance: Default::default(),
             },
         )?
         .into_any())

@@ -58,3 +58,28 @@ def test_bad_model_file_names_the_field(tmp_path):
     with pytest.raises(gearbif.RecordingError) as e:
         gearbif.Model.load(str(p))
     assert "covariance" in str(e.value) and "bad.json" in str(e.value)
+
+
+def test_locate_gives_the_closed_forms_sigma(tmp_path):
+    # the lock-loss fold f_c = (g - eta)/(2 pi zeta) of the paper's gear at Theta = 0 with a
+    # covariance over (g, zeta, eta): sigma^2 = a^T C a, a = (1, -2 pi f_c, -1)/(2 pi zeta)
+    with open(os.path.join(ASSETS, "paper_gear.model.json")) as fh:
+        doc = json.load(fh)
+    cov = [[4.0, 0.0, 1.0], [0.0, 4e-4, 0.0], [1.0, 0.0, 1.0]]
+    doc["covariance"] = {"names": ["g", "zeta", "eta"], "matrix": cov}
+    p = tmp_path / "cov.json"
+    p.write_text(json.dumps(doc))
+    m = gearbif.Model.load(str(p), f=39.7)
+    assert m.covariance == (["g", "zeta", "eta"], cov)
+    r = m.locate("fold", [1.5808, 250.3])
+    g, zeta, eta = 298.452035046191, 1.1, 23.1
+    fc = (g - eta) / (2 * np.pi * zeta)
+    a = np.array([1.0, -2 * np.pi * fc, -1.0]) / (2 * np.pi * zeta)
+    assert r["param"] == "f" and r["value"] == pytest.approx(fc, abs=1e-8)
+    assert r["sigma"] == pytest.approx(np.sqrt(a @ np.array(cov) @ a), rel=1e-5)
+    assert r["gradient"]["zeta"] == pytest.approx(a[1], rel=1e-5)
+    # in eta: eta itself is not in sigma
+    r = m.locate("fold", [1.5808, 250.3], param="eta")
+    assert r["omitted"] == ["eta"] and r["value"] == pytest.approx(g - 2 * np.pi * zeta * 39.7, abs=1e-7)
+    with pytest.raises(gearbif.GearbifError):
+        m.locate("cusp", [1.5808, 250.3])

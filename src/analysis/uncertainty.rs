@@ -90,3 +90,36 @@ pub fn located_sigma<M: FlowMethod<RecordedModel>>(
         omitted,
     })
 }
+
+/// σ of the difference λ_a − λ_b of two located points over the covariance `cov`, from the
+/// gradient of the difference d = ∇λ_a − ∇λ_b (σ² = dᵀ C d): `held_in_b` are parameters held
+/// fixed in b's gear (switched off there), so λ_b does not depend on them and their entries of
+/// ∇λ_b count as 0. A name without a derivative in a gradient contributes 0 to it.
+pub fn difference_sigma(
+    a: &LocatedSigma,
+    b: &LocatedSigma,
+    held_in_b: &[&str],
+    cov: &Covariance,
+) -> f64 {
+    let of = |s: &LocatedSigma, name: &str| {
+        s.gradient
+            .iter()
+            .find(|d| d.name == name)
+            .map_or(0.0, |d| d.derivative)
+    };
+    let d: Vec<f64> = cov
+        .names
+        .iter()
+        .map(|n| {
+            let b_n = if held_in_b.contains(&n.as_str()) {
+                0.0
+            } else {
+                of(b, n)
+            };
+            of(a, n) - b_n
+        })
+        .collect();
+    let c = cov.matrix();
+    let v = nalgebra::DVector::from_column_slice(&d);
+    (v.transpose() * c * &v)[(0, 0)].max(0.0).sqrt()
+}

@@ -117,7 +117,7 @@ pub fn run(a: Args) -> Result<()> {
             fc,
         ));
     }
-    emit(&a, files, kind, &curves, marks, None)
+    emit(&a, files, kind, &curves, marks, (None, &[]))
 }
 
 /// `boundary --model`: the curve from --start-state-rad and --start-free on the recorded gear,
@@ -148,7 +148,50 @@ fn run_recorded(a: &Args, file: &ModelFile) -> Result<()> {
             )
         })
         .collect::<Result<Vec<_>>>()?;
-    emit(a, files, kind, &[curve], Vec::new(), Some(&sigma))
+    let notes = outside_notes(file, (free, along), &curve.1.points);
+    emit(a, files, kind, &[curve], Vec::new(), (Some(&sigma), &notes))
+}
+
+/// The sentence for the point of `points` farthest outside the file's recorded drive
+/// frequencies (when f is the free or the stepped parameter and some point lies far outside),
+/// with how many points do.
+fn outside_notes(
+    file: &ModelFile,
+    (free, along): (RecordedParam, RecordedParam),
+    points: &[crate::continuation::two_param::CurvePoint],
+) -> Vec<String> {
+    let Some(r) = file.recorded else {
+        return Vec::new();
+    };
+    let f_of = |p: &crate::continuation::two_param::CurvePoint| {
+        if free == RecordedParam::F {
+            Some(p.free)
+        } else if along == RecordedParam::F {
+            Some(p.along)
+        } else {
+            None
+        }
+    };
+    let far: Vec<f64> = points
+        .iter()
+        .filter_map(f_of)
+        .filter(|&f| r.far_outside(f))
+        .collect();
+    let [lo, hi] = r.drive_hz;
+    let dist = |f: f64| (f / hi).max(lo / f);
+    far.iter()
+        .copied()
+        .max_by(|a, b| dist(*a).total_cmp(&dist(*b)))
+        .and_then(|f| r.statement("f", f, file.has_drag()))
+        .map(|s| {
+            format!(
+                "{s} ({} of {} points of the curve lie that far out)",
+                far.len(),
+                points.len()
+            )
+        })
+        .into_iter()
+        .collect()
 }
 
 /// The output files (--out, --plot), checked and staged before any curve is computed.
@@ -233,16 +276,19 @@ fn emit<S: Parametrised + serde::Serialize>(
     kind: SpecialKind,
     curves: &[(String, Curve<S>)],
     mut marks: Vec<(String, f64, f64)>,
-    sigma: Option<&[LocatedSigma]>,
+    (sigma, notes): (Option<&[LocatedSigma]>, &[String]),
 ) -> Result<()> {
     // one document for --out and --json: {"schema": "gearbif.curves/1", "curves": [[label, curve],
     // ...]} and, with --model, "sigma": the σ of each point of the curve
-    let tagged = match sigma {
+    let mut tagged = match sigma {
         Some(sg) => {
             serde_json::json!({ "schema": "gearbif.curves/1", "curves": curves, "sigma": sg })
         }
         None => serde_json::json!({ "schema": "gearbif.curves/1", "curves": curves }),
     };
+    if !notes.is_empty() {
+        tagged["outside_recorded"] = serde_json::json!(notes);
+    }
     if let Some(p) = &a.out {
         crate::io::write_json_atomic(files.path(p), &tagged)?;
     }
@@ -264,7 +310,13 @@ fn emit<S: Parametrised + serde::Serialize>(
         crate::plotting::save(&fig, files.path(p))?;
     }
     files.commit()?;
-    Output { json: a.json }.emit(&tagged, || curves_text(curves, sigma))
+    Output { json: a.json }.emit(&tagged, || {
+        let mut s = curves_text(curves, sigma);
+        for n in notes {
+            s += &format!("{n}\n");
+        }
+        s
+    })
 }
 
 /// The curves as text, with "σ …" after each point when `sigma` is given.

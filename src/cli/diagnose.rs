@@ -105,7 +105,10 @@ pub fn run(a: Args) -> Result<()> {
     // the diagnosed gear, for the dynamics commands' --model; a fit the model's lens refuses
     // (a parameter outside its range) leaves the report whole and says why the file is missing
     match crate::identification::export::model_file(&d, &set.gear) {
-        Ok(model) => write_json_atomic(dir.join("model.json"), &model)?,
+        Ok(model) => {
+            let range = crate::identification::export::recorded_range(&set.runs);
+            write_json_atomic(dir.join("model.json"), &model.with_recorded(range))?
+        }
         Err(e) => eprintln!("warning: model.json not written: {e}"),
     }
     staged.commit()?;

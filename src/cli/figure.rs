@@ -2,11 +2,14 @@
 //! diagram and the Lyapunov exponent against f, as SVG and PNG in an output folder.
 
 use super::common::{output_dir, GearArgs};
+use super::model_arg::ModelArgs;
 use super::sweep::Progress;
 use crate::analysis::classify::WindowSample;
 use crate::analysis::{classify_point, paper_fig6_start, ClassifyOptions};
 use crate::integrator::EventDriven;
-use crate::model::{Convention, Gear, GearParams};
+use crate::model::recorded::file::ModelFile;
+use crate::model::recorded::RecordedModel;
+use crate::model::{Convention, DrivenOscillator, Gear, GearParams};
 use crate::plotting::atlas::{
     fit_plot, hysteresis_lock_plot, lyapunov_plot, orbit_diagram, paper_figure_delta_deg,
     updown_series, Landscape, Markers, PolarDelta, RmsMap, PAPER_FIGURE_DELTA_LABEL,
@@ -49,6 +52,15 @@ pub struct Args {
     name: Name,
     #[command(flatten)]
     gear: GearArgs,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// With --model (orbit, lyapunov): the frequency range "LO:HI" [Hz] (default: the file's
+    /// recorded drive frequencies).
+    #[arg(long, value_name = "LO:HI")]
+    f_range: Option<String>,
+    /// With --model: the number of frequencies, 2 to 10000.
+    #[arg(long, default_value_t = 91)]
+    points: usize,
     /// Output folder (other figures in it are kept; this figure's files are replaced together at
     /// the end).
     #[arg(long, default_value = "figures")]
@@ -76,7 +88,14 @@ fn paper_gear(p: &GearParams, theta: f64, f: f64) -> Result<(Gear, [f64; 2])> {
     paper_fig6_start(p, theta, f)
 }
 
-fn window(g: &Gear, x0: [f64; 2], settle: usize) -> Result<crate::analysis::PointResult> {
+fn window<S: DrivenOscillator>(
+    g: &S,
+    x0: [f64; 2],
+    settle: usize,
+) -> Result<crate::analysis::PointResult>
+where
+    EventDriven: crate::integrator::FlowMethod<S>,
+{
     let o = ClassifyOptions {
         settle_turns: settle,
         keep_samples: true,
@@ -392,11 +411,28 @@ fn frequency_scan(
     progress: &Progress,
     out: &mut Vec<PathBuf>,
 ) -> Result<()> {
+    let fs: Vec<f64> = (0..=90).map(|i| 0.9 + 0.01 * i as f64).collect();
+    let scan = scan_frequencies(&fs, |f| paper_gear(p, 31.0, f), progress)?;
+    let title = "Θ = 31°, fresh start (paper Fig. 6 protocol)";
+    draw_scan(name, &scan, title, dir, out)
+}
+
+/// The section points (the last 40) and the largest Lyapunov exponent per period of the window
+/// of each f of `fs` (the system and its start from `at`).
+type Scan = (Vec<(f64, f64)>, Vec<(f64, f64)>);
+
+fn scan_frequencies<S: DrivenOscillator>(
+    fs: &[f64],
+    at: impl Fn(f64) -> Result<(S, [f64; 2])>,
+    progress: &Progress,
+) -> Result<Scan>
+where
+    EventDriven: crate::integrator::FlowMethod<S>,
+{
     let mut orbit = Vec::new();
     let mut lyap = Vec::new();
-    for i in 0..=90 {
-        let f = 0.9 + 0.01 * i as f64;
-        let (g, x0) = paper_gear(p, 31.0, f)?;
+    for (i, &f) in fs.iter().enumerate() {
+        let (g, x0) = at(f)?;
         let r = window(&g, x0, 90)?;
         if let Some(z) = &r.section {
             let n = z.len();
@@ -409,21 +445,71 @@ fn frequency_scan(
         }
         progress.observe(&crate::progress::Event::SweepPoint { row: 0, col: i });
     }
+    Ok((orbit, lyap))
+}
+
+/// The figure `name` (orbit or Lyapunov) of a scan, titled `title`.
+fn draw_scan(
+    name: Name,
+    scan: &Scan,
+    title: &str,
+    dir: &Path,
+    out: &mut Vec<PathBuf>,
+) -> Result<()> {
     if name == Name::Orbit {
-        let fig = orbit_diagram(
-            "Θ = 31°, fresh start (paper Fig. 6 protocol)",
-            &orbit,
-            false,
-        );
-        save_both(&fig, dir, "orbit", out)
+        save_both(&orbit_diagram(title, &scan.0, false), dir, "orbit", out)
     } else {
-        let fig = lyapunov_plot(
-            "Θ = 31°, fresh start: largest Lyapunov exponent",
-            &lyap,
-            false,
-        );
-        save_both(&fig, dir, "lyapunov", out)
+        let t = format!("{title}: largest Lyapunov exponent");
+        save_both(&lyapunov_plot(&t, &scan.1, false), dir, "lyapunov", out)
     }
+}
+
+/// The frequencies of `figure orbit|lyapunov --model FILE`: `--points` over `--f-range` (or the
+/// file's recorded drive frequencies). The paper's figures (fig5–fig10) are the paper's gear's.
+fn recorded_frequencies(a: &Args, file: &ModelFile) -> Result<Vec<f64>> {
+    if !matches!(a.name, Name::Orbit | Name::Lyapunov) {
+        return Err(Error::inconsistent(
+            format!("--model, {:?}", a.name).to_lowercase(),
+            "figures fig5–fig10 draw the paper's gear at the paper's set-ups; with --model: orbit, lyapunov",
+        ));
+    }
+    let (lo, hi) = match (&a.f_range, file.recorded) {
+        (Some(r), _) => super::continue_::parse_range(r)?,
+        (None, Some(r)) => (r.drive_hz[0], r.drive_hz[1]),
+        (None, None) => {
+            return Err(Error::inconsistent(
+                "--model, --f-range",
+                "the model file has no recorded range: give --f-range LO:HI",
+            ))
+        }
+    };
+    super::common::frequency("f_range", lo)?;
+    super::common::frequency("f_range", hi)?;
+    super::common::count("points", a.points, 2, 10_000)?;
+    let n = a.points - 1;
+    Ok((0..=n)
+        .map(|i| lo + (hi - lo) * i as f64 / n as f64)
+        .collect())
+}
+
+/// The scan of the recorded gear of `file` over `fs`, fresh start from the locked input's
+/// equilibrium at each frequency.
+fn recorded_scan(
+    a: &Args,
+    (file, fs): (&ModelFile, &[f64]),
+    dir: &Path,
+    progress: &Progress,
+) -> Result<Vec<PathBuf>> {
+    let at = |f: f64| -> Result<(RecordedModel, [f64; 2])> {
+        let m = file.model(f)?;
+        let x0 = super::model_arg::start(&m, &None)?;
+        Ok((m, x0))
+    };
+    let scan = scan_frequencies(fs, at, progress)?;
+    let title = format!("Θ = {}° (model file), fresh start", file.setup.theta_deg);
+    let mut out = Vec::new();
+    draw_scan(a.name, &scan, &title, dir, &mut out)?;
+    Ok(out)
 }
 
 /// The names a figure writes into its folder: figures (`.svg`, `.png`) and data (`.json`)
@@ -438,6 +524,11 @@ fn owned(name: &str, is_dir: bool) -> bool {
 
 /// Runs `gearbif figure`.
 pub fn run(a: Args) -> Result<()> {
+    let file = a.model.file(&a.gear)?;
+    let fs = file
+        .as_ref()
+        .map(|f| recorded_frequencies(&a, f))
+        .transpose()?;
     let p = a.gear.params()?;
     output_dir("--out", &a.out)?;
     // the plan before the work; the figure's files are written into a staging folder inside
@@ -447,7 +538,10 @@ pub fn run(a: Args) -> Result<()> {
     let staged = crate::io::StagedDir::begin_merge("--out", &a.out, &label, owned)?;
     let progress = Progress::new(a.quiet);
     let t = std::time::Instant::now();
-    let files = make(a.name, &p, (staged.path(), &a.out), a.full, &progress)?;
+    let files = match (&file, &fs) {
+        (Some(f), Some(fs)) => recorded_scan(&a, (f, fs), staged.path(), &progress)?,
+        _ => make(a.name, &p, (staged.path(), &a.out), a.full, &progress)?,
+    };
     progress.finish();
     staged.commit()?;
     for f in files {

@@ -74,6 +74,10 @@ struct Located {
     /// σ of the located parameter from the model file's covariance (--model only).
     #[serde(skip_serializing_if = "Option::is_none")]
     sigma: Option<Sigma>,
+    /// The sentence when a located frequency lies far outside the model file's recorded drive
+    /// frequencies (--model only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    outside_recorded: Option<String>,
 }
 
 /// [`LocatedSigma`] and the wall time it took.
@@ -168,6 +172,14 @@ pub fn run(a: Args) -> Result<()> {
             value,
             wall_time_s: clock.elapsed().as_secs_f64(),
         });
+        let f = if param == RecordedParam::F {
+            out.point.free
+        } else {
+            a.f
+        };
+        out.outside_recorded = file
+            .recorded
+            .and_then(|r| r.statement("f", f, file.has_drag()));
         return emit(&a, &out, param.unit());
     }
     let gear = a.gear.params()?.driven(a.f)?;
@@ -204,6 +216,7 @@ where
         point: p2,
         wall_time_s: clock.elapsed().as_secs_f64(),
         sigma: None,
+        outside_recorded: None,
     })
 }
 
@@ -226,6 +239,9 @@ fn emit(a: &Args, out: &Located, unit: &str) -> Result<()> {
         );
         if let Some(sg) = &out.sigma {
             s.push_str(&sigma_text(out.param, unit, &sg.value));
+        }
+        if let Some(w) = &out.outside_recorded {
+            s.push_str(&format!("  {w}\n"));
         }
         s
     })

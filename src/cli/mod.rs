@@ -24,6 +24,7 @@ mod model_arg;
 mod report;
 mod simulate;
 mod sweep;
+mod sweep_model;
 mod synth;
 
 pub use common::{parse_config, GearArgs, GearConfig, Output};

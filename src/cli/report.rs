@@ -1,9 +1,12 @@
 //! `gearbif report`: the self-contained report folder of a gear (report.md, report.json, figures).
 
 use super::common::{output_dir, GearArgs};
+use super::model_arg::ModelArgs;
 use super::sweep::Progress;
+use crate::model::recorded::file::ModelFile;
+use crate::report::recorded::{self, RecordedReportOptions};
 use crate::report::{build_report, ReportOptions};
-use crate::Result;
+use crate::{Error, Result};
 use std::path::PathBuf;
 
 /// Arguments of `gearbif report`.
@@ -11,6 +14,15 @@ use std::path::PathBuf;
 pub struct Args {
     #[command(flatten)]
     gear: GearArgs,
+    #[command(flatten)]
+    model: ModelArgs,
+    /// With --model: the frequency where the locked orbit is found by simulation [Hz] (default:
+    /// the lowest recorded drive frequency, or 1 Hz).
+    #[arg(long)]
+    f_start: Option<f64>,
+    /// With --model: the highest frequency the lock branch is followed to [Hz].
+    #[arg(long, default_value_t = 200.0)]
+    f_max: f64,
     /// Output folder.
     #[arg(long, default_value = "gearbif-report")]
     out: PathBuf,
@@ -33,6 +45,9 @@ fn owned(name: &str, is_dir: bool) -> bool {
 
 /// Runs `gearbif report`.
 pub fn run(a: Args) -> Result<()> {
+    if let Some(file) = a.model.file(&a.gear)? {
+        return run_recorded(&a, &file);
+    }
     let gear = a.gear.params()?;
     output_dir("--out", &a.out)?;
     let opts = if a.fine {
@@ -47,6 +62,49 @@ pub fn run(a: Args) -> Result<()> {
     let rep = build_report(&gear, &opts, staged.path(), &progress)?;
     progress.finish();
     rep.write(staged.path())?;
+    staged.commit()?;
+    eprintln!(
+        "wrote {}/report.md and report.json in {:.1} s",
+        a.out.display(),
+        t.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// `gearbif report --model FILE`: the recorded gear against the nominal one
+/// ([`crate::report::recorded`]).
+fn run_recorded(a: &Args, file: &ModelFile) -> Result<()> {
+    if a.fine {
+        return Err(Error::inconsistent(
+            "--model, --fine",
+            "--fine refines the paper's gear's map; the recorded gear's report has no map",
+        ));
+    }
+    let mut o = RecordedReportOptions::for_file(file);
+    if let Some(f) = a.f_start {
+        o.f_start = super::common::frequency("f_start", f)?;
+    }
+    o.f_max = super::common::frequency("f_max", a.f_max)?;
+    if o.f_max <= o.f_start {
+        return Err(Error::inconsistent(
+            "--f-start, --f-max",
+            format!(
+                "--f-max {} must exceed the start frequency {}",
+                o.f_max, o.f_start
+            ),
+        ));
+    }
+    output_dir("--out", &a.out)?;
+    let name = a
+        .model
+        .model
+        .as_ref()
+        .map(|p| p.display().to_string())
+        .unwrap_or_default();
+    let t = std::time::Instant::now();
+    let staged = crate::io::StagedDir::begin("--out", &a.out, owned)?;
+    let data = recorded::compute(file, &name, &o)?;
+    recorded::text::report(&data).write(staged.path())?;
     staged.commit()?;
     eprintln!(
         "wrote {}/report.md and report.json in {:.1} s",

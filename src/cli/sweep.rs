@@ -20,30 +20,32 @@ pub struct Args {
     #[command(subcommand)]
     command: Option<SweepCommand>,
     #[command(flatten)]
-    gear: GearArgs,
+    pub(super) gear: GearArgs,
+    #[command(flatten)]
+    model: super::model_arg::ModelArgs,
     /// Row axis (parallel): param:start:stop:step or param:start:stop:n:log
     /// (param: a name of the gear's lens — theta [deg, within ±360], f [Hz, in [1e-3, 1e4]], zeta,
     /// eta, g [>= 0], delta — or inertia [> 0]). At most 1e7 points per axis and in the whole grid.
     #[arg(long, default_value = "theta:0:50:10")]
-    rows: String,
+    pub(super) rows: String,
     /// Column axis (sequential; the semi-static protocol carries the state along it), as --rows.
     #[arg(long, default_value = "f:0.5:3:0.25")]
-    cols: String,
+    pub(super) cols: String,
     /// Start every point afresh (Fig. 7b) or carry the state along a row (Fig. 8).
     #[arg(long, value_enum, default_value_t = ProtocolArg::Fresh)]
-    protocol: ProtocolArg,
+    pub(super) protocol: ProtocolArg,
     /// Preset: the paper's Fig. 8 grid (overrides axes, protocol, start, settle).
     #[arg(long)]
-    fig8: bool,
+    pub(super) fig8: bool,
     /// Drive frequency when f is not an axis [Hz], in [1e-3, 1e4].
     #[arg(long, default_value_t = 1.0)]
-    f: f64,
+    pub(super) f: f64,
     /// Input angle α at t = 0 [deg], in [-360, 360].
     #[arg(long, default_value_t = 90.0, allow_hyphen_values = true)]
-    alpha0_deg: f64,
+    pub(super) alpha0_deg: f64,
     /// Output angle β at t = 0 [deg], in [-360, 360], in the --convention.
     #[arg(long, default_value_t = 90.0, allow_hyphen_values = true)]
-    beta0_deg: f64,
+    pub(super) beta0_deg: f64,
     /// Settling turns per point, 0 to 1000000 (paper: 90 fresh, 1000 semi-static).
     #[arg(long)]
     settle: Option<usize>,
@@ -55,23 +57,23 @@ pub struct Args {
     analysis: usize,
     /// Integrator tolerance, in (0, 1).
     #[arg(long, default_value_t = 1e-9)]
-    tol: f64,
+    pub(super) tol: f64,
     /// Use the paper's fixed-step RK4 (T/50) instead of the exact integrator.
     #[arg(long)]
-    rk4: bool,
+    pub(super) rk4: bool,
     /// Use the event-driven DP5 instead of the default event-driven DOP853.
     #[arg(long, conflicts_with = "rk4")]
-    dp5: bool,
+    pub(super) dp5: bool,
     /// Output directory (checkpoints in it; rerun the same command to resume); complete.json is
     /// written last, when the sweep is complete.
     #[arg(long, default_value = "sweep-out")]
-    out: PathBuf,
+    pub(super) out: PathBuf,
     /// Stop after this many new rows (the rest can be resumed later).
     #[arg(long)]
-    max_rows: Option<usize>,
+    pub(super) max_rows: Option<usize>,
     /// No progress bar.
     #[arg(long)]
-    quiet: bool,
+    pub(super) quiet: bool,
     /// End the settling early once the state repeats (period ≤ 8 turns) to this distance
     /// (e.g. 1e-8; in (0, 1)); default: integrate every settling turn as the paper did.
     #[arg(long)]
@@ -84,7 +86,7 @@ pub struct Args {
     /// Compute only shard i of N (0 <= i < N; rows r with r mod N = i), e.g. `--shard
     /// $SLURM_ARRAY_TASK_ID/8`; combine the shards' --out directories with `gearbif sweep merge`.
     #[arg(long, value_name = "i/N")]
-    shard: Option<String>,
+    pub(super) shard: Option<String>,
 }
 
 /// Subcommands of `gearbif sweep`.
@@ -199,7 +201,7 @@ impl crate::progress::Observer for Progress {
 
 /// The spec from the arguments.
 pub fn spec(a: &Args) -> Result<SweepSpec> {
-    check_args(a)?;
+    check_args(a, true)?;
     let gear = a.gear.params()?;
     let mut s = if a.fig8 {
         SweepSpec::paper_fig8()?
@@ -223,20 +225,7 @@ pub fn spec(a: &Args) -> Result<SweepSpec> {
     if a.fig8 {
         s.gear = gear;
     }
-    if let Some(n) = a.settle {
-        s.classify.settle_turns = n;
-    } else if !a.fig8 && s.protocol == Protocol::SemiStatic {
-        s.classify.settle_turns = 1000;
-    }
-    s.classify.record_turns = a.record;
-    s.classify.settle_tol = a.settle_tol;
-    s.classify.settle_after_nonperiodic = a.settle_nonperiodic;
-    s.classify.tol = a.tol;
-    if a.analysis == 0 || a.rk4 {
-        s.classify.rigorous = false;
-    } else {
-        s.classify.analysis_turns = a.analysis;
-    }
+    s.classify = classify_options(a, s.classify.clone(), s.protocol == Protocol::SemiStatic);
     s.method = if a.rk4 {
         Method::FixedStep
     } else if a.dp5 {
@@ -246,6 +235,27 @@ pub fn spec(a: &Args) -> Result<SweepSpec> {
     };
     s.validate()?;
     Ok(s)
+}
+
+/// The classification settings of the arguments over `base` (the protocol's defaults): a
+/// semi-static sweep settles 1000 turns unless --settle or --fig8 says otherwise.
+fn classify_options(a: &Args, base: ClassifyOptions, semi_static: bool) -> ClassifyOptions {
+    let mut c = base;
+    if let Some(n) = a.settle {
+        c.settle_turns = n;
+    } else if !a.fig8 && semi_static {
+        c.settle_turns = 1000;
+    }
+    c.record_turns = a.record;
+    c.settle_tol = a.settle_tol;
+    c.settle_after_nonperiodic = a.settle_nonperiodic;
+    c.tol = a.tol;
+    if a.analysis == 0 || a.rk4 {
+        c.rigorous = false;
+    } else {
+        c.analysis_turns = a.analysis;
+    }
+    c
 }
 
 /// The result files of a sweep's output folder (besides its `checkpoint` folder).
@@ -314,6 +324,12 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(SweepCommand::Merge(m)) = a.command {
         return merge(m);
     }
+    if let Some(file) = a.model.file(&a.gear)? {
+        check_args(&a, false)?;
+        let semi = a.protocol == ProtocolArg::SemiStatic;
+        let opts = classify_options(&a, ClassifyOptions::default(), semi);
+        return super::sweep_model::run(&a, &a.model, &file, &opts);
+    }
     let spec = spec(&a)?;
     let shard = a.shard.as_deref().map(Shard::parse).transpose()?;
     let work = work_dir(&a.out)?;
@@ -361,7 +377,8 @@ pub fn run(a: Args) -> Result<()> {
 }
 
 /// The domain checks of `sweep`, all before any point is computed or any file written.
-fn check_args(a: &Args) -> Result<()> {
+/// (`gear_axes`: the axes are the paper's gear's; a recorded gear's are checked by its lens.)
+fn check_args(a: &Args, gear_axes: bool) -> Result<()> {
     frequency("f", a.f)?;
     angle_deg("alpha0_deg", a.alpha0_deg)?;
     angle_deg("beta0_deg", a.beta0_deg)?;
@@ -379,7 +396,7 @@ fn check_args(a: &Args) -> Result<()> {
     if a.analysis != 0 {
         count("analysis", a.analysis, 2, limits::TURNS_MAX)?;
     }
-    if !a.fig8 {
+    if gear_axes && !a.fig8 {
         for axis in [&a.rows, &a.cols] {
             check_axis(&Axis::parse(axis)?)?;
         }

@@ -7,8 +7,8 @@
 use super::diagnose::Diagnosis;
 use super::spec::{coefficients, FittedTheta};
 use crate::error::Result;
-use crate::io::recordings::GearSetup;
-use crate::model::recorded::file::{Covariance, ModelFile, LATENCY};
+use crate::io::recordings::{GearSetup, Run, RunKind};
+use crate::model::recorded::file::{Covariance, ModelFile, RecordedRange, LATENCY};
 use crate::model::recorded::{Coefficients, Geometry, RecordedModel, RecordedParam};
 use crate::model::{Parameter, Parametrised};
 use nalgebra::DMatrix;
@@ -25,6 +25,14 @@ pub fn model_file(d: &Diagnosis, setup: &GearSetup) -> Result<ModelFile> {
     };
     let effects = d.report.findings.iter().map(|f| f.effect.clone()).collect();
     Ok(ModelFile::new(&model, covariance, effects, d.latency))
+}
+
+/// The range of drive frequencies of the driven runs of `runs` (model.json's `recorded`).
+pub fn recorded_range(runs: &[Run]) -> Option<RecordedRange> {
+    RecordedRange::of(runs.iter().filter_map(|r| match r.kind {
+        RunKind::Driven { f_hz } => Some(f_hz),
+        RunKind::Ringdown { .. } => None,
+    }))
 }
 
 /// The coefficients as a driven model (f = 1 Hz: f is not written).

@@ -17,6 +17,7 @@ pub mod compute;
 #[cfg(feature = "plot")]
 pub mod figures;
 pub mod markdown;
+pub mod recorded;
 
 pub use compute::{
     compute_report, safe_frequencies, LockLossCurves, ReportData, BIFURCATION_F_RANGE_HZ,

@@ -7,6 +7,7 @@
 //! fault: the schema, every parameter name, unit and value (the lens's own checks), the covariance
 //! (square, symmetric, positive semi-definite, over known names), the effect names.
 
+use super::effect::Effect;
 use super::{Coefficients, ExtraTerm, Geometry, RecordedModel, RecordedParam, MAX_EXTRA};
 use crate::error::{Error, Result};
 use crate::model::params::{Parameter, Parametrised};
@@ -57,6 +58,74 @@ pub struct ModelFile {
     pub effects: Vec<String>,
     /// How the recording saw the gear (not part of the dynamics).
     pub measurement: Measurement,
+    /// The range of the driven runs the parameters were fitted to (optional: a file without it
+    /// makes no statement on extrapolation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recorded: Option<RecordedRange>,
+}
+
+/// The range of drive frequencies of the recordings behind a model file.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordedRange {
+    /// Lowest and highest drive frequency of the driven runs, Hz.
+    pub drive_hz: [f64; 2],
+}
+
+/// A located frequency counts as far outside the recorded range beyond this factor past its
+/// ends (f > 1.25 f_max or f < f_min / 1.25).
+pub const FAR_FACTOR: f64 = 1.25;
+
+impl RecordedRange {
+    /// The range of `freqs` (Hz), or `None` when there is none.
+    pub fn of(freqs: impl IntoIterator<Item = f64>) -> Option<Self> {
+        let (lo, hi) = freqs
+            .into_iter()
+            .filter(|f| f.is_finite() && *f > 0.0)
+            .fold((f64::INFINITY, 0.0f64), |(a, b), f| (a.min(f), b.max(f)));
+        (lo <= hi).then_some(Self { drive_hz: [lo, hi] })
+    }
+
+    /// True when the drive frequency `f` lies far outside the range ([`FAR_FACTOR`]).
+    pub fn far_outside(&self, f: f64) -> bool {
+        f > FAR_FACTOR * self.drive_hz[1] || f * FAR_FACTOR < self.drive_hz[0]
+    }
+
+    /// The sentence on `name` = `f` Hz, or `None` when it lies within reach of the range
+    /// (`drag`: the model has a fitted drag law, whose extrapolation the sentence names).
+    pub fn statement(&self, name: &str, f: f64, drag: bool) -> Option<String> {
+        self.far_outside(f).then(|| {
+            let [lo, hi] = self.drive_hz;
+            format!(
+                "{name} = {} Hz lies outside the recorded {}–{} Hz: an extrapolation of the {}",
+                round_sig(f, 3),
+                round_sig(lo, 3),
+                round_sig(hi, 3),
+                if drag { "drag law" } else { "fitted model" }
+            )
+        })
+    }
+
+    /// Checks: finite, positive, ordered.
+    fn check(&self, file: &str) -> Result<()> {
+        let [lo, hi] = self.drive_hz;
+        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi) {
+            return Err(bad(
+                file,
+                format!("recorded.drive_hz: [{lo}, {hi}] must be 0 < low <= high, finite"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// `x` to `n` significant digits, as text.
+fn round_sig(x: f64, n: i32) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let d = (n - 1 - x.abs().log10().floor() as i32).max(0) as usize;
+    format!("{x:.d$}")
 }
 
 /// The set-up: shaft angles and the conventions of the equation.
@@ -178,7 +247,49 @@ impl ModelFile {
             covariance,
             effects,
             measurement: Measurement { latency_s },
+            recorded: None,
         }
+    }
+
+    /// This file with the recorded range `r`.
+    pub fn with_recorded(self, r: Option<RecordedRange>) -> Self {
+        Self {
+            recorded: r,
+            ..self
+        }
+    }
+
+    /// The accepted effects as [`Effect`]s (checked by [`Self::read`]).
+    pub fn effect_list(&self) -> Vec<Effect> {
+        self.effects
+            .iter()
+            .filter_map(|e| Effect::from_name(e).ok())
+            .collect()
+    }
+
+    /// True when an accepted effect is of the drag family.
+    pub fn has_drag(&self) -> bool {
+        self.effect_list().iter().any(|e| e.is_drag())
+    }
+
+    /// This file with the parameters of `effects` moved to `s` of the way from their off value
+    /// to the file's (s = 0: the effects switched off; s = 1: the file), the sparse-search terms
+    /// too when [`Effect::Unexplained`] is among them.
+    pub fn scaled(&self, effects: &[Effect], s: f64) -> Self {
+        let mut out = self.clone();
+        for e in effects {
+            for &(p, off) in e.parameters() {
+                if let Some(v) = out.parameters.iter_mut().find(|v| v.name == p.name()) {
+                    v.value = off + s * (v.value - off);
+                }
+            }
+            if *e == Effect::Unexplained {
+                for t in &mut out.extra_terms {
+                    t.value *= s;
+                }
+            }
+        }
+        out
     }
 
     /// Reads and checks a model file (errors name the file and the field).
@@ -200,7 +311,7 @@ impl ModelFile {
         let obj = v
             .as_object()
             .ok_or_else(|| bad(file, "the model file must be a JSON object".into()))?;
-        const KEYS: [&str; 7] = [
+        const KEYS: [&str; 8] = [
             "schema",
             "setup",
             "parameters",
@@ -208,6 +319,7 @@ impl ModelFile {
             "covariance",
             "effects",
             "measurement",
+            "recorded",
         ];
         if let Some(k) = obj.keys().find(|k| !KEYS.contains(&k.as_str())) {
             return Err(bad(
@@ -226,6 +338,10 @@ impl ModelFile {
             covariance: section(obj, "covariance", file)?,
             effects: section(obj, "effects", file)?,
             measurement: section(obj, "measurement", file)?,
+            recorded: match obj.get("recorded") {
+                None => None,
+                Some(_) => Some(section(obj, "recorded", file)?),
+            },
         };
         m.check(file)?;
         Ok(m)
@@ -263,6 +379,9 @@ impl ModelFile {
             return Err(bad(file, format!("extra_terms: at most {MAX_EXTRA} terms")));
         }
         self.covariance.check(file)?;
+        if let Some(r) = &self.recorded {
+            r.check(file)?;
+        }
         self.model_at(1.0, file).map(|_| ())
     }
 
@@ -477,6 +596,29 @@ mod tests {
             ],
         };
         ModelFile::new(&m, cov, vec!["static_torque".into()], 0.012)
+            .with_recorded(RecordedRange::of([1.0, 2.5, 1.5]))
+    }
+
+    /// The recorded range: its sentence only far outside, and switching an effect off moves its
+    /// parameters (and only its) to the off value.
+    #[test]
+    fn recorded_range_and_effects_switched_off() {
+        let r = RecordedRange::of([2.5, 1.0, 1.7]).unwrap();
+        assert_eq!(r.drive_hz, [1.0, 2.5]);
+        assert!(r.statement("f_c", 3.0, true).is_none());
+        assert_eq!(
+            r.statement("f_c", 4.1, true).unwrap(),
+            "f_c = 4.10 Hz lies outside the recorded 1.00–2.50 Hz: an extrapolation of the drag law"
+        );
+        assert!(r.far_outside(0.7) && !r.far_outside(0.9));
+        let f = sample();
+        let off = f.scaled(&[Effect::StaticTorque], 0.0).model(2.0).unwrap();
+        let on = f.model(2.0).unwrap();
+        assert_eq!(off.param(RecordedParam::StaticA), 0.0);
+        assert_eq!(on.param(RecordedParam::StaticA), 2.0);
+        assert_eq!(off.param(RecordedParam::G), on.param(RecordedParam::G));
+        let half = f.scaled(&[Effect::Unexplained], 0.5);
+        assert_eq!(half.extra_terms[0].value, 0.35);
     }
 
     /// Written and read back, the file gives the same gear (forces equal bit for bit).
@@ -547,6 +689,14 @@ mod tests {
             (
                 Box::new(|m| m.covariance.matrix.pop().map(|_| ()).unwrap()),
                 "must be 3 × 3",
+            ),
+            (
+                Box::new(|m| {
+                    m.recorded = Some(RecordedRange {
+                        drive_hz: [2.0, 1.0],
+                    })
+                }),
+                "recorded.drive_hz",
             ),
         ];
         for (edit, field) in cases {

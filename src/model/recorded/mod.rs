@@ -22,6 +22,7 @@
 use super::{DrivenOscillator, Forces, ForcesJet};
 use std::f64::consts::TAU;
 
+pub mod effect;
 pub mod file;
 mod lens;
 pub mod spline;
