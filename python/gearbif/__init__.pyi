@@ -164,6 +164,19 @@ class Model(_System):
     @staticmethod
     def load(path: StrPath, f: float = 1.0) -> Model: ...
     def with_param(self, name: str, value: float) -> Model: ...
+    def locate(
+        self,
+        kind: Literal["fold", "flip", "sb", "ns"],
+        x: ArrayLike,
+        *,
+        param: str = "f",
+        section: Section = "stroboscopic",
+        period: int = 1,
+        winding: int = 1,
+        tol: float = 1e-11,
+    ) -> Dict[str, Any]: ...
+    @property
+    def covariance(self) -> Tuple[List[str], List[List[float]]]: ...
     def forces(self, t: float, beta: float, omega: float) -> Tuple[float, float]: ...
     @property
     def f(self) -> float: ...

@@ -44,9 +44,7 @@
 use super::judge::{compare, heldout, z_threshold, Comparison, HeldOut};
 use super::regression::{build, Term, WeakOptions, BASE_TERMS};
 use super::select::{ModelState, SelectCtx};
-use super::shooting::{
-    curve_columns, par_map, refit, Reselect, ShootingOptions, SimFit, SimModel,
-};
+use super::shooting::{curve_columns, par_map, refit, Reselect, ShootingOptions, SimFit, SimModel};
 use super::smoothing::{add_penalty, gcv_refine, Linearised, Smoothed};
 use crate::model::recorded::spline::{basis, SplineKind, SPLINE_KNOTS};
 use nalgebra::{DMatrix, DVector};
