@@ -34,7 +34,19 @@ use clap::{Parser, Subcommand};
 /// gearbif: exact dynamics, periodic orbits and bifurcations of periodically driven oscillators
 /// with dry friction — the dipole magnetic gear of Hartung & Rehberg (2020) built in.
 #[derive(Debug, Parser)]
-#[command(name = "gearbif", version, about, long_about = None, propagate_version = true)]
+#[command(
+    name = "gearbif",
+    version,
+    about,
+    long_about = None,
+    propagate_version = true,
+    after_help = "Every command works on the dipole gear: the paper's (the default), one given by \
+                  the gear flags or --config, or a recorded gear's model.json with --model \
+                  (simulate, map, locate, classify, continue, diagram, boundary, sweep, report, \
+                  figure orbit/lyapunov). fit, diagnose, synth and campaign read or make \
+                  recordings of the gear. Any other driven oscillator with dry friction goes \
+                  through the library (the DrivenOscillator trait) or Python (gearbif.UserSystem)."
+)]
 pub struct Cli {
     /// The command to run.
     #[command(subcommand)]

@@ -473,7 +473,12 @@ impl<S: Parametrised> Figure for BoundaryPlot<S> {
         root.fill(&WHITE).map_err(plot_err)?;
         let all = || self.curves.iter().flat_map(|c| c.1.points.iter());
         let (x0, x1) = range(all().map(|p| p.along).chain(self.marks.iter().map(|m| m.1)));
-        let (y0, y1) = range(all().map(|p| p.free).chain(self.marks.iter().map(|m| m.2)));
+        let ys = || all().map(|p| p.free).chain(self.marks.iter().map(|m| m.2));
+        let (y0, y1) = if self.log_y {
+            super::finite_range(ys(), true).unwrap_or((0.1, 1.0))
+        } else {
+            range(ys())
+        };
         let (xl, yl) = self
             .curves
             .first()
