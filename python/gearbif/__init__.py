@@ -52,55 +52,39 @@ from ._results import (
     Trajectory,
 )
 
-__all__ = [
-    "__version__",
-    # systems
-    "GearParams",
-    "Gear",
-    "CoulombOscillator",
-    "ForcedPendulum",
-    "UserSystem",
-    "Model",
-    # dynamics
-    "simulate",
-    "poincare_map",
-    "multipliers",
-    "shoot",
-    # continuation
-    "continuation",
-    "switch_branch",
-    "lock_loss_boundary",
-    "SpecialPoint",
-    # analysis
-    "classify",
-    "sweep",
-    "sweep_grid",
-    # identification
-    "synth",
-    "fit",
-    "diagnose",
-    # results
-    "Result",
-    "Trajectory",
-    "MapResult",
-    "Orbit",
-    "Classification",
-    "Sweep",
-    "Branch",
-    "Boundary",
-    "BoundaryCurve",
-    # errors
-    "GearbifError",
-    "InvalidParameterError",
-    "InvalidInputError",
-    "IntegrationError",
-    "NewtonError",
-    "ContinuationError",
-    "GearbifIOError",
-    "UnsupportedError",
-    "NoPeriodError",
-    "RecordingError",
-]
+# the public names by what a user does with them (docs/python-api.md is written in this order)
+_GROUPS = {
+    "Systems": ["GearParams", "Gear", "CoulombOscillator", "ForcedPendulum", "UserSystem", "Model"],
+    "Dynamics": ["simulate", "poincare_map", "multipliers", "shoot"],
+    "Continuation": ["continuation", "switch_branch", "lock_loss_boundary", "SpecialPoint"],
+    "Atlas": ["classify", "sweep", "sweep_grid"],
+    "Recordings": ["synth", "fit", "diagnose"],
+    "Results": [
+        "Result",
+        "Trajectory",
+        "MapResult",
+        "Orbit",
+        "Classification",
+        "Sweep",
+        "Branch",
+        "Boundary",
+        "BoundaryCurve",
+    ],
+    "Errors": [
+        "GearbifError",
+        "InvalidParameterError",
+        "InvalidInputError",
+        "IntegrationError",
+        "NewtonError",
+        "ContinuationError",
+        "GearbifIOError",
+        "UnsupportedError",
+        "NoPeriodError",
+        "RecordingError",
+    ],
+}
+
+__all__ = ["__version__"] + [name for names in _GROUPS.values() for name in names]
 
 
 def _wrap(name: str, result: Callable[[Any], Any]) -> Callable[..., Any]:
