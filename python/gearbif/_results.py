@@ -190,16 +190,7 @@ class Sweep(Result):
 
     def to_pandas(self) -> Any:
         """Every point as one row of a DataFrame (the columns of points.csv)."""
-        rows = []
-        for p in self.points():
-            flat = {}
-            for k, v in p.items():
-                if isinstance(v, (list, tuple)) and len(v) == 2 and k.endswith("_end"):
-                    flat[k] = v
-                elif not isinstance(v, (dict, list)):
-                    flat[k] = v
-            rows.append(flat)
-        return _pandas().DataFrame(rows)
+        return _pandas().DataFrame(self.points())
 
 
 _UNITS = {
