@@ -17,7 +17,7 @@ from __future__ import annotations
 import functools
 from typing import Any, Callable
 
-from . import _core
+from . import _core, _results
 from ._core import (
     ContinuationError,
     CoulombOscillator,
@@ -59,17 +59,7 @@ _GROUPS = {
     "Continuation": ["continuation", "switch_branch", "lock_loss_boundary", "SpecialPoint"],
     "Atlas": ["classify", "sweep", "sweep_grid"],
     "Recordings": ["synth", "fit", "diagnose"],
-    "Results": [
-        "Result",
-        "Trajectory",
-        "MapResult",
-        "Orbit",
-        "Classification",
-        "Sweep",
-        "Branch",
-        "Boundary",
-        "BoundaryCurve",
-    ],
+    "Results": list(_results.__all__),
     "Errors": [
         "GearbifError",
         "InvalidParameterError",

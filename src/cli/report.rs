@@ -55,17 +55,27 @@ pub fn run(a: Args) -> Result<()> {
     } else {
         ReportOptions::coarse()?
     };
-    let t = std::time::Instant::now();
     let progress = Progress::new(a.quiet);
-    // the whole output plan before the work; the result is written beside it and moved into place
-    let staged = crate::io::StagedDir::begin("--out", &a.out, owned)?;
-    let rep = build_report(&gear, &opts, staged.path(), &progress)?;
-    progress.finish();
-    rep.write(staged.path())?;
+    write_staged(&a.out, |dir| {
+        let rep = build_report(&gear, &opts, dir, &progress)?;
+        progress.finish();
+        rep.write(dir)
+    })
+}
+
+/// Writes a report into a folder staged beside `out` (the whole output plan checked before the
+/// work) and moves it into place; says where and how long it took.
+fn write_staged(
+    out: &std::path::Path,
+    write: impl FnOnce(&std::path::Path) -> Result<()>,
+) -> Result<()> {
+    let t = std::time::Instant::now();
+    let staged = crate::io::StagedDir::begin("--out", out, owned)?;
+    write(staged.path())?;
     staged.commit()?;
     eprintln!(
         "wrote {}/report.md and report.json in {:.1} s",
-        a.out.display(),
+        out.display(),
         t.elapsed().as_secs_f64()
     );
     Ok(())
@@ -101,15 +111,8 @@ fn run_recorded(a: &Args, file: &ModelFile) -> Result<()> {
         .as_ref()
         .map(|p| p.display().to_string())
         .unwrap_or_default();
-    let t = std::time::Instant::now();
-    let staged = crate::io::StagedDir::begin("--out", &a.out, owned)?;
-    let data = recorded::compute(file, &name, &o)?;
-    recorded::text::report(&data).write(staged.path())?;
-    staged.commit()?;
-    eprintln!(
-        "wrote {}/report.md and report.json in {:.1} s",
-        a.out.display(),
-        t.elapsed().as_secs_f64()
-    );
-    Ok(())
+    write_staged(&a.out, |dir| {
+        let data = recorded::compute(file, &name, &o)?;
+        recorded::text::report(&data).write(dir)
+    })
 }

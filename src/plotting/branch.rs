@@ -516,11 +516,7 @@ impl<S: Parametrised> Figure for BoundaryPlot<S> {
         } else {
             y1 + headroom * (y1 - y0)
         };
-        let mut b = ChartBuilder::on(root);
-        b.caption(&self.title, ("sans-serif", 20))
-            .margin(15)
-            .x_label_area_size(50)
-            .y_label_area_size(80);
+        let mut b = super::line_frame(root, &self.title);
         macro_rules! body {
             ($chart:expr) => {{
                 let mut chart = $chart;

@@ -183,6 +183,20 @@ pub struct Series {
     pub color: usize,
 }
 
+/// The frame of a line figure: its caption, margin and axis label areas ([`LinePlot`],
+/// [`branch::BoundaryPlot`]).
+pub(crate) fn line_frame<'a, 'b, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+) -> ChartBuilder<'a, 'b, DB> {
+    let mut b = ChartBuilder::on(root);
+    b.caption(title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(80);
+    b
+}
+
 /// The range of the finite values (positive ones for a log axis) with a margin: 5 % of the span
 /// (linear) or a factor 1.2 (log); `None` if there are none.
 pub(crate) fn finite_range(v: impl Iterator<Item = f64>, log: bool) -> Option<(f64, f64)> {
@@ -428,11 +442,7 @@ impl Figure for LinePlot {
                 y1 + headroom * (y1 - y0)
             };
         }
-        let mut b = ChartBuilder::on(root);
-        b.caption(&self.title, ("sans-serif", 20))
-            .margin(15)
-            .x_label_area_size(50)
-            .y_label_area_size(80);
+        let mut b = line_frame(root, &self.title);
         macro_rules! body {
             ($chart:expr) => {{
                 let mut chart = $chart;
