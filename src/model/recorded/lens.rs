@@ -346,7 +346,7 @@ impl RecordedModel {
         let (sc_alpha, sc_beta) = (al.sin_cos(), beta.sin_cos());
         let (_, _, (sa, ca)) = gear.input_angle_sc(al, sc_alpha, sc_beta);
         let (sb, cb) = sc_beta;
-        let (_, _, _, a_alpha) = gear.smooth_at((sa, ca), sc_beta, omega);
+        let (_, _, _, a_alpha) = gear.smooth_at((sa, ca), (beta, sc_beta), omega);
         // the input magnet's response: κ, τ_in and ∂τ_in/∂c
         let tau = c.c_sc * ca * sb + c.c_cs * sa * cb - c.c_cc * sa * sb - c.c_ss * ca * cb;
         let tau_a = -c.c_sc * sa * sb + c.c_cs * ca * cb - c.c_cc * ca * sb + c.c_ss * sa * cb;
@@ -425,7 +425,7 @@ impl RecordedModel {
         } = *at;
         let gear = &self.gear;
         let c = &gear.c;
-        let (rho, _) = gear.friction(al, sc_beta, Some(sc_alpha), false);
+        let (rho, _) = gear.friction(al, (beta, sc_beta), Some(sc_alpha), false);
         let through = match held {
             None => rho > 0.0,
             Some(floored) => !floored,

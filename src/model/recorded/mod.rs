@@ -556,6 +556,9 @@ pub fn angle_harmonic_sc(
     }
 }
 
+/// An angle, rad, with its (sine, cosine): the right-hand side computes them once.
+type AngleSc = (f64, (f64, f64));
+
 /// The augmented gear as a driven oscillator.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RecordedGear {
@@ -627,24 +630,25 @@ impl RecordedGear {
         let (_, ta, tb, sc) = tau(d);
         (a0 + d, c.compliance * tb / (1.0 - c.compliance * ta), sc)
     }
-    /// a, ∂a/∂β, ∂a/∂ω at the recorded input angle `alpha` (`sc_alpha` = (sin α, cos α),
-    /// `sc_beta` = (sin β, cos β)).
+    /// a, ∂a/∂β, ∂a/∂ω at the recorded input angle `alpha` (`sc_alpha` = (sin α, cos α)) and
+    /// β given with (sin β, cos β).
     fn smooth(
         &self,
         alpha: f64,
         sc_alpha: (f64, f64),
-        sc_beta: (f64, f64),
+        (beta, sc_beta): AngleSc,
         omega: f64,
     ) -> (f64, f64, f64) {
         let (_, da_dbeta, sc_in) = self.input_angle_sc(alpha, sc_alpha, sc_beta);
-        let (a, a_beta, a_omega, a_alpha) = self.smooth_at(sc_in, sc_beta, omega);
+        let (a, a_beta, a_omega, a_alpha) = self.smooth_at(sc_in, (beta, sc_beta), omega);
         (a, a_beta + a_alpha * da_dbeta, a_omega)
     }
-    /// a, ∂a/∂β, ∂a/∂ω, ∂a/∂α at the input angle α and β given by their sines and cosines.
+    /// a, ∂a/∂β, ∂a/∂ω, ∂a/∂α at the input angle α given by its sine and cosine and β given by
+    /// itself with its sine and cosine.
     fn smooth_at(
         &self,
         (sa, ca): (f64, f64),
-        (sb, cb): (f64, f64),
+        (beta, (sb, cb)): AngleSc,
         omega: f64,
     ) -> (f64, f64, f64, f64) {
         let c = &self.c;
@@ -677,7 +681,7 @@ impl RecordedGear {
             }
         }
         if spline::active(&c.spline_torque) {
-            let (v, d) = spline::eval(&c.spline_torque, sb.atan2(cb));
+            let (v, d) = spline::eval(&c.spline_torque, beta);
             a += v;
             a_beta += d;
         }
@@ -708,12 +712,12 @@ impl RecordedGear {
     /// sin β, cos or sin(kα + lβ)) + Σ c_j B_j(β) (a friction curve, [`spline`]) at (α, β), and, when `with_beta`, ∂ρ/∂β (the friction is
     /// max(ρ, 0), [`Self::floored_friction`]); L the bearing load of [`load_shape`] (the `load_dependent_friction`
     /// family of docs/diagnosis.md, "The catalog as families"). α is the recorded input angle,
-    /// not the input magnet's (the coupling's, [`Self::input_angle`]). `sc_beta` = (sin β,
+    /// not the input magnet's (the coupling's, [`Self::input_angle`]). β is given with (sin β,
     /// cos β); `sc_alpha` = (sin α, cos α) when the caller has it.
     fn friction(
         &self,
         alpha: f64,
-        sc_beta: (f64, f64),
+        (beta, sc_beta): AngleSc,
         sc_alpha: Option<(f64, f64)>,
         with_beta: bool,
     ) -> (f64, f64) {
@@ -740,7 +744,7 @@ impl RecordedGear {
             }
         }
         if spline::active(&self.c.spline_friction) {
-            let (v, d) = spline::eval(&self.c.spline_friction, sc_beta.0.atan2(sc_beta.1));
+            let (v, d) = spline::eval(&self.c.spline_friction, beta);
             r += v;
             r_beta += d;
         }
@@ -764,7 +768,7 @@ impl RecordedGear {
         &self,
         alpha: f64,
         omega: f64,
-        sc: ((f64, f64), Option<(f64, f64)>),
+        sc: (AngleSc, Option<(f64, f64)>),
         with_beta: bool,
         held: Option<bool>,
     ) -> (f64, f64, f64) {
@@ -783,8 +787,9 @@ impl RecordedGear {
     fn forces_on(&self, t: f64, beta: f64, omega: f64, held: Option<bool>) -> Forces {
         let al = self.alpha(t);
         let (sc_alpha, sc_beta) = (al.sin_cos(), beta.sin_cos());
-        let (a, _, _) = self.smooth(al, sc_alpha, sc_beta, omega);
-        let (r, _, _) = self.floored_friction(al, omega, (sc_beta, Some(sc_alpha)), false, held);
+        let (a, _, _) = self.smooth(al, sc_alpha, (beta, sc_beta), omega);
+        let (r, _, _) =
+            self.floored_friction(al, omega, ((beta, sc_beta), Some(sc_alpha)), false, held);
         Forces {
             a: a + self.corot_bend(t),
             r,
@@ -794,9 +799,9 @@ impl RecordedGear {
     fn forces_jet_on(&self, t: f64, beta: f64, omega: f64, held: Option<bool>) -> ForcesJet {
         let al = self.alpha(t);
         let (sc_alpha, sc_beta) = (al.sin_cos(), beta.sin_cos());
-        let (a, a_beta, a_omega) = self.smooth(al, sc_alpha, sc_beta, omega);
+        let (a, a_beta, a_omega) = self.smooth(al, sc_alpha, (beta, sc_beta), omega);
         let (r, r_beta, r_omega) =
-            self.floored_friction(al, omega, (sc_beta, Some(sc_alpha)), true, held);
+            self.floored_friction(al, omega, ((beta, sc_beta), Some(sc_alpha)), true, held);
         let mut j = ForcesJet::new(a + self.corot_bend(t), r);
         j.a_beta = a_beta;
         j.a_omega = a_omega;
@@ -830,8 +835,10 @@ impl DrivenOscillator for RecordedGear {
         self.forces_jet_on(t, beta, omega, None)
     }
     fn friction_floor(&self, t: f64, beta: f64, _omega: f64) -> Option<f64> {
-        self.friction_varies()
-            .then(|| self.friction(self.alpha(t), beta.sin_cos(), None, false).0)
+        self.friction_varies().then(|| {
+            self.friction(self.alpha(t), (beta, beta.sin_cos()), None, false)
+                .0
+        })
     }
     fn forces_held(&self, t: f64, beta: f64, omega: f64, floored: bool) -> Forces {
         self.forces_on(t, beta, omega, Some(floored))
@@ -846,9 +853,19 @@ impl DrivenOscillator for RecordedGear {
     ) -> ForcesJet {
         self.forces_jet_on(t, beta, omega, Some(floored))
     }
+    /// With the input at rest (α̇ = 0 and no bend: a ring-down) the forces do not depend on t, so
+    /// the release function G = |a(β, 0)| − r_s(β) of a stuck output is constant: it slips at once
+    /// or stays stuck through `t_max`. Otherwise the generic scan and bisection
+    /// ([`crate::model::default_next_release`]).
+    fn next_release(&self, t: f64, beta: f64, t_max: f64) -> Option<f64> {
+        if self.alpha_rate == 0.0 && self.bend.a == [0.0; 4] {
+            return (crate::model::release_function(self, t, beta) >= 0.0).then_some(t);
+        }
+        crate::model::default_next_release(self, t, beta, t_max)
+    }
     fn static_friction(&self, t: f64, beta: f64) -> f64 {
         let al = self.alpha(t);
-        let (fr, _) = self.friction(al, beta.sin_cos(), None, false);
+        let (fr, _) = self.friction(al, (beta, beta.sin_cos()), None, false);
         fr.max(0.0) + self.c.eta_static_excess.max(0.0)
     }
 }
@@ -942,6 +959,37 @@ mod tests {
             alpha_rate: 4.0,
             bend: InputBend::default(),
         }
+    }
+
+    /// With the input at rest the release search answers at once, and as the generic scan over
+    /// the whole interval does: stuck states stay stuck, the others slip at t (a friction curve
+    /// and a static torque make the release depend on β).
+    #[test]
+    fn a_ring_down_releases_at_once_or_never_as_the_scan_finds() {
+        let mut c = Coefficients::base(300.0, 0.2, 1.0, 40.0);
+        c.st_a = 6.0;
+        for j in 0..spline::SPLINE_KNOTS {
+            c.spline_friction[j] = 30.0 + 20.0 * (j as f64 * 0.9).sin();
+        }
+        let sys = RecordedGear {
+            alpha_rate: 0.0,
+            ..driven_test_gear(c)
+        };
+        let (mut stuck, mut slips) = (0, 0);
+        for k in 0..40 {
+            let (t, b) = (0.05 * k as f64, 0.3 + 0.157 * k as f64);
+            let fast = sys.next_release(t, b, t + 2.0);
+            assert_eq!(
+                fast,
+                crate::model::default_next_release(&sys, t, b, t + 2.0)
+            );
+            if fast.is_some() {
+                slips += 1;
+            } else {
+                stuck += 1;
+            }
+        }
+        assert!(stuck > 0 && slips > 0, "{stuck} stuck, {slips} slipping");
     }
 
     #[test]

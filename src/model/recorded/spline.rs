@@ -50,31 +50,38 @@ impl SplineKind {
 
 /// The four basis functions nonzero at x: their indices, values and x-derivatives (rad⁻¹).
 pub fn basis(x: f64) -> ([usize; 4], [f64; 4], [f64; 4]) {
-    let n = SPLINE_KNOTS as f64;
-    let h = TAU / n;
-    let u = (x / h).rem_euclid(n);
-    let i = (u.floor() as usize).min(SPLINE_KNOTS - 1);
+    const N: f64 = SPLINE_KNOTS as f64;
+    const INV_H: f64 = N / TAU;
+    const SIXTH: f64 = 1.0 / 6.0;
+    // x/h wrapped to [0, n) by its floor (f64::rem_euclid's fmod and the divisions cost more
+    // than the rest: this runs at every right-hand side of a curve model)
+    let u = x * INV_H;
+    let u = u - N * (u * (1.0 / N)).floor();
+    let i = (u.max(0.0) as usize).min(SPLINE_KNOTS - 1);
     let f = u - i as f64;
     let g = 1.0 - f;
-    let idx = [
-        (i + SPLINE_KNOTS - 1) % SPLINE_KNOTS,
-        i,
-        (i + 1) % SPLINE_KNOTS,
-        (i + 2) % SPLINE_KNOTS,
-    ];
+    let wrap = |k: usize| {
+        if k >= SPLINE_KNOTS {
+            k - SPLINE_KNOTS
+        } else {
+            k
+        }
+    };
+    let idx = [wrap(i + SPLINE_KNOTS - 1), i, wrap(i + 1), wrap(i + 2)];
+    let (f2, g2) = (f * f, g * g);
     let val = [
-        g * g * g / 6.0,
-        (4.0 - 6.0 * f * f + 3.0 * f * f * f) / 6.0,
-        (4.0 - 6.0 * g * g + 3.0 * g * g * g) / 6.0,
-        f * f * f / 6.0,
+        g2 * g * SIXTH,
+        (4.0 - 6.0 * f2 + 3.0 * f2 * f) * SIXTH,
+        (4.0 - 6.0 * g2 + 3.0 * g2 * g) * SIXTH,
+        f2 * f * SIXTH,
     ];
     let du = [
-        -0.5 * g * g,
-        -2.0 * f + 1.5 * f * f,
-        2.0 * g - 1.5 * g * g,
-        0.5 * f * f,
+        -0.5 * g2 * INV_H,
+        (-2.0 * f + 1.5 * f2) * INV_H,
+        (2.0 * g - 1.5 * g2) * INV_H,
+        0.5 * f2 * INV_H,
     ];
-    (idx, val, du.map(|d| d / h))
+    (idx, val, du)
 }
 
 /// B_j(x), the basis function `j` at x (the weak-form column of a curve's coefficient j).
