@@ -20,6 +20,7 @@ use super::{ExtraTerm, DRAG_REFERENCE_SPEED, STRIBECK_POWER};
 use crate::error::{finite, non_negative, positive, Error, Result};
 use crate::model::params::{Column, Parameter, Parametrised};
 use crate::model::{DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry, MAX_PARAMS};
+use crate::numerics::trig::sin_cos;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};
 
@@ -343,7 +344,7 @@ impl RecordedModel {
             r: [0.0; N],
         };
         let al = gear.alpha(t);
-        let (sc_alpha, sc_beta) = (al.sin_cos(), beta.sin_cos());
+        let (sc_alpha, sc_beta) = (sin_cos(al), sin_cos(beta));
         let (_, _, (sa, ca)) = gear.input_angle_sc(al, sc_alpha, sc_beta);
         let (sb, cb) = sc_beta;
         let (_, _, _, a_alpha) = gear.smooth_at((sa, ca), (beta, sc_beta), omega);

@@ -20,6 +20,7 @@
 //! with the friction above. The base model is c_sc = −g, c_cs = gΔ, everything else 0.
 
 use super::{DrivenOscillator, Forces, ForcesJet};
+use crate::numerics::trig::sin_cos;
 use std::f64::consts::TAU;
 
 pub mod effect;
@@ -531,7 +532,7 @@ fn rotate_small((s, c): (f64, f64), d: f64) -> (f64, f64) {
                 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0 * (1.0 - d2 / 56.0 * (1.0 - d2 / 90.0))));
         (sd, cd)
     } else {
-        d.sin_cos()
+        sin_cos(d)
     };
     (s * cd + c * sd, c * cd - s * sd)
 }
@@ -593,7 +594,7 @@ impl RecordedGear {
     /// The input magnet's angle α_in = α + ε + χ τ_in(α_in, β) (Newton iteration) and its
     /// derivative dα_in/dβ = χ τ_β / (1 − χ τ_α).
     pub fn input_angle(&self, alpha: f64, beta: f64) -> (f64, f64) {
-        let (a, da, _) = self.input_angle_sc(alpha, alpha.sin_cos(), beta.sin_cos());
+        let (a, da, _) = self.input_angle_sc(alpha, sin_cos(alpha), sin_cos(beta));
         (a, da)
     }
     /// [`Self::input_angle`] with (sin α, cos α) and (sin β, cos β) given (the right-hand side
@@ -723,7 +724,7 @@ impl RecordedGear {
     ) -> (f64, f64) {
         let (mut r, mut r_beta) = (self.c.eta, 0.0);
         let mut sc_alpha = sc_alpha;
-        let mut sc_alpha = || *sc_alpha.get_or_insert_with(|| alpha.sin_cos());
+        let mut sc_alpha = || *sc_alpha.get_or_insert_with(|| sin_cos(alpha));
         if self.c.eta_load != 0.0 {
             let (lo, hi) = Shape::LoadWeight.range();
             let w = self.c.load_weight.map(|x| x.clamp(lo, hi));
@@ -786,7 +787,7 @@ impl RecordedGear {
     /// [`DrivenOscillator::forces`] on the branch `held` ([`Self::floored_friction`]).
     fn forces_on(&self, t: f64, beta: f64, omega: f64, held: Option<bool>) -> Forces {
         let al = self.alpha(t);
-        let (sc_alpha, sc_beta) = (al.sin_cos(), beta.sin_cos());
+        let (sc_alpha, sc_beta) = (sin_cos(al), sin_cos(beta));
         let (a, _, _) = self.smooth(al, sc_alpha, (beta, sc_beta), omega);
         let (r, _, _) =
             self.floored_friction(al, omega, ((beta, sc_beta), Some(sc_alpha)), false, held);
@@ -798,7 +799,7 @@ impl RecordedGear {
     /// [`DrivenOscillator::forces_jet`] on the branch `held` ([`Self::floored_friction`]).
     fn forces_jet_on(&self, t: f64, beta: f64, omega: f64, held: Option<bool>) -> ForcesJet {
         let al = self.alpha(t);
-        let (sc_alpha, sc_beta) = (al.sin_cos(), beta.sin_cos());
+        let (sc_alpha, sc_beta) = (sin_cos(al), sin_cos(beta));
         let (a, a_beta, a_omega) = self.smooth(al, sc_alpha, (beta, sc_beta), omega);
         let (r, r_beta, r_omega) =
             self.floored_friction(al, omega, ((beta, sc_beta), Some(sc_alpha)), true, held);
@@ -836,7 +837,7 @@ impl DrivenOscillator for RecordedGear {
     }
     fn friction_floor(&self, t: f64, beta: f64, _omega: f64) -> Option<f64> {
         self.friction_varies().then(|| {
-            self.friction(self.alpha(t), (beta, beta.sin_cos()), None, false)
+            self.friction(self.alpha(t), (beta, sin_cos(beta)), None, false)
                 .0
         })
     }
@@ -865,7 +866,7 @@ impl DrivenOscillator for RecordedGear {
     }
     fn static_friction(&self, t: f64, beta: f64) -> f64 {
         let al = self.alpha(t);
-        let (fr, _) = self.friction(al, (beta, beta.sin_cos()), None, false);
+        let (fr, _) = self.friction(al, (beta, sin_cos(beta)), None, false);
         fr.max(0.0) + self.c.eta_static_excess.max(0.0)
     }
 }
