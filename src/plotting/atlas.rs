@@ -92,7 +92,7 @@ impl RmsMap {
     }
 
     /// The cells in their RMS_δ colours, then the class layer; returns the cells per marker
-    /// (rows, columns).
+    /// (rows, columns; (1, 1) without a class layer).
     fn draw_map<DB: DrawingBackend, X: Ranged<ValueType = f64>>(
         &self,
         chart: &mut ChartContext<'_, DB, Cartesian2d<X, RangedCoordf64>>,
@@ -110,6 +110,16 @@ impl RmsMap {
         if self.markers == Markers::None {
             return Ok((1, 1));
         }
+        self.draw_classes(chart, (ex, ey))
+    }
+
+    /// The class layer ([`super::classes`]): borders between cells of different classes, then
+    /// a marker per block of one class; returns the cells per marker (rows, columns).
+    fn draw_classes<DB: DrawingBackend, X: Ranged<ValueType = f64>>(
+        &self,
+        chart: &mut ChartContext<'_, DB, Cartesian2d<X, RangedCoordf64>>,
+        (ex, ey): (&[f64], &[f64]),
+    ) -> Result<(usize, usize)> {
         let grid = ClassGrid::new(
             &self.points,
             (self.rows.len(), self.cols.len()),
