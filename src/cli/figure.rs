@@ -116,6 +116,7 @@ fn inset(p: &GearParams, r: &PointRecord, alpha0_deg: f64, title: &str) -> Resul
     Ok(Landscape {
         title: title.into(),
         delta: g.delta,
+        coupling_j: p.coupling(),
         convention: Convention::Paper,
         samples: w.samples.unwrap_or_default(),
     })
@@ -312,10 +313,10 @@ fn rms_map(
         fig.title = format!("{stem}: RMS_δ (classes in {stem}-data/points.csv)");
         return save_both(&fig, dir, stem, out);
     }
-    fig.title = format!("{stem}: RMS_δ, paper classes (○ chaos, × T/2, — T)");
+    fig.title = format!("{stem}: RMS_δ with the paper's classes");
     save_both(&fig, dir, stem, out)?;
     fig.markers = Markers::Rigorous;
-    fig.title = format!("{stem}: RMS_δ, rigorous classes (○ chaos/QP, × sym., — asym., □ ?)");
+    fig.title = format!("{stem}: RMS_δ with the rigorous classes");
     save_both(&fig, dir, rigorous_stem, out)
 }
 

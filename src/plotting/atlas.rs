@@ -1,70 +1,23 @@
-//! The atlas figures: the RMS_δ colour map with class markers (paper Figs. 7b, 8), polar δ
-//! diagrams (Fig. 6), trajectories β(α) over the field-energy landscape (insets of Figs. 9–10).
+//! The atlas figures: the RMS_δ colour map with its class layer ([`super::classes`]; paper
+//! Figs. 7b, 8), polar δ diagrams (Fig. 6), trajectories β(α) over the field energy of eq.
+//! `field_energy` (insets of Figs. 9–10), each colour scale with its bar ([`super::colour`]).
 //! δ over α with its harmonic fit (Fig. 5), orbit diagrams and Lyapunov exponents against f are
 //! [`super::LinePlot`]s built by [`fit_plot`], [`orbit_diagram`] and [`lyapunov_plot`].
 
+use super::classes::{cells_per_marker, legend, Border, ClassGrid, Glyph};
+use super::colour::{diverging, sequential, ColourScale};
 use super::{plot_err, Figure, LinePlot, Series};
 use crate::analysis::classify::WindowSample;
 use crate::analysis::HarmonicFit;
 use crate::error::Result;
 use crate::model::Parameter;
 use crate::sweep::{PointRecord, SweepResult};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::f64::consts::TAU;
 
-/// Colour of a value in [0, 1] (a blue–white–red scale: valleys blue, hills red as in the paper).
-fn diverging(v: f64) -> RGBColor {
-    let v = v.clamp(0.0, 1.0);
-    let lerp = |a: f64, b: f64, t: f64| (a + (b - a) * t).round() as u8;
-    if v < 0.5 {
-        let t = v / 0.5;
-        RGBColor(
-            lerp(40.0, 245.0, t),
-            lerp(70.0, 245.0, t),
-            lerp(200.0, 245.0, t),
-        )
-    } else {
-        let t = (v - 0.5) / 0.5;
-        RGBColor(
-            lerp(245.0, 200.0, t),
-            lerp(245.0, 30.0, t),
-            lerp(245.0, 30.0, t),
-        )
-    }
-}
-
-/// Sequential colour scale for RMS_δ (dark blue → yellow → red).
-fn sequential(v: f64) -> RGBColor {
-    let v = v.clamp(0.0, 1.0);
-    let stops = [
-        (0.0, (20.0, 30.0, 110.0)),
-        (0.35, (40.0, 150.0, 200.0)),
-        (0.65, (250.0, 220.0, 60.0)),
-        (1.0, (200.0, 20.0, 20.0)),
-    ];
-    for w in stops.windows(2) {
-        let ((a, ca), (b, cb)) = (w[0], w[1]);
-        if v <= b {
-            let t = (v - a) / (b - a);
-            let l = |x: f64, y: f64| (x + (y - x) * t).round() as u8;
-            return RGBColor(l(ca.0, cb.0), l(ca.1, cb.1), l(ca.2, cb.2));
-        }
-    }
-    RGBColor(200, 20, 20)
-}
-
-/// Which class the markers of an [`RmsMap`] show.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Markers {
-    /// The paper's flowchart: circle chaos, cross T/2, dash T.
-    Paper,
-    /// The rigorous class: circle chaos/QP, cross symmetric, dash asymmetric periodic, square
-    /// unresolved.
-    Rigorous,
-    /// No markers.
-    None,
-}
+pub use super::classes::Markers;
 
 /// The RMS_δ colour map over a sweep (rows on y, columns on x), with class markers.
 #[derive(Debug, Clone)]
@@ -128,18 +81,124 @@ fn edges(c: &[f64], log: bool) -> Vec<f64> {
     e
 }
 
+impl RmsMap {
+    /// The colour scale of RMS_δ.
+    fn scale(&self) -> ColourScale<'static> {
+        ColourScale {
+            range: (0.0, self.vmax),
+            colour: sequential,
+            label: "RMS_δ [deg]",
+        }
+    }
+
+    /// The cells in their RMS_δ colours, then the class layer; returns the cells per marker
+    /// (rows, columns; (1, 1) without a class layer).
+    fn draw_map<DB: DrawingBackend, X: Ranged<ValueType = f64>>(
+        &self,
+        chart: &mut ChartContext<'_, DB, Cartesian2d<X, RangedCoordf64>>,
+        (ex, ey): (&[f64], &[f64]),
+    ) -> Result<(usize, usize)> {
+        let scale = self.scale();
+        chart
+            .draw_series(self.points.iter().map(|p| {
+                Rectangle::new(
+                    [(ex[p.col], ey[p.row]), (ex[p.col + 1], ey[p.row + 1])],
+                    scale.of(p.rms_delta_deg).filled(),
+                )
+            }))
+            .map_err(plot_err)?;
+        if self.markers == Markers::None {
+            return Ok((1, 1));
+        }
+        self.draw_classes(chart, (ex, ey))
+    }
+
+    /// The class layer ([`super::classes`]): borders between cells of different classes, then
+    /// a marker per block of one class; returns the cells per marker (rows, columns).
+    fn draw_classes<DB: DrawingBackend, X: Ranged<ValueType = f64>>(
+        &self,
+        chart: &mut ChartContext<'_, DB, Cartesian2d<X, RangedCoordf64>>,
+        (ex, ey): (&[f64], &[f64]),
+    ) -> Result<(usize, usize)> {
+        let grid = ClassGrid::new(
+            &self.points,
+            (self.rows.len(), self.cols.len()),
+            self.markers,
+        );
+        let per = cells_in_glyph(chart, (ex, ey));
+        let line = ShapeStyle::from(&BLACK).stroke_width(2);
+        chart
+            .draw_series(grid.borders().into_iter().map(|b| {
+                let ends = match b {
+                    Border::Vertical { row, col } => [(ex[col], ey[row]), (ex[col], ey[row + 1])],
+                    Border::Horizontal { row, col } => [(ex[col], ey[row]), (ex[col + 1], ey[row])],
+                };
+                PathElement::new(ends.to_vec(), line)
+            }))
+            .map_err(plot_err)?;
+        let mid = |a: f64, b: f64, log: bool| if log { (a * b).sqrt() } else { 0.5 * (a + b) };
+        for b in grid.uniform_blocks(per) {
+            let at = (
+                mid(ex[b.cols.start], ex[b.cols.end], self.log_x),
+                mid(ey[b.rows.start], ey[b.rows.end], false),
+            );
+            draw_glyph(chart, at, b.glyph)?;
+        }
+        Ok(per)
+    }
+}
+
+/// Cells per marker (rows, columns) of a map with cell edges `ex`, `ey` on `chart`
+/// ([`cells_per_marker`] of the narrowest cell in pixels).
+fn cells_in_glyph<DB: DrawingBackend, X: Ranged<ValueType = f64>>(
+    chart: &ChartContext<'_, DB, Cartesian2d<X, RangedCoordf64>>,
+    (ex, ey): (&[f64], &[f64]),
+) -> (usize, usize) {
+    let narrowest = |px: Vec<i32>| {
+        px.windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .min()
+            .unwrap_or(0) as f64
+    };
+    let xs = ex.iter().map(|&x| chart.backend_coord(&(x, ey[0])).0);
+    let ys = ey.iter().map(|&y| chart.backend_coord(&(ex[0], y)).1);
+    (
+        cells_per_marker(narrowest(ys.collect())),
+        cells_per_marker(narrowest(xs.collect())),
+    )
+}
+
+/// One class marker at `at` (8 px: circle, cross, dash or square).
+fn draw_glyph<DB: DrawingBackend, X: Ranged<ValueType = f64>>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, RangedCoordf64>>,
+    at: (f64, f64),
+    glyph: Glyph,
+) -> Result<()> {
+    let st = ShapeStyle::from(&BLACK).stroke_width(1);
+    let drawn = match glyph {
+        Glyph::Circle => chart.draw_series(std::iter::once(Circle::new(at, 4, st))),
+        Glyph::Cross => chart.draw_series(std::iter::once(Cross::new(at, 4, st))),
+        Glyph::Dash => chart.draw_series(std::iter::once(
+            EmptyElement::at(at) + PathElement::new(vec![(-4, 0), (4, 0)], st),
+        )),
+        Glyph::Square => chart.draw_series(std::iter::once(
+            EmptyElement::at(at) + Rectangle::new([(-3, -3), (3, 3)], st),
+        )),
+    };
+    drawn.map(|_| ()).map_err(plot_err)
+}
+
 impl Figure for RmsMap {
     fn size(&self) -> (u32, u32) {
-        (1000, 650)
+        (1000, 690)
     }
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
-        let (main, bar) = root.split_horizontally(880);
+        let (body, foot) = root.split_vertically(650);
+        let (main, bar) = body.split_horizontally(880);
         let ex = edges(&self.cols, self.log_x);
         let ey = edges(&self.rows, false);
         let (x0, x1) = (ex[0].min(ex[ex.len() - 1]), ex[0].max(ex[ex.len() - 1]));
         let (y0, y1) = (ey[0].min(ey[ey.len() - 1]), ey[0].max(ey[ey.len() - 1]));
-        let nc = self.cols.len();
-        let draw_markers = self.markers != Markers::None && nc * self.rows.len() <= 4000;
         macro_rules! body {
             ($chart:expr) => {{
                 let mut chart = $chart;
@@ -151,70 +210,7 @@ impl Figure for RmsMap {
                     .label_style(("sans-serif", 14))
                     .draw()
                     .map_err(plot_err)?;
-                chart
-                    .draw_series(self.points.iter().map(|p| {
-                        let c = sequential(p.rms_delta_deg / self.vmax);
-                        Rectangle::new(
-                            [(ex[p.col], ey[p.row]), (ex[p.col + 1], ey[p.row + 1])],
-                            c.filled(),
-                        )
-                    }))
-                    .map_err(plot_err)?;
-                if draw_markers {
-                    for p in &self.points {
-                        let at = (self.cols[p.col], self.rows[p.row]);
-                        let kind = match self.markers {
-                            Markers::Paper => match p.paper_class.as_str() {
-                                "chaos" => 0,
-                                "T/2" => 1,
-                                _ => 2,
-                            },
-                            _ => {
-                                if p.class == "chaos" || p.class == "QP" {
-                                    0
-                                } else if p.symmetric {
-                                    1
-                                } else if p.half_periods > 0 {
-                                    2
-                                } else {
-                                    3
-                                }
-                            }
-                        };
-                        let st = ShapeStyle::from(&BLACK).stroke_width(1);
-                        match kind {
-                            0 => {
-                                chart
-                                    .draw_series(std::iter::once(Circle::new(at, 4, st)))
-                                    .map_err(plot_err)?;
-                            }
-                            1 => {
-                                chart
-                                    .draw_series(std::iter::once(Cross::new(at, 4, st)))
-                                    .map_err(plot_err)?;
-                            }
-                            2 => {
-                                chart
-                                    .draw_series(std::iter::once(
-                                        EmptyElement::at(at)
-                                            + PathElement::new(vec![(-4, 0), (4, 0)], st),
-                                    ))
-                                    .map_err(plot_err)?;
-                            }
-                            _ => {
-                                chart
-                                    .draw_series(std::iter::once(
-                                        EmptyElement::at(at)
-                                            + plotters::element::Rectangle::new(
-                                                [(-3, -3), (3, 3)],
-                                                st,
-                                            ),
-                                    ))
-                                    .map_err(plot_err)?;
-                            }
-                        }
-                    }
-                }
+                self.draw_map(&mut chart, (&ex, &ey))?
             }};
         }
         let mut b = ChartBuilder::on(&main);
@@ -222,36 +218,24 @@ impl Figure for RmsMap {
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(60);
-        if self.log_x {
+        let per = if self.log_x {
             body!(b
                 .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
-                .map_err(plot_err)?);
+                .map_err(plot_err)?)
         } else {
-            body!(b.build_cartesian_2d(x0..x1, y0..y1).map_err(plot_err)?);
+            body!(b.build_cartesian_2d(x0..x1, y0..y1).map_err(plot_err)?)
+        };
+        self.scale().draw_bar(&bar, (40, 57))?;
+        if self.markers != Markers::None {
+            for (k, text) in legend(self.markers, per).iter().enumerate() {
+                foot.draw(&Text::new(
+                    text.as_str(),
+                    (72, 18 * k as i32),
+                    ("sans-serif", 14).into_font(),
+                ))
+                .map_err(plot_err)?;
+            }
         }
-        // colour bar
-        let mut cb = ChartBuilder::on(&bar);
-        cb.margin_top(40)
-            .margin_bottom(57)
-            .margin_right(10)
-            .y_label_area_size(45)
-            .caption("RMS_δ [°]", ("sans-serif", 14));
-        let mut c = cb
-            .build_cartesian_2d(0.0..1.0, 0.0..self.vmax)
-            .map_err(plot_err)?;
-        c.configure_mesh()
-            .disable_mesh()
-            .disable_x_axis()
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(plot_err)?;
-        let n = 100;
-        c.draw_series((0..n).map(|i| {
-            let a = self.vmax * i as f64 / n as f64;
-            let b2 = self.vmax * (i + 1) as f64 / n as f64;
-            Rectangle::new([(0.0, a), (1.0, b2)], sequential(a / self.vmax).filled())
-        }))
-        .map_err(plot_err)?;
         Ok(())
     }
 }
@@ -347,25 +331,75 @@ impl Figure for PolarDelta {
     }
 }
 
-/// A trajectory β(α) (mod 360°) over the field energy E(α, β) (paper Figs. 9–10 insets).
+/// A trajectory β(α) (mod 360°) over the field energy E(α, β) of eq. `field_energy` (paper
+/// Figs. 9–10 insets), with the energy's colour bar in mJ.
 #[derive(Debug, Clone)]
 pub struct Landscape {
     /// Title.
     pub title: String,
     /// Shaft index Δ.
     pub delta: f64,
+    /// Coupling energy scale c = μ₀ m₁ m₂ / (4π r³), J (`GearParams::coupling`).
+    pub coupling_j: f64,
     /// Sign convention of β (Paper: β shifted by 180°).
     pub convention: crate::model::Convention,
     /// The trajectory.
     pub samples: Vec<WindowSample>,
 }
 
+impl Landscape {
+    /// Label of the colour bar.
+    pub const ENERGY_LABEL: &'static str = "field energy E(α, β) [mJ]";
+
+    /// The energy's colour scale: ±c max(1, |Δ|) in mJ, the range of E.
+    fn scale(&self) -> ColourScale<'static> {
+        let m = 1e3 * self.coupling_j * 1f64.max(self.delta.abs());
+        ColourScale {
+            range: (-m, m),
+            colour: diverging,
+            label: Self::ENERGY_LABEL,
+        }
+    }
+
+    /// The cells of the background's grid per axis.
+    const GRID: usize = 72;
+
+    /// E(α, β) = c (sin α sin β + Δ cos α cos β) in mJ at the centre of cell (i, j) of the
+    /// background (α of column i, β of row j in the figure's convention, taken back to the
+    /// physical one).
+    fn energy_mj(&self, (i, j): (usize, usize)) -> f64 {
+        let d = 360.0 / Self::GRID as f64;
+        let a = ((i as f64 + 0.5) * d).to_radians();
+        let b = ((j as f64 + 0.5) * d).to_radians() - self.convention.beta_offset();
+        1e3 * self.coupling_j * crate::model::gear::energy_bracket(self.delta, a, b)
+    }
+
+    /// The background: [`Landscape::energy_mj`] on its grid, in the energy's colours.
+    fn energy_cells(&self) -> Vec<Rectangle<(f64, f64)>> {
+        let (n, scale) = (Self::GRID, self.scale());
+        let d = 360.0 / n as f64;
+        let mut cells = Vec::with_capacity(n * n);
+        for i in 0..n {
+            for j in 0..n {
+                let (x, y) = (i as f64 * d, j as f64 * d);
+                cells.push(Rectangle::new(
+                    [(x, y), (x + d, y + d)],
+                    scale.of(self.energy_mj((i, j))).filled(),
+                ));
+            }
+        }
+        cells
+    }
+}
+
 impl Figure for Landscape {
     fn size(&self) -> (u32, u32) {
-        (620, 560)
+        (740, 580)
     }
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
-        let mut ch = ChartBuilder::on(root)
+        let (body, foot) = root.split_vertically(560);
+        let (main, bar) = body.split_horizontally(620);
+        let mut ch = ChartBuilder::on(&main)
             .caption(&self.title, ("sans-serif", 18))
             .margin(12)
             .x_label_area_size(40)
@@ -382,27 +416,7 @@ impl Figure for Landscape {
             .label_style(("sans-serif", 13))
             .draw()
             .map_err(plot_err)?;
-        let n = 72;
-        let off = self.convention.beta_offset();
-        let d = 360.0 / n as f64;
-        let mut cells = Vec::with_capacity(n * n);
-        for i in 0..n {
-            for j in 0..n {
-                let a = ((i as f64 + 0.5) * d).to_radians();
-                let b = ((j as f64 + 0.5) * d).to_radians() - off;
-                // E/c = sin α sin β + Δ cos α cos β, in [−max(1,|Δ|), max(1,|Δ|)]
-                let e = crate::model::gear::energy_bracket(self.delta, a, b);
-                let m = 1f64.max(self.delta.abs());
-                cells.push(Rectangle::new(
-                    [
-                        (i as f64 * d, j as f64 * d),
-                        ((i + 1) as f64 * d, (j + 1) as f64 * d),
-                    ],
-                    diverging(0.5 + 0.5 * e / m).filled(),
-                ));
-            }
-        }
-        ch.draw_series(cells).map_err(plot_err)?;
+        ch.draw_series(self.energy_cells()).map_err(plot_err)?;
         ch.draw_series(self.samples.iter().map(|w| {
             Circle::new(
                 (
@@ -414,7 +428,17 @@ impl Figure for Landscape {
             )
         }))
         .map_err(plot_err)?;
-        Ok(())
+        self.scale().draw_bar(&bar, (40, 52))?;
+        foot.draw(&Text::new(
+            format!(
+                "yellow: the attractor's β(α); background: E = c (sin α sin β + Δ cos α cos β), c = {:.1} mJ, Δ = {:.3}",
+                1e3 * self.coupling_j,
+                self.delta
+            ),
+            (12, 0),
+            ("sans-serif", 13).into_font(),
+        ))
+        .map_err(plot_err)
     }
 }
 
@@ -597,4 +621,126 @@ pub fn hysteresis_lock_plot(
         marker_shapes,
         ..Default::default()
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plotting::classes::GLYPH_PX;
+    use crate::plotting::to_svg;
+
+    fn point(row: usize, col: usize, paper_class: &str) -> PointRecord {
+        PointRecord {
+            row,
+            col,
+            row_value: row as f64,
+            col_value: col as f64,
+            f_hz: 1.0,
+            delta: 1.0,
+            rms_delta_deg: 10.0,
+            rms_fit_deg: 0.0,
+            thd: None,
+            thd_printed: None,
+            delta_avg_deg: 0.0,
+            delta_fund_deg: 0.0,
+            net_rotation_hz: 0.0,
+            paper_class: paper_class.into(),
+            class: String::new(),
+            half_periods: 0,
+            symmetric: false,
+            rotation_number: None,
+            locked: None,
+            lyapunov: None,
+            agree: None,
+            beta_end: 0.0,
+            omega_end: 0.0,
+        }
+    }
+
+    /// A map of `rows` × `cols` cells on a log f axis, the class of each cell from `class`.
+    fn map(rows: usize, cols: usize, class: impl Fn(usize, usize) -> &'static str) -> RmsMap {
+        RmsMap {
+            title: "test".into(),
+            rows: (0..rows).map(|r| 10.0 * r as f64).collect(),
+            cols: (0..cols)
+                .map(|c| 0.1 * 1000f64.powf(c as f64 / cols as f64))
+                .collect(),
+            row_label: "Θ [deg]".into(),
+            col_label: "f [Hz]".into(),
+            log_x: true,
+            points: (0..rows * cols)
+                .map(|k| point(k / cols, k % cols, class(k / cols, k % cols)))
+                .collect(),
+            vmax: 60.0,
+            markers: Markers::Paper,
+        }
+    }
+
+    /// The centres (cx, cy) of the circles of an SVG text.
+    fn circles(svg: &str) -> Vec<(f64, f64)> {
+        let attr = |el: &str, name: &str| -> f64 {
+            let i = el.find(&format!(" {name}=\"")).unwrap() + name.len() + 3;
+            el[i..i + el[i..].find('"').unwrap()].parse().unwrap()
+        };
+        svg.split("<circle")
+            .skip(1)
+            .map(|el| (attr(el, "cx"), attr(el, "cy")))
+            .collect()
+    }
+
+    #[test]
+    fn class_markers_never_crowd_closer_than_a_glyph() {
+        // wide cells: one marker per cell
+        let svg = to_svg(&map(3, 10, |_, _| "chaos")).unwrap();
+        assert_eq!(circles(&svg).len(), 30);
+        assert!(svg.contains("one marker per cell"));
+        // 200 columns of 4 px: the markers thin out to blocks, never closer than a glyph
+        let svg = to_svg(&map(3, 200, |_, _| "chaos")).unwrap();
+        let c = circles(&svg);
+        assert!(c.len() >= 3 && c.len() <= 3 * 200 / 3, "{}", c.len());
+        for a in &c {
+            for b in &c {
+                let d = (a.0 - b.0).hypot(a.1 - b.1);
+                assert!(d == 0.0 || d >= GLYPH_PX - 1.0, "{a:?} {b:?}");
+            }
+        }
+        assert!(svg.contains("one marker per block of"));
+        // a narrow checkerboard: every block mixed, no marker; the borders are drawn
+        let checker = to_svg(&map(
+            3,
+            200,
+            |r, c| if (r + c) % 2 == 0 { "chaos" } else { "T/2" },
+        ));
+        let checker = checker.unwrap();
+        assert!(circles(&checker).is_empty());
+        assert!(checker.matches("<polyline").count() >= 3 * 199);
+    }
+
+    #[test]
+    fn the_inset_background_is_the_field_energy_with_its_colour_bar() {
+        // Θ = 0 (Δ = 1): E = c cos(α − β), in the paper's β (physical + 180°) lowest on the
+        // diagonal β = α and highest on β = α ± 180°
+        let l = Landscape {
+            title: "test".into(),
+            delta: 1.0,
+            coupling_j: 0.0193,
+            convention: crate::model::Convention::Paper,
+            samples: Vec::new(),
+        };
+        let (c_mj, scale) = (19.3, l.scale());
+        assert_eq!(scale.range, (-c_mj, c_mj));
+        for i in [0, 17, 50] {
+            assert!((l.energy_mj((i, i)) + c_mj).abs() < 1e-9);
+            assert!((l.energy_mj((i, (i + 36) % 72)) - c_mj).abs() < 1e-9);
+            // a quarter turn apart: E = 0
+            assert!(l.energy_mj((i, (i + 18) % 72)).abs() < 1e-9);
+        }
+        // valleys blue, hills red
+        assert_eq!(scale.of(-c_mj), diverging(0.0));
+        assert_eq!(scale.of(c_mj), diverging(1.0));
+        assert_eq!(l.energy_cells().len(), 72 * 72);
+        let svg = to_svg(&l).unwrap();
+        assert!(svg.contains(Landscape::ENERGY_LABEL));
+        assert!(svg.contains("c = 19.3 mJ"));
+    }
 }

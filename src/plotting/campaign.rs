@@ -1,6 +1,7 @@
 //! The campaign figure: detection rate against effect size, one panel per swept effect (with the
 //! 90 % goal), and the confusion matrix of verdicts.
 
+use super::colour::ColourScale;
 use super::{plot_err, Figure};
 use crate::campaign::metrics::Summary;
 use crate::error::Result;
@@ -75,11 +76,29 @@ impl Figure for CampaignFigure<'_> {
     }
 }
 
+/// Width of the confusion matrix's colour bar, px.
+const BAR_W: u32 = 120;
+
+/// The shade of a cell of the confusion matrix: white (none of its row) to blue (all of it).
+fn share_colour(frac: f64) -> RGBColor {
+    let shade = (255.0 * (1.0 - 0.85 * frac.clamp(0.0, 1.0))) as u8;
+    RGBColor(shade, shade, 255)
+}
+
+/// The colour scale of the confusion matrix.
+const SHARE: ColourScale<'static> = ColourScale {
+    range: (0.0, 1.0),
+    colour: share_colour,
+    label: "fraction of the truth's row",
+};
+
 fn draw_confusion<DB: DrawingBackend>(s: &Summary, area: &DrawingArea<DB, Shift>) -> Result<()> {
     let c = &s.confusion;
     let (nr, nc) = (c.rows.len().max(1), c.cols.len().max(1));
     let area = area.margin(10, 10, 10, 10);
     let (w, h) = area.dim_in_pixel();
+    let (area, bar) = area.split_horizontally(w.saturating_sub(BAR_W));
+    let w = w.saturating_sub(BAR_W);
     let label_w = 190i32;
     let label_h = 150i32;
     let title_h = 30i32;
@@ -103,10 +122,9 @@ fn draw_confusion<DB: DrawingBackend>(s: &Summary, area: &DrawingArea<DB, Shift>
         for (j, &k) in c.counts[i].iter().enumerate() {
             let x0 = label_w + j as i32 * cw;
             let frac = k as f64 / total as f64;
-            let shade = (255.0 * (1.0 - 0.85 * frac)) as u8;
             area.draw(&Rectangle::new(
                 [(x0, y0), (x0 + cw - 1, y0 + chh - 1)],
-                RGBColor(shade, shade, 255).filled(),
+                SHARE.of(frac).filled(),
             ))
             .map_err(plot_err)?;
             if k > 0 {
@@ -120,9 +138,18 @@ fn draw_confusion<DB: DrawingBackend>(s: &Summary, area: &DrawingArea<DB, Shift>
             }
         }
     }
-    let note_y = title_h + label_h + nr as i32 * chh + 24;
+    let bottom = title_h + label_h + nr as i32 * chh;
+    // the bar beside the matrix, as tall as its rows
+    SHARE.draw_bar(
+        &bar,
+        (
+            (title_h + label_h) as u32,
+            (h as i32 - bottom).max(0) as u32,
+        ),
+    )?;
+    let note_y = bottom + 24;
     for (k, line) in [
-        "cells: counts; shade: fraction of the row",
+        "cells: counts; colour: fraction of the row (bar)",
         "left panels: fraction named right per size, bars: 95 % interval,",
         "grey line: the 90 % goal",
     ]

@@ -8,6 +8,8 @@ pub mod atlas;
 pub mod basins;
 pub mod branch;
 pub mod campaign;
+pub mod classes;
+pub mod colour;
 pub mod diagnosis;
 
 use crate::error::{Error, Result};
@@ -60,16 +62,7 @@ pub fn save(fig: &impl Figure, path: impl AsRef<Path>) -> Result<()> {
         .unwrap_or_default();
     let size = fig.size();
     match ext.as_str() {
-        "svg" => {
-            let mut s = String::new();
-            {
-                let root = SVGBackend::with_string(&mut s, size).into_drawing_area();
-                root.fill(&WHITE).map_err(plot_err)?;
-                fig.draw(&root)?;
-                root.present().map_err(plot_err)?;
-            }
-            crate::io::write_atomic(path, s.as_bytes())
-        }
+        "svg" => crate::io::write_atomic(path, to_svg(fig)?.as_bytes()),
         "png" => {
             let dir = path
                 .parent()
@@ -94,6 +87,19 @@ pub fn save(fig: &impl Figure, path: impl AsRef<Path>) -> Result<()> {
             "must end in .svg or .png",
         )),
     }
+}
+
+/// The SVG text of a figure.
+pub fn to_svg(fig: &impl Figure) -> Result<String> {
+    init_fonts();
+    let mut s = String::new();
+    {
+        let root = SVGBackend::with_string(&mut s, fig.size()).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        fig.draw(&root)?;
+        root.present().map_err(plot_err)?;
+    }
+    Ok(s)
 }
 
 /// Draws `fig` into the PNG file `path` (the backend writes it on `present`).

@@ -51,10 +51,10 @@ pub fn lock_branch(d: &ReportData, dir: &Path) -> Result<Links> {
 pub fn map(d: &ReportData, dir: &Path) -> Result<Links> {
     let mut out = Links::new();
     let mut fig = RmsMap::from_sweep(&d.map);
-    fig.title = "RMS_δ, paper classes (○ chaos, × T/2, — T)".into();
+    fig.title = "RMS_δ with the paper's classes".into();
     save_pair(&fig, dir, "map_paper", "map, paper classes", &mut out)?;
     fig.markers = Markers::Rigorous;
-    fig.title = "RMS_δ, rigorous classes (○ chaos/QP, × symmetric, — asymmetric, □ ?)".into();
+    fig.title = "RMS_δ with the rigorous classes".into();
     save_pair(&fig, dir, "map_rigorous", "map, rigorous classes", &mut out)?;
     Ok(out)
 }
