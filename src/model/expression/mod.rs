@@ -80,7 +80,8 @@ pub enum ExpressionError {
     },
 }
 
-/// The values of the tape's registers that read only parameters, for one parameter set.
+/// The tape's register file for one parameter set, its registers that read only numbers and
+/// parameters evaluated ([`Compiled::constants`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Constants(Box<[f64]>);
 

@@ -160,35 +160,41 @@ impl Tape {
         }
     }
 
-    /// The registers that read only numbers and parameters, at the parameter values `params`.
+    /// The register file at the parameter values `params`: the registers that read only numbers
+    /// and parameters evaluated, the others 0; its length is the size class of [`Self::eval`].
     pub fn constants(&self, params: &[f64]) -> Box<[f64]> {
-        let mut regs = vec![0.0; self.n_const];
+        let len = match self.n_regs {
+            0..=32 => 32,
+            33..=64 => 64,
+            65..=128 => 128,
+            n => n,
+        };
+        let mut regs = vec![0.0; len];
         run(&self.constants, &mut regs, params);
         regs.into_boxed_slice()
     }
 
-    /// The outputs of `level` at (t, x, v), into `out` (as many as `out` holds), with the
-    /// constants of [`Self::constants`]. The registers live on the stack up to 128 of them.
-    pub fn eval(&self, level: Level, constants: &[f64], txv: [f64; 3], out: &mut [f64]) {
-        match self.n_regs {
-            0..=32 => self.eval_in(&mut [0.0; 32], level, constants, txv, out),
-            33..=64 => self.eval_in(&mut [0.0; 64], level, constants, txv, out),
-            65..=128 => self.eval_in(&mut [0.0; 128], level, constants, txv, out),
-            n => self.eval_in(&mut vec![0.0; n], level, constants, txv, out),
+    /// The outputs of `level` at (t, x, v), into `out` (as many as `out` holds), starting from the
+    /// register file of [`Self::constants`]: copied onto the stack whole (one fixed-size copy, no
+    /// clearing) up to 128 registers.
+    pub fn eval(&self, level: Level, file: &[f64], txv: [f64; 3], out: &mut [f64]) {
+        match file.len() {
+            32 => self.eval_in::<32>(file, level, txv, out),
+            64 => self.eval_in::<64>(file, level, txv, out),
+            128 => self.eval_in::<128>(file, level, txv, out),
+            _ => self.finish(&mut file.to_vec(), level, txv, out),
         }
     }
 
     #[inline]
-    fn eval_in(
-        &self,
-        regs: &mut [f64],
-        level: Level,
-        constants: &[f64],
-        txv: [f64; 3],
-        out: &mut [f64],
-    ) {
+    fn eval_in<const N: usize>(&self, file: &[f64], level: Level, txv: [f64; 3], out: &mut [f64]) {
+        let mut regs: [f64; N] = file.try_into().unwrap_or([f64::NAN; N]);
+        self.finish(&mut regs, level, txv, out);
+    }
+
+    #[inline]
+    fn finish(&self, regs: &mut [f64], level: Level, txv: [f64; 3], out: &mut [f64]) {
         let k = self.n_const;
-        regs[..k].copy_from_slice(constants);
         regs[k..k + 3].copy_from_slice(&txv);
         run(&self.passes[level as usize], regs, &[]);
         for (o, &r) in out.iter_mut().zip(&self.outputs) {
