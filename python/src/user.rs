@@ -307,8 +307,8 @@ impl DrivenOscillator for UserSystem {
 /// expressions in t [s], x (= β), v (= ω) and the parameters by name, e.g.
 /// ("A*cos(2*PI*f*t) - gamma*v - w0^2*sin(x)", "mu"): compiled once, with their symbolic
 /// derivatives, into one instruction tape evaluated in Rust (operators + - * / and ^ or **, with
-/// -x^2 = -(x^2); functions sin cos tan asin acos atan sinh cosh tanh exp log (= ln) log2 log10
-/// sqrt cbrt abs sgn; constants PI, TAU, E); within 3× of the same system written in Rust
+/// -x^2 = -(x^2); functions sin cos tan asin acos atan sinh cosh tanh asinh acosh atanh exp
+/// log (= ln) log2 log10 sqrt cbrt abs sgn; constants PI, TAU, E); within 3× of the same system written in Rust
 /// (docs/tables/user-system-speed.md). params: dict {name: value}, at most 8, one of them `f`, the drive frequency [Hz] (period T = 1/f; the forces must be
 /// T-periodic in t). jacobian(t, beta, omega, p) → (a, ∂a/∂β, ∂a/∂ω, r, ∂r/∂β, ∂r/∂ω,
 /// ∂a/∂p (n values), ∂r/∂p (n values)) at fixed t, in the order of params; without it the

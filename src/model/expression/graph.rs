@@ -30,6 +30,9 @@ pub enum Fun {
     Sinh,
     Cosh,
     Tanh,
+    Asinh,
+    Acosh,
+    Atanh,
     Exp,
     Ln,
     Log2,
@@ -52,6 +55,9 @@ pub const FUNCTIONS: &[(&str, Fun)] = &[
     ("sinh", Fun::Sinh),
     ("cosh", Fun::Cosh),
     ("tanh", Fun::Tanh),
+    ("asinh", Fun::Asinh),
+    ("acosh", Fun::Acosh),
+    ("atanh", Fun::Atanh),
     ("exp", Fun::Exp),
     ("log", Fun::Ln),
     ("ln", Fun::Ln),
@@ -78,6 +84,9 @@ impl Fun {
             Fun::Sinh => u.sinh(),
             Fun::Cosh => u.cosh(),
             Fun::Tanh => u.tanh(),
+            Fun::Asinh => u.asinh(),
+            Fun::Acosh => u.acosh(),
+            Fun::Atanh => u.atanh(),
             Fun::Exp => u.exp(),
             Fun::Ln => u.ln(),
             Fun::Log2 => u.log2(),
@@ -319,6 +328,19 @@ impl Graph {
                 };
                 let sign = self.num(if f == Fun::Acos { -1.0 } else { 1.0 });
                 self.div(sign, inner)
+            }
+            // 1/√(w² + 1), 1/√(w² − 1), 1/(1 − w²)
+            Fun::Asinh | Fun::Acosh => {
+                let sq = self.powi(w, 2);
+                let op = if f == Fun::Asinh { Bin::Add } else { Bin::Sub };
+                let d = self.bin(op, sq, one);
+                let root = self.fun(Fun::Sqrt, d);
+                self.div(one, root)
+            }
+            Fun::Atanh => {
+                let sq = self.powi(w, 2);
+                let d = self.sub(one, sq);
+                self.div(one, d)
             }
             Fun::Sinh => self.fun(Fun::Cosh, w),
             Fun::Cosh => self.fun(Fun::Sinh, w),

@@ -14,8 +14,8 @@
 //!
 //! (so −x^2 = −(x²) and 2^−x = 2^(−x), as in mathematics and Python); a name is t, x, v, a
 //! parameter, or a constant PI (π), TAU (τ), E (e), a parameter taking precedence; the functions
-//! are sin cos tan asin acos atan sinh cosh tanh exp log (= ln) ln log2 log10 sqrt cbrt abs and
-//! sgn (= signum, with sgn 0 = 0). An expression nests at most 1000 levels deep (a sum of 1000
+//! are sin cos tan asin acos atan sinh cosh tanh asinh acosh atanh exp log (= ln) ln log2 log10
+//! sqrt cbrt abs and sgn (= signum, with sgn 0 = 0). An expression nests at most 1000 levels deep (a sum of 1000
 //! terms is 1000 levels). [`Compiled::new`] parses both, differentiates them symbolically in x, v
 //! and every parameter — the terms of the variational equations, ∂a/∂x, ∂a/∂v, ∂r/∂x, ∂r/∂v and
 //! the parameter columns ∂a/∂p_k, ∂r/∂p_k at fixed t — into one graph whose common

@@ -26,6 +26,10 @@ const CASES: &[(&str, &str)] = &[
         "mu^2 + k^0.5*x**2",
     ),
     (
+        "asinh(x) + acosh(2 + v^2) - atanh(x/2)",
+        "mu*acosh(1.5 + x^2)",
+    ),
+    (
         "PI*t + π*x - TAU*v + τ*k + E*x - e*v + 1.5e-1*x + .5E+1*v",
         "mu*2.5",
     ),
