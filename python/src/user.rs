@@ -139,13 +139,14 @@ impl UserSystem {
             vec![f64::NAN; len]
         })
     }
+    /// The forces at parameter values `values` (the central differences of a Python `forces` vary
+    /// them).
     fn forces_with(&self, values: &[f64; MAX_PARAMS], t: f64, x: f64, v: f64) -> (f64, f64) {
         match &self.source {
             Source::Python(c) => {
                 let r = self.call(&c.forces, values, [t, x, v], 2);
                 (r[0], r[1])
             }
-            Source::Expressions(c, k) if values == &self.values => c.forces(k, t, x, v),
             Source::Expressions(c, _) => c.forces(&c.constants(values), t, x, v),
         }
     }
