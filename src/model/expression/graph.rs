@@ -317,30 +317,8 @@ impl Graph {
                 let op = if f == Fun::Tan { Bin::Add } else { Bin::Sub };
                 self.bin(op, one, sq)
             }
-            // ±1/√(1 − w²), 1/(1 + w²)
-            Fun::Asin | Fun::Acos | Fun::Atan => {
-                let sq = self.powi(w, 2);
-                let inner = if f == Fun::Atan {
-                    self.add(one, sq)
-                } else {
-                    let d = self.sub(one, sq);
-                    self.fun(Fun::Sqrt, d)
-                };
-                let sign = self.num(if f == Fun::Acos { -1.0 } else { 1.0 });
-                self.div(sign, inner)
-            }
-            // 1/√(w² + 1), 1/√(w² − 1), 1/(1 − w²)
-            Fun::Asinh | Fun::Acosh => {
-                let sq = self.powi(w, 2);
-                let op = if f == Fun::Asinh { Bin::Add } else { Bin::Sub };
-                let d = self.bin(op, sq, one);
-                let root = self.fun(Fun::Sqrt, d);
-                self.div(one, root)
-            }
-            Fun::Atanh => {
-                let sq = self.powi(w, 2);
-                let d = self.sub(one, sq);
-                self.div(one, d)
+            Fun::Asin | Fun::Acos | Fun::Atan | Fun::Asinh | Fun::Acosh | Fun::Atanh => {
+                self.inverse_derivative(f, w)
             }
             Fun::Sinh => self.fun(Fun::Cosh, w),
             Fun::Cosh => self.fun(Fun::Sinh, w),
@@ -365,6 +343,33 @@ impl Graph {
             }
             Fun::Abs => self.fun(Fun::Sgn, w),
             Fun::Sgn => self.num(0.0),
+        }
+    }
+
+    /// f'(w) of the inverse trigonometric and hyperbolic functions: ±1/√(1 − w²), 1/(1 + w²),
+    /// 1/√(w² ± 1), 1/(1 − w²); NaN for any other function (never called with one).
+    fn inverse_derivative(&mut self, f: Fun, w: Id) -> Id {
+        let one = self.num(1.0);
+        let sq = self.powi(w, 2);
+        match f {
+            Fun::Asin | Fun::Acos => {
+                let d = self.sub(one, sq);
+                let root = self.fun(Fun::Sqrt, d);
+                let sign = self.num(if f == Fun::Acos { -1.0 } else { 1.0 });
+                self.div(sign, root)
+            }
+            Fun::Asinh | Fun::Acosh => {
+                let op = if f == Fun::Asinh { Bin::Add } else { Bin::Sub };
+                let d = self.bin(op, sq, one);
+                let root = self.fun(Fun::Sqrt, d);
+                self.div(one, root)
+            }
+            Fun::Atan | Fun::Atanh => {
+                let op = if f == Fun::Atan { Bin::Add } else { Bin::Sub };
+                let d = self.bin(op, one, sq);
+                self.div(one, d)
+            }
+            _ => self.num(f64::NAN),
         }
     }
 
