@@ -154,7 +154,7 @@ class UserSystem(_System):
         params: Dict[str, float],
         *,
         jacobian: Optional[Callable[..., Any]] = None,
-        symmetry: Optional[str] = None,
+        symmetry: Optional[Tuple[float, float]] = None,
         angular: bool = True,
     ) -> None: ...
     def with_param(self, name: str, value: float) -> UserSystem: ...

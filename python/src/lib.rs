@@ -12,7 +12,6 @@ mod branches;
 mod convert;
 mod dynamics;
 mod errors;
-mod expression;
 mod located;
 mod systems;
 mod user;

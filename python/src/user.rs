@@ -10,11 +10,11 @@
 //! equations need (∂a/∂β, ∂a/∂ω, ∂r/∂β, ∂r/∂ω and the parameter columns ∂a/∂p_k, ∂r/∂p_k at fixed
 //! t) come from the user's `jacobian` function if given, else from central differences of `forces`
 //! (step 1e-6 relative: about 1e-10 relative accuracy for smooth forces). Forces given as two
-//! expressions instead of a function are compiled once ([`crate::expression`]): evaluated in Rust,
-//! with symbolic derivatives.
+//! expressions instead of a function are compiled once into one instruction tape
+//! ([`gearbif::model::expression`]): evaluated in Rust, with symbolic derivatives.
 
 use crate::errors::{invalid, IntoPyResult};
-use crate::expression::{Compiled, Constants};
+use gearbif::model::expression::{Compiled, Constants};
 use gearbif::model::{
     Column, DrivenOscillator, Forces, ForcesJet, HalfPeriodSymmetry, Parameter, Parametrised,
     MAX_PARAMS,
@@ -59,7 +59,7 @@ enum Source {
     Python(Arc<Callbacks>),
     /// Two expressions compiled once, evaluated in Rust, with the values of their terms that read
     /// the parameters only (recomputed when a parameter changes).
-    Expressions(Arc<Compiled>, Box<Constants>),
+    Expressions(Arc<Compiled>, Constants),
 }
 
 /// A driven oscillator with dry friction whose forces are a Python function or two expressions.
@@ -139,14 +139,15 @@ impl UserSystem {
             vec![f64::NAN; len]
         })
     }
+    /// The forces at parameter values `values` (the central differences of a Python `forces` vary
+    /// them).
     fn forces_with(&self, values: &[f64; MAX_PARAMS], t: f64, x: f64, v: f64) -> (f64, f64) {
         match &self.source {
             Source::Python(c) => {
                 let r = self.call(&c.forces, values, [t, x, v], 2);
                 (r[0], r[1])
             }
-            Source::Expressions(c, k) if values == &self.values => c.forces(values, k, t, x, v),
-            Source::Expressions(c, _) => c.forces(values, &c.constants(values), t, x, v),
+            Source::Expressions(c, _) => c.forces(&c.constants(values), t, x, v),
         }
     }
 }
@@ -199,7 +200,7 @@ impl Parametrised for UserSystem {
         let mut s = self.clone();
         s.values[k] = value;
         if let Source::Expressions(c, constants) = &mut s.source {
-            **constants = c.constants(&s.values);
+            *constants = c.constants(&s.values);
         }
         Ok(s)
     }
@@ -239,21 +240,16 @@ impl DrivenOscillator for UserSystem {
         }
     }
     fn forces(&self, t: f64, beta: f64, omega: f64) -> Forces {
-        let (a, r) = self.forces_with(&self.values, t, beta, omega);
+        let (a, r) = match &self.source {
+            Source::Expressions(c, k) => c.forces(k, t, beta, omega),
+            Source::Python(_) => self.forces_with(&self.values, t, beta, omega),
+        };
         Forces { a, r }
     }
     fn forces_jet(&self, t: f64, beta: f64, omega: f64, params: bool) -> ForcesJet {
         let n = self.n();
         let callbacks = match &self.source {
-            Source::Expressions(c, k) => {
-                let e = c.jet((&self.values, k), t, beta, omega, params);
-                let mut j = ForcesJet::new(e.a, e.r);
-                [j.a_beta, j.a_omega] = e.a_state;
-                [j.r_beta, j.r_omega] = e.r_state;
-                j.a_p = e.a_p;
-                j.r_p = e.r_p;
-                return j;
-            }
+            Source::Expressions(c, k) => return c.jet(k, t, beta, omega, params),
             Source::Python(c) => c,
         };
         if let Some(jac) = &callbacks.jacobian {
@@ -310,10 +306,11 @@ impl DrivenOscillator for UserSystem {
 /// forces(t, beta, omega, p) → (a, r): the smooth acceleration a and the dry-friction magnitude r
 /// (per unit inertia), p the dict {name: value} of the parameters. Or forces = (a, r), two
 /// expressions in t [s], x (= β), v (= ω) and the parameters by name, e.g.
-/// ("A*cos(2*PI*f*t) - gamma*v - w0^2*sin(x)", "mu"): parsed once and evaluated in Rust, with
-/// symbolic derivatives (operators + - * / ^, functions sin cos tan exp log sqrt abs tanh …,
-/// constants PI and E); as fast as a system written in Rust within a small factor. params: dict {name: value}, at
-/// most 8, one of them `f`, the drive frequency [Hz] (period T = 1/f; the forces must be
+/// ("A*cos(2*PI*f*t) - gamma*v - w0^2*sin(x)", "mu"): compiled once, with their symbolic
+/// derivatives, into one instruction tape evaluated in Rust (operators + - * / and ^ or **, with
+/// -x^2 = -(x^2); functions sin cos tan asin acos atan sinh cosh tanh asinh acosh atanh exp
+/// log (= ln) log2 log10 sqrt cbrt abs sgn; constants PI, TAU, E); within 3× of the same system written in Rust
+/// (docs/tables/user-system-speed.md). params: dict {name: value}, at most 8, one of them `f`, the drive frequency [Hz] (period T = 1/f; the forces must be
 /// T-periodic in t). jacobian(t, beta, omega, p) → (a, ∂a/∂β, ∂a/∂ω, r, ∂r/∂β, ∂r/∂ω,
 /// ∂a/∂p (n values), ∂r/∂p (n values)) at fixed t, in the order of params; without it the
 /// derivatives are central differences of `forces`. symmetry = (σ, c): a half-period symmetry
@@ -394,8 +391,8 @@ impl PyUserSystem {
         };
         let source = match expressions {
             Some((a, r)) => {
-                let c = Compiled::new(&a, &r, &names).map_err(invalid)?;
-                let constants = Box::new(c.constants(&values));
+                let c = Compiled::new(&a, &r, &names).map_err(|e| invalid(e.to_string()))?;
+                let constants = c.constants(&values);
                 Source::Expressions(Arc::new(c), constants)
             }
             None => Source::Python(Arc::new(Callbacks {

@@ -130,8 +130,11 @@ def test_expressions_give_the_forces_and_refuse_what_they_cannot_compile():
         gearbif.UserSystem(("k*x", "mu"), dict(P))
     with pytest.raises(ValueError, match="may not be called"):
         gearbif.UserSystem(("x", "0"), dict(f=1.0, v=2.0))
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="column 4"):
         gearbif.UserSystem(("x +* 2", "0"), dict(f=1.0))
+    # the grammar's precedences: -x^2 is -(x²), ** is ^
+    signs = gearbif.UserSystem(("-x^2 + 2**-v", "0"), dict(f=1.0))
+    assert signs.forces(0.0, 3.0, 1.0) == (-8.5, 0.0)
     with pytest.raises(ValueError, match="no jacobian"):
         gearbif.UserSystem(EXPRESSIONS, dict(P), jacobian=pendulum_jacobian)
     with pytest.raises(ValueError, match="pair of expressions"):

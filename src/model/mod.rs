@@ -17,6 +17,7 @@
 //! gear ([`gear`]).
 
 pub mod den_hartog;
+pub mod expression;
 pub mod gear;
 pub mod one_sided;
 pub mod oscillators;
