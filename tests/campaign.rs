@@ -1359,7 +1359,7 @@ fn drag_exponent_covers_the_truth_on_generated_sets() {
 /// convergence on the refit's windows, and a parabola fitted to the five χ²/s²; the σ it implies
 /// must agree with the Gauss–Newton σ within a factor 1.5 either way (the profile is not exactly
 /// quadratic along the ζ–q–p valley, and each held refit stops within a few tenths of a χ² unit of
-/// its minimum). Set: the campaign's `power_law_drag` at level 2 (−0.4 |β̇|^1.5 sgn β̇), `ci`
+/// its minimum; each starts from the linearisation's prediction of the other parameters). Set: the campaign's `power_law_drag` at level 2 (−0.4 |β̇|^1.5 sgn β̇), `ci`
 /// size, seed 1; the refit starts at the quadratic member p = 2. Before the refit's Jacobian was
 /// the variable-projection one (`shooting::varpro_jacobian`) it differenced the projected
 /// residuals, each trial re-projecting the window states from the last trial's: the exponent's σ
@@ -1397,7 +1397,8 @@ fn a_shape_sigma_matches_the_curvature_of_its_profile() {
     let s2 = f.resid.iter().map(|r| r * r).sum::<f64>()
         / (f.samples - 2 * f.used.len() - f.theta.len()) as f64;
     let k = 5;
-    let sigma = gauss_newton_cov(&f.jac)[(k, k)].sqrt();
+    let cov = gauss_newton_cov(&f.jac);
+    let sigma = cov[(k, k)].sqrt();
     assert!(sigma.is_finite() && sigma > 0.0);
     let profile: Vec<(f64, f64)> = (-2..=2)
         .map(|i| {
@@ -1409,7 +1410,11 @@ fn a_shape_sigma_matches_the_curvature_of_its_profile() {
                 held_shapes: vec![(Shape::DragExponent, v)],
                 ..model.clone()
             };
-            let mut th = f.theta.clone();
+            // each held refit starts where the linearisation puts the profile's other parameters
+            // (θ̂_j + C_jk/C_kk (p − p̂)): near its own minimum along the ζ–q–p valley
+            let mut th: Vec<f64> = (0..f.theta.len())
+                .map(|j| f.theta[j] + cov[(j, k)] / cov[(k, k)] * (v - f.theta[k]))
+                .collect();
             th.remove(k);
             let g = refit_to_convergence(&held, &th, &wins, &sopts).unwrap();
             let c: f64 = g
