@@ -433,7 +433,8 @@ fn sweep<'py>(
 ///       f_range=(0.5, 2.5), samples_per_turn=50, fps=100.0, noise_deg=0.5, seed=1)
 ///
 /// effect: none, rescale, static_torque, quadratic_drag, corotating_drag, coupling_geometry,
-/// load_dependent_friction, sensor_latency, input_compliance, drive_steps, parameter_drift
+/// load_dependent_friction, sensor_latency, input_compliance, drive_steps, parameter_drift,
+/// static_friction
 /// (`gearbif synth --list` gives the meaning of size). f_range [Hz], fps [1/s], noise_deg [deg].
 /// Returns a dict: effect, size, g [1/s²], delta [1], zeta [1/s], eta [1/s²], latency_s [s].
 #[pyfunction]
