@@ -813,15 +813,7 @@ fn fit_windows(
         Some(with_penalty(
             model,
             theta,
-            varpro_jacobian(
-                model,
-                theta,
-                wins,
-                &used,
-                &states,
-                row,
-                (false, CurveColumns::Forward),
-            ),
+            varpro_jacobian(model, theta, wins, &used, &states, row, Differences::REFIT),
         ))
     };
     let r0 = residuals(theta0)?;
@@ -862,7 +854,7 @@ fn fit_windows(
             &used,
             &states,
             row,
-            (true, CurveColumns::Forward),
+            Differences::AT_SHAPE_BOUND,
         );
         sol.jac = with_penalty(model, &sol.p, jac);
         sol.cov = scaled_cov(&sol.jac, sol.rss);
@@ -914,6 +906,29 @@ struct Projected {
     best: (f64, Vec<[f64; 2]>),
 }
 
+/// How [`varpro_jacobian`] differences the columns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Differences {
+    /// A shape parameter near an end of its range is differenced one-sided towards the inside.
+    inward: bool,
+    /// How a curve's coefficients are differenced.
+    curves: CurveColumns,
+}
+
+impl Differences {
+    /// The refit's steps: central, a curve's coefficients forward.
+    const REFIT: Self = Self {
+        inward: false,
+        curves: CurveColumns::Forward,
+    };
+    /// The covariance of a fit whose shape lies at an end of its range: as [`Self::REFIT`], the
+    /// shapes differenced towards the inside.
+    const AT_SHAPE_BOUND: Self = Self {
+        inward: true,
+        curves: CurveColumns::Forward,
+    };
+}
+
 /// How [`varpro_jacobian`] differences a curve's coefficients.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum CurveColumns {
@@ -948,7 +963,7 @@ const LATENCY_STEP: f64 = 1e-5;
 /// block, and a column whose simulation fails on one side is differenced one-sided from θ (zero
 /// when both fail), so that one window does not fail the refit's step.
 ///
-/// A curve's coefficients ([`Term::Spline`], `curves`: [`CurveColumns::Forward`]) are differenced
+/// A curve's coefficients ([`Term::Spline`], [`CurveColumns::Forward`]) are differenced
 /// forward from θ: one simulation per column instead of two, for the 24 columns that make a curve
 /// model's Jacobian three quarters of its cost. At the relative step [`COEF_STEP`] the forward
 /// quotient's truncation error (half the step times the residuals' curvature in the coefficient,
@@ -961,7 +976,7 @@ fn varpro_jacobian(
     used: &[(usize, usize)],
     states: &[[f64; 2]],
     rows: usize,
-    (inward, curves): (bool, CurveColumns),
+    Differences { inward, curves }: Differences,
 ) -> DMatrix<f64> {
     let n = theta.len();
     let nt = model.terms.len();
@@ -1324,7 +1339,11 @@ mod tests {
         let used: Vec<(usize, usize)> = (0..wins.len()).map(|k| (k, 50 * k)).collect();
         let jac = |tol, curves| {
             let model = SimModel::of_terms(&runs, geo, terms.clone(), tol);
-            varpro_jacobian(&model, &theta, &wins, &used, &states, 200, (false, curves))
+            let how = Differences {
+                curves,
+                ..Differences::REFIT
+            };
+            varpro_jacobian(&model, &theta, &wins, &used, &states, 200, how)
         };
         let fwd = jac(1e-8, CurveColumns::Forward);
         let cen = jac(1e-8, CurveColumns::Central);
